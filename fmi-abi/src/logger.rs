@@ -1,0 +1,128 @@
+//! Messages to the importer's logger, the way every importer can take them.
+//!
+//! Lessons from importers (fmi.md section 7.4): pass the caller's componentEnvironment back
+//! unchanged, pass our own copy of the instance name, never pass a NULL category (OMSimulator
+//! crashes on one), and pass the text through "%s" so '%' in a message is never a conversion.
+//! A NULL callback structure or NULL logger simply means nobody listens.
+
+use crate::types::{fmi2CallbackFunctions, fmi2Status};
+use std::ffi::{CStr, CString, c_void};
+
+/// The log categories every FMU of ours declares, in the order written to the XML.
+pub const CATEGORIES: &[(&CStr, &str)] = &[
+    (c"logStatusWarning", "Warnings: a call succeeded with a caveat (for example a skipped NaN sample)."),
+    (c"logStatusError", "Errors: a call failed; the message says which argument or state was wrong."),
+    (c"logStatusFatal", "Fatal errors: an internal fault was caught; only fmi2FreeInstance is allowed."),
+    (c"logCalls", "Every FMI function call with its arguments (verbose)."),
+    (c"logModel", "Information from the model (for example when it rebuilds its matrices)."),
+];
+
+/// Index into [`CATEGORIES`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Category {
+    Warning = 0,
+    Error = 1,
+    Fatal = 2,
+    Calls = 3,
+    Model = 4,
+}
+
+/// The logger of one instance: the caller's callbacks, a copy of the instance name, and which
+/// categories are switched on.
+pub struct Logger {
+    callbacks: Option<fmi2CallbackFunctions>,
+    instance_name: CString,
+    enabled: [bool; CATEGORIES.len()],
+}
+
+// The callbacks are plain C function pointers plus the caller's opaque environment pointer,
+// which the FMI standard lets us hand back from whichever thread runs the instance.
+unsafe impl Send for Logger {}
+
+impl Logger {
+    /// Status categories (warning, error, fatal) are on from the start; the debug categories
+    /// follow `logging_on`, as fmi2Instantiate's loggingOn asks.
+    pub fn new(callbacks: Option<fmi2CallbackFunctions>, instance_name: &str, logging_on: bool) -> Logger {
+        let name = CString::new(instance_name.replace('\0', "")).unwrap_or_default();
+        Logger { callbacks, instance_name: name, enabled: [true, true, true, logging_on, logging_on] }
+    }
+
+    /// A logger that drops everything, for tests and for running models outside an importer.
+    pub fn silent() -> Logger {
+        Logger { callbacks: None, instance_name: CString::default(), enabled: [false; CATEGORIES.len()] }
+    }
+
+    pub fn instance_name(&self) -> &str {
+        self.instance_name.to_str().unwrap_or("")
+    }
+
+    /// fmi2SetDebugLogging: no names means every category; returns the names not known.
+    pub fn set_categories(&mut self, on: bool, names: &[String]) -> Vec<String> {
+        if names.is_empty() {
+            self.enabled = [on; CATEGORIES.len()];
+            return vec![];
+        }
+        let mut unknown = vec![];
+        for name in names {
+            match CATEGORIES.iter().position(|(c, _)| c.to_bytes() == name.as_bytes()) {
+                Some(i) => self.enabled[i] = on,
+                None => unknown.push(name.clone()),
+            }
+        }
+        unknown
+    }
+
+    pub fn enabled(&self, category: Category) -> bool {
+        self.enabled[category as usize] && self.callbacks.and_then(|c| c.logger).is_some()
+    }
+
+    pub fn log(&self, status: fmi2Status, category: Category, message: &str) {
+        if !self.enabled(category) {
+            return;
+        }
+        let Some(cb) = self.callbacks else { return };
+        let Some(logger) = cb.logger else { return };
+        let text = CString::new(message.replace('\0', " ")).unwrap_or_default();
+        let cat = CATEGORIES[category as usize].0;
+        // SAFETY: the importer gave us this function for exactly this call; every pointer we
+        // pass is a valid NUL-terminated string that outlives the call.
+        unsafe {
+            logger(
+                cb.component_environment,
+                self.instance_name.as_ptr(),
+                status as i32,
+                cat.as_ptr(),
+                c"%s".as_ptr(),
+                text.as_ptr(),
+            );
+        }
+    }
+
+    pub fn warning(&self, message: &str) {
+        self.log(fmi2Status::Warning, Category::Warning, message);
+    }
+
+    pub fn error(&self, message: &str) {
+        self.log(fmi2Status::Error, Category::Error, message);
+    }
+
+    pub fn fatal(&self, message: &str) {
+        self.log(fmi2Status::Fatal, Category::Fatal, message);
+    }
+
+    pub fn info(&self, message: &str) {
+        self.log(fmi2Status::OK, Category::Model, message);
+    }
+
+    /// The logCalls trace; the message is only built when somebody listens.
+    pub fn call(&self, message: impl FnOnce() -> String) {
+        if self.enabled(Category::Calls) {
+            self.log(fmi2Status::OK, Category::Calls, &message());
+        }
+    }
+
+    /// The environment pointer, for fmi2StepFinished (not used: we never return fmi2Pending).
+    pub fn component_environment(&self) -> *mut c_void {
+        self.callbacks.map_or(std::ptr::null_mut(), |c| c.component_environment)
+    }
+}

@@ -1,0 +1,68 @@
+//! What an FMU crate implements: its identity, its variable table and its equations. Everything
+//! else (states, checks, logging, FMU state, the C entry points) is the export layer's.
+
+use crate::logger::Logger;
+use crate::variables::{VarSpec, Values};
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use std::path::PathBuf;
+
+/// Static facts written to modelDescription.xml.
+#[derive(Debug, Clone, Copy)]
+pub struct ModelInfo {
+    pub model_name: &'static str,
+    /// The shared library name and the `modelIdentifier` attribute.
+    pub model_identifier: &'static str,
+    /// Unique per FMU (libcosim caches by GUID); no braces (libcosim #533).
+    pub guid: &'static str,
+    pub description: &'static str,
+    pub author: &'static str,
+    pub version: &'static str,
+    pub default_start: f64,
+    pub default_stop: f64,
+    pub default_step: f64,
+}
+
+/// How a step ended when it did not fail.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepOutcome {
+    Ok,
+    /// The step completed but something was logged as a warning (fmi2Warning).
+    Warning,
+}
+
+/// What fmi2Instantiate learned from the importer.
+#[derive(Debug, Clone, Default)]
+pub struct InstantiateContext {
+    pub instance_name: String,
+    /// Parsed fmuResourceLocation, when the importer gave a usable one.
+    pub resources: Option<PathBuf>,
+}
+
+/// The equations of one FMU. Errors are plain messages: the layer logs them with the instance
+/// name and returns fmi2Error. A model must be cheap to clone (FMU state is a clone) and
+/// serializable (fmi2SerializeFMUstate).
+pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
+    const INFO: ModelInfo;
+
+    fn variables() -> &'static [VarSpec];
+
+    /// A fresh model; the layer keeps a copy of it for fmi2Reset.
+    fn instantiate(ctx: &InstantiateContext, log: &Logger) -> Result<Self, String>;
+
+    /// Computes outputs declared `initial="calculated"` from the current parameters, so that
+    /// they can be read in initialization mode.
+    fn calculate_initial(&mut self, _values: &mut Values) {}
+
+    /// Checks parameters and builds whatever the steps need. Parameters already passed the
+    /// table's min/max checks.
+    fn exit_initialization(&mut self, values: &mut Values, log: &Logger) -> Result<(), String>;
+
+    /// A tunable parameter was set between steps.
+    fn parameters_changed(&mut self, _values: &mut Values, _log: &Logger) -> Result<(), String> {
+        Ok(())
+    }
+
+    /// Advances from `t` to `t + h` with the inputs in `values`, writing the outputs there.
+    fn do_step(&mut self, values: &mut Values, t: f64, h: f64, log: &Logger) -> Result<StepOutcome, String>;
+}
