@@ -1,0 +1,138 @@
+//! Q and R: from the calibration file in the FMU's resources when it holds them, otherwise the
+//! diagonal model built from the FMI noise parameters.
+//!
+//! The calibration file (`resources/calibration.toml`) is written by the calibration study
+//! (issue 5) from vehicle runs, as the paper does (system error `x_k - F x_{k-1}` and measurement
+//! error `z_k - H x_k`). Until that study exists the shipped file holds no matrices, and the FMU
+//! uses the **diagonal model** below. Format:
+//! ```toml
+//! status = "calibrated"          # free text, logged
+//! step_size = 0.001              # [s] the step Q was computed for
+//! speed = 20.0                   # [m/s] the speed Q was computed for (informative)
+//! q = [[...7 numbers...], ...]   # 7 rows, discrete process noise covariance
+//! r = [[...4 numbers...], ...]   # 4 rows, measurement noise covariance
+//! ```
+//! When the FMU runs with another step `h`, Q is scaled by `h / step_size` (white process noise
+//! accumulates linearly in time) and a message says so.
+//!
+//! # The diagonal model
+//! - `R = diag(sigma_acc_ws^2, sigma_yaw_rate^2, sigma_acc_frame^2, sigma_xi^2)`: the sensor
+//!   sigmas of the paper's section 5 (0.01 m/s2, 0.0005 rad/s, 0.01 m/s2) and its 5 mm for the
+//!   virtual alignment measurement.
+//! - `Q = h diag(0, 0, 0, q_acc_ws, q_yaw_acc, q_acc_frame, q_xi)`: white accelerations of
+//!   intensity `q_*` [m2/s3 or rad2/s3] on the three bodies and a random walk of intensity
+//!   `q_xi` [m2/s] on the alignment. The `q_xi` default comes from the low-disturbance German
+//!   alignment spectrum (railway.md section 3): alignment slope about 4.5e-4 rms, so at 20 m/s
+//!   `dxi/dt` is about 9e-3 m/s rms with a correlation time of about 0.06 s (1 / (Oc V)),
+//!   `q_xi = 2 sigma^2 tau`, about 1e-5 m2/s. The acceleration intensities are deliberately
+//!   small: they express trust in the simplified model until the calibration replaces them.
+
+use crate::filter::Mat4;
+use crate::model::Mat7;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Matrices read from a calibration file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    pub status: String,
+    pub step_size: f64,
+    pub q: Mat7,
+    pub r: Mat4,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    status: Option<String>,
+    step_size: Option<f64>,
+    #[allow(dead_code)]
+    speed: Option<f64>,
+    #[allow(dead_code)]
+    description: Option<String>,
+    q: Option<Vec<Vec<f64>>>,
+    r: Option<Vec<Vec<f64>>>,
+}
+
+fn matrix<const N: usize>(rows: &[Vec<f64>], name: &str, file: &Path) -> Result<nalgebra::SMatrix<f64, N, N>, String> {
+    if rows.len() != N || rows.iter().any(|r| r.len() != N) {
+        return Err(format!("{}: '{name}' must be {N} rows of {N} numbers", file.display()));
+    }
+    let m = nalgebra::SMatrix::<f64, N, N>::from_fn(|i, j| rows[i][j]);
+    if m.iter().any(|x| !x.is_finite()) {
+        return Err(format!("{}: '{name}' holds a non-finite number", file.display()));
+    }
+    if (m - m.transpose()).amax() > 1e-12 * m.amax() {
+        return Err(format!("{}: '{name}' is not symmetric", file.display()));
+    }
+    if (0..N).any(|i| m[(i, i)] < 0.0) {
+        return Err(format!("{}: '{name}' has a negative diagonal entry", file.display()));
+    }
+    Ok(m)
+}
+
+/// Reads a calibration file. `Ok(None)`: the file holds no matrices (not yet calibrated).
+pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read calibration file {}: {e}", path.display()))?;
+    let file: File = toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
+    let status = file.status.unwrap_or_else(|| "unspecified".into());
+    match (file.q, file.r) {
+        (None, None) => Ok(None),
+        (Some(q), Some(r)) => {
+            let step_size = file
+                .step_size
+                .filter(|h| *h > 0.0 && h.is_finite())
+                .ok_or_else(|| format!("{}: 'step_size' (the step Q was computed for) must be a positive number", path.display()))?;
+            let q = matrix::<7>(&q, "q", path)?;
+            let r = matrix::<4>(&r, "r", path)?;
+            if r.cholesky().is_none() {
+                return Err(format!("{}: 'r' is not positive definite", path.display()));
+            }
+            Ok(Some(Calibration { status, step_size, q, r }))
+        }
+        _ => Err(format!("{}: give both 'q' and 'r', or neither", path.display())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("fmu-estimator-cal-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("calibration.toml");
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn the_shipped_file_holds_no_matrices_yet() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/calibration.toml");
+        assert_eq!(load(&p).unwrap(), None);
+    }
+
+    #[test]
+    fn a_full_calibration_is_read() {
+        let q: Vec<String> = (0..7).map(|i| format!("[{}]", (0..7).map(|j| if i == j { "1e-6" } else { "0" }).collect::<Vec<_>>().join(","))).collect();
+        let r: Vec<String> = (0..4).map(|i| format!("[{}]", (0..4).map(|j| if i == j { "2e-4" } else { "0" }).collect::<Vec<_>>().join(","))).collect();
+        let p = write("full", &format!("status = \"test\"\nstep_size = 0.001\nq = [{}]\nr = [{}]\n", q.join(","), r.join(",")));
+        let c = load(&p).unwrap().unwrap();
+        assert_eq!(c.q[(6, 6)], 1e-6);
+        assert_eq!(c.r[(3, 3)], 2e-4);
+        assert_eq!(c.step_size, 0.001);
+    }
+
+    #[test]
+    fn bad_files_are_refused_with_the_file_and_entry_named() {
+        let p = write("bad1", "q = [[1.0]]\nr = [[1.0]]\nstep_size = 0.001\n");
+        let e = load(&p).unwrap_err();
+        assert!(e.contains("calibration.toml") && e.contains("'q' must be 7 rows"), "{e}");
+        let p = write("bad2", "q = [[1.0]]\n");
+        assert!(load(&p).unwrap_err().contains("both"));
+        let p = write("bad3", "this is = not toml [");
+        assert!(load(&p).unwrap_err().contains("calibration.toml"));
+        let e = load(Path::new("/nonexistent/calibration.toml")).unwrap_err();
+        assert!(e.contains("/nonexistent/calibration.toml"), "{e}");
+    }
+}

@@ -1,0 +1,377 @@
+//! The estimator as an FMI model: its variable table and what each FMI phase does.
+//!
+//! Timing: `fmi2DoStep(t, h)` predicts from `t` to `t + h` and then updates with the inputs
+//! present at that call, taken as the sensor samples at `t + h`. That is what a Gauss-Seidel
+//! master with the vehicle stepped first delivers; with a Jacobi master the samples are one
+//! step old, a latency the study accounts for. Outputs are the estimate at `t + h`.
+
+use crate::calibration::{self, Calibration};
+use crate::discretize::{Scheme, transition};
+use crate::filter::{Kalman, Mat4, Vec4, Vec7};
+use crate::model::{Mat4x7, Mat7, measurement_matrix, state_matrix};
+use crate::observability::pbh_rank;
+use crate::params::Params;
+use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, VarSpec, Values};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Real value references.
+pub mod vr {
+    pub const WS_ACC_Y: u32 = 0;
+    pub const WS_YAW_RATE: u32 = 1;
+    pub const FRAME_ACC_Y: u32 = 2;
+    pub const SPEED: u32 = 3;
+    pub const ALIGNMENT: u32 = 4;
+    pub const ALIGNMENT_STD: u32 = 5;
+    pub const DISTANCE: u32 = 6;
+    pub const EST_Y: u32 = 7;
+    pub const EST_PSI: u32 = 8;
+    pub const EST_Y_F: u32 = 9;
+    pub const EST_VY: u32 = 10;
+    pub const EST_PSI_RATE: u32 = 11;
+    pub const EST_VY_F: u32 = 12;
+    pub const NIS: u32 = 13;
+    pub const M: u32 = 14;
+    pub const I: u32 = 15;
+    pub const L: u32 = 16;
+    pub const L_S: u32 = 17;
+    pub const ALPHA: u32 = 18;
+    pub const R_0: u32 = 19;
+    pub const M_F: u32 = 20;
+    pub const F11: u32 = 21;
+    pub const F22: u32 = 22;
+    pub const F23: u32 = 23;
+    pub const F33: u32 = 24;
+    pub const KX: u32 = 25;
+    pub const CX: u32 = 26;
+    pub const KY: u32 = 27;
+    pub const CY: u32 = 28;
+    pub const G: u32 = 29;
+    pub const SIGMA_ACC_WS: u32 = 30;
+    pub const SIGMA_YAW_RATE: u32 = 31;
+    pub const SIGMA_ACC_FRAME: u32 = 32;
+    pub const SIGMA_XI: u32 = 33;
+    pub const Q_ACC_WS: u32 = 34;
+    pub const Q_YAW_ACC: u32 = 35;
+    pub const Q_ACC_FRAME: u32 = 36;
+    pub const Q_XI: u32 = 37;
+    pub const P0_XI: u32 = 38;
+    pub const MIN_SPEED: u32 = 39;
+    // Integer
+    pub const DISCRETIZATION: u32 = 0;
+    pub const SKIPPED_UPDATES: u32 = 1;
+    pub const REBUILDS: u32 = 2;
+    // Boolean
+    pub const USE_CALIBRATION_FILE: u32 = 0;
+    pub const UPDATED: u32 = 1;
+    // String
+    pub const CALIBRATION_FILE: u32 = 0;
+}
+
+const P: Params = Params {
+    m: 1109.0,
+    i: 606.0,
+    l: 0.75,
+    l_s: 0.85,
+    alpha: 0.1,
+    r_0: 0.425,
+    m_f: 3781.0,
+    f11: 5.5e6,
+    f22: 5.0e6,
+    f23: 9.3e3,
+    f33: 15.0,
+    kx: 7.95e5,
+    cx: 1.47e4,
+    ky: 4.12e6,
+    cy: 1.41e5,
+    g: 9.81,
+};
+
+/// The variable table: the single source of the FMU's interface (see `fmi_abi::variables`).
+pub static VARIABLES: &[VarSpec] = &[
+    VarSpec::real_input(vr::WS_ACC_Y, "ws_acc_y", "m/s2", 0.0, "Wheelset lateral acceleration (accelerometer on the axle box)"),
+    VarSpec::real_input(vr::WS_YAW_RATE, "ws_yaw_rate", "rad/s", 0.0, "Wheelset yaw angular velocity (gyroscope)"),
+    VarSpec::real_input(vr::FRAME_ACC_Y, "frame_acc_y", "m/s2", 0.0, "Bogie frame lateral acceleration above the wheelset (accelerometer)"),
+    VarSpec::real_input(vr::SPEED, "speed", "m/s", 20.0, "Forward speed of the vehicle; below min_speed the estimate is held"),
+    VarSpec::real_output(vr::ALIGNMENT, "alignment", "m", 0.0, "Estimated lateral alignment of the track at the wheelset"),
+    VarSpec::real_output_calculated(vr::ALIGNMENT_STD, "alignment_std", "m", "Standard deviation of the alignment estimate (square root of P[7,7])"),
+    VarSpec::real_output(vr::DISTANCE, "distance", "m", 0.0, "Distance travelled, integrated from speed (rectangle rule, speed sampled at the end of each step)"),
+    VarSpec::real_output(vr::EST_Y, "est_y", "m", 0.0, "Estimated wheelset lateral displacement from the ideal track centre line"),
+    VarSpec::real_output(vr::EST_PSI, "est_psi", "rad", 0.0, "Estimated wheelset yaw angle"),
+    VarSpec::real_output(vr::EST_Y_F, "est_y_f", "m", 0.0, "Estimated suspended frame lateral displacement"),
+    VarSpec::real_output(vr::EST_VY, "est_vy", "m/s", 0.0, "Estimated wheelset lateral velocity"),
+    VarSpec::real_output(vr::EST_PSI_RATE, "est_psi_rate", "rad/s", 0.0, "Estimated wheelset yaw rate"),
+    VarSpec::real_output(vr::EST_VY_F, "est_vy_f", "m/s", 0.0, "Estimated suspended frame lateral velocity"),
+    VarSpec::real_output(vr::NIS, "nis", "1", 0.0, "Normalized innovation squared of the last update (chi-square with 4 degrees of freedom when the filter is consistent)"),
+    VarSpec::real_parameter(vr::M, "m", "kg", P.m, "Wheelset mass (paper Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::I, "I", "kg.m2", P.i, "Wheelset yaw moment of inertia (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::L, "l", "m", P.l, "Half the distance between the wheel-rail contact points (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::L_S, "l_s", "m", P.l_s, "Half the distance between the longitudinal primary suspension elements (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::ALPHA, "alpha", "1", P.alpha, "Nominal conicity of the wheel treads (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::R_0, "r_0", "m", P.r_0, "Rolling radius of the centred wheelset; Table 2 prints 0.85 m, the wheel diameter (see docs)").min(0.0),
+    VarSpec::real_parameter(vr::M_F, "m_f", "kg", P.m_f, "Suspended mass carried by the wheelset: quarter car body plus half bogie frame (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::F11, "f11", "N", P.f11, "Kalker longitudinal creep coefficient per wheel (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::F22, "f22", "N", P.f22, "Kalker lateral creep coefficient per wheel (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::F23, "f23", "N.m", P.f23, "Kalker lateral/spin creep coefficient per wheel (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::F33, "f33", "N.m2", P.f33, "Kalker spin creep coefficient per wheel (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::KX, "kx", "N/m", P.kx, "Longitudinal primary stiffness per side at +/- l_s (Table 2, identified)").min(0.0),
+    VarSpec::real_parameter(vr::CX, "cx", "N.s/m", P.cx, "Longitudinal primary damping per side at +/- l_s (Table 2, identified)").min(0.0),
+    VarSpec::real_parameter(vr::KY, "ky", "N/m", P.ky, "Lateral primary stiffness, wheelset to frame (Table 2, identified)").min(0.0),
+    VarSpec::real_parameter(vr::CY, "cy", "N.s/m", P.cy, "Lateral primary damping, wheelset to frame (Table 2, identified)").min(0.0),
+    VarSpec::real_parameter(vr::G, "g", "m/s2", P.g, "Gravitational acceleration (gravitational stiffness W alpha / l)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_ACC_WS, "sigma_acc_ws", "m/s2", 0.01, "Noise sigma of the wheelset accelerometer (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_YAW_RATE, "sigma_yaw_rate", "rad/s", 0.0005, "Noise sigma of the gyroscope (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_ACC_FRAME, "sigma_acc_frame", "m/s2", 0.01, "Noise sigma of the frame accelerometer (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_XI, "sigma_xi", "m", 0.005, "Sigma of the virtual measurement alignment = 0 (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_ACC_WS, "q_acc_ws", "m2/s3", 1e-2, "Intensity of the white acceleration noise on the wheelset (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_YAW_ACC, "q_yaw_acc", "1", 1e-2, "Intensity of the white yaw acceleration noise on the wheelset [rad2/s3] (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_ACC_FRAME, "q_acc_frame", "m2/s3", 1e-3, "Intensity of the white acceleration noise on the frame (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_XI, "q_xi", "1", 1e-5, "Intensity of the alignment random walk [m2/s] (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::P0_XI, "p0_xi", "m", 0.005, "Initial standard deviation of the alignment estimate").min(0.0),
+    VarSpec::real_parameter(vr::MIN_SPEED, "min_speed", "m/s", 0.5, "Below this speed the filter holds its estimate (creep terms divide by the speed)").min(0.0),
+    VarSpec::integer_parameter(vr::DISCRETIZATION, "discretization", 1, "1: the paper's second-order Taylor scheme; 2: exact (matrix exponential)").min(1.0).max(2.0),
+    VarSpec::integer_output(vr::SKIPPED_UPDATES, "skipped_updates", 0, "Steps whose measurement update was skipped (non-finite sample or singular innovation covariance)"),
+    VarSpec::integer_output(vr::REBUILDS, "rebuilds", 0, "How many times F, H and Q were rebuilt (on a change of speed or step size)"),
+    VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
+    VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
+    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file, relative to the FMU's resources directory or absolute"),
+];
+
+/// Matrices valid for one (speed, step) pair.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Discrete {
+    speed: f64,
+    h: f64,
+    f: Mat7,
+    hm: Mat4x7,
+    q: Mat7,
+}
+
+/// The estimator's FMI model state. Everything here is part of a saved FMU state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Estimator {
+    resources: Option<PathBuf>,
+    params: Params,
+    scheme: Scheme,
+    calibration: Option<Calibration>,
+    /// Q per second of the diagonal model (used when there is no calibration).
+    q_rate: Mat7,
+    r: Mat4,
+    min_speed: f64,
+    filter: Kalman,
+    discrete: Option<Discrete>,
+    skipped: i32,
+    rebuilds: i32,
+    holding: bool,
+}
+
+/// Reads the Params from the FMI values.
+fn params_from(v: &Values) -> Params {
+    let r = |i: u32| v.real[i as usize];
+    Params {
+        m: r(vr::M),
+        i: r(vr::I),
+        l: r(vr::L),
+        l_s: r(vr::L_S),
+        alpha: r(vr::ALPHA),
+        r_0: r(vr::R_0),
+        m_f: r(vr::M_F),
+        f11: r(vr::F11),
+        f22: r(vr::F22),
+        f23: r(vr::F23),
+        f33: r(vr::F33),
+        kx: r(vr::KX),
+        cx: r(vr::CX),
+        ky: r(vr::KY),
+        cy: r(vr::CY),
+        g: r(vr::G),
+    }
+}
+
+/// Initial covariance: the alignment from `p0_xi`, the body states from typical amplitudes
+/// (5 mm, 1 mrad, 5 mm; 0.05 m/s, 0.01 rad/s, 0.05 m/s) of a wheelset running at speed.
+fn initial_covariance(p0_xi: f64) -> Mat7 {
+    let s = [5e-3, 1e-3, 5e-3, 5e-2, 1e-2, 5e-2, p0_xi];
+    Mat7::from_diagonal(&Vec7::from_fn(|i, _| s[i] * s[i]))
+}
+
+impl Estimator {
+    fn write_outputs(&self, v: &mut Values) {
+        let x = &self.filter.x;
+        let o = &mut v.real;
+        o[vr::ALIGNMENT as usize] = x[6];
+        o[vr::ALIGNMENT_STD as usize] = self.filter.p[(6, 6)].max(0.0).sqrt();
+        o[vr::EST_Y as usize] = x[0];
+        o[vr::EST_PSI as usize] = x[1];
+        o[vr::EST_Y_F as usize] = x[2];
+        o[vr::EST_VY as usize] = x[3];
+        o[vr::EST_PSI_RATE as usize] = x[4];
+        o[vr::EST_VY_F as usize] = x[5];
+        v.integer[vr::SKIPPED_UPDATES as usize] = self.skipped;
+        v.integer[vr::REBUILDS as usize] = self.rebuilds;
+    }
+
+    /// Rebuilds F, H and Q when the speed or the step differs from the last ones (exact
+    /// comparison: a constant-speed run builds them once).
+    fn ensure_discrete(&mut self, speed: f64, h: f64, log: &Logger) {
+        if let Some(d) = &self.discrete
+            && d.speed == speed
+            && d.h == h
+        {
+            return;
+        }
+        let fc = state_matrix(&self.params, speed);
+        let f = transition(&fc, h, self.scheme);
+        let hm = measurement_matrix(&fc);
+        let q = match &self.calibration {
+            Some(c) => c.q * (h / c.step_size),
+            None => self.q_rate * h,
+        };
+        if self.rebuilds == 0
+            && let Some(c) = &self.calibration
+            && (h - c.step_size).abs() > 1e-12 * h
+        {
+            log.info(&format!("calibrated Q was computed for a step of {} s; scaled to {h} s", c.step_size));
+        }
+        self.discrete = Some(Discrete { speed, h, f, hm, q });
+        self.rebuilds += 1;
+    }
+}
+
+impl Model for Estimator {
+    const INFO: ModelInfo = ModelInfo {
+        model_name: "AlignmentEstimator",
+        model_identifier: "AlignmentEstimator",
+        guid: "7d0c3f4e-5b1a-4c8e-9a52-3e6f1d2b8a41",
+        description: "Kalman filter estimate of the lateral alignment of a straight railway track from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer (Munoz, Ros, Escalona).",
+        author: "railway track-geometry toolkit",
+        version: env!("CARGO_PKG_VERSION"),
+        default_start: 0.0,
+        default_stop: 20.0,
+        default_step: 0.001,
+    };
+
+    fn variables() -> &'static [VarSpec] {
+        VARIABLES
+    }
+
+    fn instantiate(ctx: &InstantiateContext, _log: &Logger) -> Result<Self, String> {
+        Ok(Estimator {
+            resources: ctx.resources.clone(),
+            params: Params::default(),
+            scheme: Scheme::Taylor2,
+            calibration: None,
+            q_rate: Mat7::zeros(),
+            r: Mat4::identity(),
+            min_speed: 0.5,
+            filter: Kalman::new(Vec7::zeros(), initial_covariance(0.005)),
+            discrete: None,
+            skipped: 0,
+            rebuilds: 0,
+            holding: false,
+        })
+    }
+
+    fn calculate_initial(&mut self, v: &mut Values) {
+        v.real[vr::ALIGNMENT_STD as usize] = v.real[vr::P0_XI as usize];
+    }
+
+    fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {
+        let params = params_from(v);
+        params.check()?;
+        self.params = params;
+        self.scheme = Scheme::from_fmi(v.integer[vr::DISCRETIZATION as usize])?;
+        let r = |i: u32| v.real[i as usize];
+        let sig = [r(vr::SIGMA_ACC_WS), r(vr::SIGMA_YAW_RATE), r(vr::SIGMA_ACC_FRAME), r(vr::SIGMA_XI)];
+        self.r = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
+        let q = [0.0, 0.0, 0.0, r(vr::Q_ACC_WS), r(vr::Q_YAW_ACC), r(vr::Q_ACC_FRAME), r(vr::Q_XI)];
+        self.q_rate = Mat7::from_diagonal(&Vec7::from_fn(|i, _| q[i]));
+        self.min_speed = r(vr::MIN_SPEED);
+        self.calibration = None;
+        if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
+            let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
+            let path = if name.is_absolute() { Some(name) } else { self.resources.as_ref().map(|d| d.join(&name)) };
+            match path {
+                Some(path) if path.exists() => match calibration::load(&path)? {
+                    Some(c) => {
+                        log.info(&format!("Q and R from {} ({})", path.display(), c.status));
+                        self.r = c.r;
+                        self.calibration = Some(c);
+                    }
+                    None => log.info(&format!("{} holds no matrices: using the diagonal noise model", path.display())),
+                },
+                Some(path) => log.warning(&format!(
+                    "calibration file {} not found: using the diagonal noise model from the FMI parameters",
+                    path.display()
+                )),
+                None => log.warning("no resources directory: using the diagonal noise model from the FMI parameters"),
+            }
+        }
+        if self.calibration.is_none() && sig.iter().any(|s| *s <= 0.0) {
+            return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
+        }
+        self.filter = Kalman::new(Vec7::zeros(), initial_covariance(r(vr::P0_XI)));
+        let speed = r(vr::SPEED);
+        if speed.is_finite() && speed >= self.min_speed {
+            let fc = state_matrix(&self.params, speed);
+            let (rank, lambda) = pbh_rank(&fc, &measurement_matrix(&fc));
+            if rank < 7 {
+                log.warning(&format!(
+                    "the model is not observable at {speed} m/s (PBH rank {rank} < 7 at eigenvalue {lambda}): some states cannot be estimated from the sensors"
+                ));
+            }
+        }
+        self.write_outputs(v);
+        Ok(())
+    }
+
+    fn do_step(&mut self, v: &mut Values, _t: f64, h: f64, log: &Logger) -> Result<StepOutcome, String> {
+        let speed = v.real[vr::SPEED as usize];
+        let mut outcome = StepOutcome::Ok;
+        if speed.is_finite() {
+            v.real[vr::DISTANCE as usize] += speed * h;
+        }
+        if !(speed >= self.min_speed) || !speed.is_finite() {
+            if !self.holding {
+                log.info(&format!("speed {speed} m/s is below min_speed {} m/s: holding the estimate", self.min_speed));
+                self.holding = true;
+            }
+            if !speed.is_finite() {
+                log.warning(&format!("non-finite speed {speed}: estimate held"));
+                outcome = StepOutcome::Warning;
+            }
+            v.boolean[vr::UPDATED as usize] = false;
+            return Ok(outcome);
+        }
+        self.holding = false;
+        self.ensure_discrete(speed, h, log);
+        let d = self.discrete.as_ref().expect("built above");
+        self.filter.predict(&d.f, &d.q);
+        let z = Vec4::new(v.real[vr::WS_ACC_Y as usize], v.real[vr::WS_YAW_RATE as usize], v.real[vr::FRAME_ACC_Y as usize], 0.0);
+        let mut updated = false;
+        if z.iter().all(|x| x.is_finite()) {
+            match self.filter.update(&d.hm, &self.r, &z) {
+                Some(nis) => {
+                    v.real[vr::NIS as usize] = nis;
+                    updated = true;
+                }
+                None => {
+                    log.warning("innovation covariance not positive definite: measurement update skipped");
+                    outcome = StepOutcome::Warning;
+                }
+            }
+        } else {
+            log.warning(&format!(
+                "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
+                z[0], z[1], z[2]
+            ));
+            outcome = StepOutcome::Warning;
+        }
+        if !updated {
+            self.skipped += 1;
+        }
+        v.boolean[vr::UPDATED as usize] = updated;
+        self.write_outputs(v);
+        Ok(outcome)
+    }
+}
