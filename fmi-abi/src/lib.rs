@@ -22,6 +22,9 @@
 //!   NULL callbacks or logger, NULL componentEnvironment, a second fmi2Terminate, a
 //!   fmuResourceLocation in any of the forms importers send.
 
+// `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod description;
 pub mod export;
 pub mod instance;

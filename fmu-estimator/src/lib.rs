@@ -13,6 +13,9 @@
 //! The FMU's variables are listed in `documentation/index.html` inside the packaged FMU and in
 //! the README.
 
+// `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod calibration;
 pub mod discretize;
 pub mod filter;
