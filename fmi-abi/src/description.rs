@@ -6,8 +6,8 @@ use crate::model::Model;
 use crate::units::unit;
 use crate::variables::{Start, VarSpec};
 use model_description::{
-    Category, CoSimulation, DefaultExperiment, IntegerAttributes, ModelDescription, ModelStructure, RealAttributes,
-    ScalarVariable, VariableKind,
+    Category, CoSimulation, DefaultExperiment, IntegerAttributes, ModelDescription, ModelStructure,
+    RealAttributes, ScalarVariable, VariableKind,
 };
 
 fn scalar_variable(v: &VarSpec) -> ScalarVariable {
@@ -25,8 +25,14 @@ fn scalar_variable(v: &VarSpec) -> ScalarVariable {
             start: v.has_start.then_some(x),
             ..IntegerAttributes::default()
         }),
-        Start::Boolean(x) => VariableKind::Boolean { declared_type: None, start: v.has_start.then_some(x) },
-        Start::String(x) => VariableKind::String { declared_type: None, start: v.has_start.then(|| x.to_string()) },
+        Start::Boolean(x) => VariableKind::Boolean {
+            declared_type: None,
+            start: v.has_start.then_some(x),
+        },
+        Start::String(x) => VariableKind::String {
+            declared_type: None,
+            start: v.has_start.then(|| x.to_string()),
+        },
     };
     ScalarVariable {
         name: v.name.to_string(),
@@ -51,7 +57,9 @@ pub fn model_description<M: Model>() -> ModelDescription {
     unit_names.dedup();
     let unit_definitions = unit_names
         .iter()
-        .map(|u| unit(u).unwrap_or_else(|| panic!("unit '{u}' is not in fmi_abi::units; add it there")))
+        .map(|u| {
+            unit(u).unwrap_or_else(|| panic!("unit '{u}' is not in fmi_abi::units; add it there"))
+        })
         .collect();
     let model_structure = ModelStructure::derive(&variables, |_| Some(vec![]));
     ModelDescription {
@@ -94,7 +102,10 @@ pub fn model_description<M: Model>() -> ModelDescription {
 }
 
 fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// documentation/index.html: the method (an HTML fragment the FMU crate writes) followed by a

@@ -81,7 +81,9 @@ unsafe fn with<M: Model>(
             let text = panic_text(payload.as_ref());
             let inst = unsafe { &mut *inst };
             let _ = catch_unwind(AssertUnwindSafe(|| {
-                inst.poison(&format!("{function}: internal error ({text}); the instance can only be freed"))
+                inst.poison(&format!(
+                    "{function}: internal error ({text}); the instance can only be freed"
+                ))
             }));
             fmi2Status::Fatal
         }
@@ -89,23 +91,37 @@ unsafe fn with<M: Model>(
 }
 
 /// A slice from a C array, or an error naming the argument when it is NULL.
-unsafe fn slice<'a, T>(inst: &Instance<impl Model>, p: *const T, n: usize, what: &str, function: &str) -> Result<&'a [T], fmi2Status> {
+unsafe fn slice<'a, T>(
+    inst: &Instance<impl Model>,
+    p: *const T,
+    n: usize,
+    what: &str,
+    function: &str,
+) -> Result<&'a [T], fmi2Status> {
     if n == 0 {
         return Ok(&[]);
     }
     if p.is_null() {
-        inst.log.error(&format!("{function}: {what} is NULL but nvr = {n}"));
+        inst.log
+            .error(&format!("{function}: {what} is NULL but nvr = {n}"));
         return Err(fmi2Status::Error);
     }
     Ok(unsafe { std::slice::from_raw_parts(p, n) })
 }
 
-unsafe fn slice_mut<'a, T>(inst: &Instance<impl Model>, p: *mut T, n: usize, what: &str, function: &str) -> Result<&'a mut [T], fmi2Status> {
+unsafe fn slice_mut<'a, T>(
+    inst: &Instance<impl Model>,
+    p: *mut T,
+    n: usize,
+    what: &str,
+    function: &str,
+) -> Result<&'a mut [T], fmi2Status> {
     if n == 0 {
         return Ok(&mut []);
     }
     if p.is_null() {
-        inst.log.error(&format!("{function}: {what} is NULL but nvr = {n}"));
+        inst.log
+            .error(&format!("{function}: {what} is NULL but nvr = {n}"));
         return Err(fmi2Status::Error);
     }
     Ok(unsafe { std::slice::from_raw_parts_mut(p, n) })
@@ -142,7 +158,11 @@ pub unsafe fn instantiate<M: Model>(
     logging_on: fmi2Boolean,
 ) -> fmi2Component {
     let result = catch_unwind(AssertUnwindSafe(|| {
-        let callbacks = if functions.is_null() { None } else { Some(unsafe { *functions }) };
+        let callbacks = if functions.is_null() {
+            None
+        } else {
+            Some(unsafe { *functions })
+        };
         let name = unsafe { string_arg(instance_name) }.unwrap_or_default();
         let log = Logger::new(callbacks, &name, logging_on != 0);
         if instance_name.is_null() {
@@ -177,10 +197,16 @@ pub unsafe fn instantiate<M: Model>(
                 location.as_deref().unwrap_or("NULL")
             ));
         }
-        let ctx = InstantiateContext { instance_name: name, resources };
+        let ctx = InstantiateContext {
+            instance_name: name,
+            resources,
+        };
         match Instance::<M>::new(&ctx, log) {
             Ok(inst) => {
-                let h = Box::new(Handle { magic: const { model_magic(M::INFO.guid) }, inst });
+                let h = Box::new(Handle {
+                    magic: const { model_magic(M::INFO.guid) },
+                    inst,
+                });
                 Box::into_raw(h) as fmi2Component
             }
             Err((log, e)) => {
@@ -204,16 +230,26 @@ pub unsafe fn free_instance<M: Model>(c: fmi2Component) {
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn set_debug_logging<M: Model>(c: fmi2Component, on: fmi2Boolean, n: usize, categories: *const fmi2String) -> fmi2Status {
+pub unsafe fn set_debug_logging<M: Model>(
+    c: fmi2Component,
+    on: fmi2Boolean,
+    n: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SetDebugLogging", |inst| {
             let cats = slice(inst, categories, n, "categories", "fmi2SetDebugLogging")?;
-            let names: Vec<String> = cats.iter().map(|&p| string_arg(p).unwrap_or_default()).collect();
+            let names: Vec<String> = cats
+                .iter()
+                .map(|&p| string_arg(p).unwrap_or_default())
+                .collect();
             let unknown = inst.log.set_categories(on != 0, &names);
             if unknown.is_empty() {
                 Ok(fmi2Status::OK)
             } else {
-                inst.log.warning(&format!("fmi2SetDebugLogging: unknown log categories {unknown:?} ignored"));
+                inst.log.warning(&format!(
+                    "fmi2SetDebugLogging: unknown log categories {unknown:?} ignored"
+                ));
                 Ok(fmi2Status::Warning)
             }
         })
@@ -240,13 +276,21 @@ pub unsafe fn setup_experiment<M: Model>(
 /// # Safety
 /// FMI contract.
 pub unsafe fn enter_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Status {
-    unsafe { with::<M>(c, "fmi2EnterInitializationMode", |inst| ok(inst.enter_initialization_mode())) }
+    unsafe {
+        with::<M>(c, "fmi2EnterInitializationMode", |inst| {
+            ok(inst.enter_initialization_mode())
+        })
+    }
 }
 
 /// # Safety
 /// FMI contract.
 pub unsafe fn exit_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Status {
-    unsafe { with::<M>(c, "fmi2ExitInitializationMode", |inst| ok(inst.exit_initialization_mode())) }
+    unsafe {
+        with::<M>(c, "fmi2ExitInitializationMode", |inst| {
+            ok(inst.exit_initialization_mode())
+        })
+    }
 }
 
 /// # Safety
@@ -263,7 +307,12 @@ pub unsafe fn reset<M: Model>(c: fmi2Component) -> fmi2Status {
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_real<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *mut f64) -> fmi2Status {
+pub unsafe fn get_real<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *mut f64,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetReal", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetReal")?;
@@ -275,7 +324,12 @@ pub unsafe fn get_real<M: Model>(c: fmi2Component, vr: *const u32, n: usize, val
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_integer<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *mut c_int) -> fmi2Status {
+pub unsafe fn get_integer<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *mut c_int,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetInteger", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetInteger")?;
@@ -287,7 +341,12 @@ pub unsafe fn get_integer<M: Model>(c: fmi2Component, vr: *const u32, n: usize, 
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_boolean<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *mut fmi2Boolean) -> fmi2Status {
+pub unsafe fn get_boolean<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetBoolean", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetBoolean")?;
@@ -304,7 +363,12 @@ pub unsafe fn get_boolean<M: Model>(c: fmi2Component, vr: *const u32, n: usize, 
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_string<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *mut fmi2String) -> fmi2Status {
+pub unsafe fn get_string<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetString", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetString")?;
@@ -318,7 +382,12 @@ pub unsafe fn get_string<M: Model>(c: fmi2Component, vr: *const u32, n: usize, v
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn set_real<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *const f64) -> fmi2Status {
+pub unsafe fn set_real<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *const f64,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SetReal", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetReal")?;
@@ -330,7 +399,12 @@ pub unsafe fn set_real<M: Model>(c: fmi2Component, vr: *const u32, n: usize, val
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn set_integer<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *const c_int) -> fmi2Status {
+pub unsafe fn set_integer<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *const c_int,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SetInteger", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetInteger")?;
@@ -342,11 +416,19 @@ pub unsafe fn set_integer<M: Model>(c: fmi2Component, vr: *const u32, n: usize, 
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn set_boolean<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *const fmi2Boolean) -> fmi2Status {
+pub unsafe fn set_boolean<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SetBoolean", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetBoolean")?;
-            let vals: Vec<bool> = slice(inst, value, n, "value", "fmi2SetBoolean")?.iter().map(|&b| b != 0).collect();
+            let vals: Vec<bool> = slice(inst, value, n, "value", "fmi2SetBoolean")?
+                .iter()
+                .map(|&b| b != 0)
+                .collect();
             ok(inst.set_boolean(vr, &vals))
         })
     }
@@ -354,7 +436,12 @@ pub unsafe fn set_boolean<M: Model>(c: fmi2Component, vr: *const u32, n: usize, 
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn set_string<M: Model>(c: fmi2Component, vr: *const u32, n: usize, value: *const fmi2String) -> fmi2Status {
+pub unsafe fn set_string<M: Model>(
+    c: fmi2Component,
+    vr: *const u32,
+    n: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SetString", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetString")?;
@@ -364,7 +451,8 @@ pub unsafe fn set_string<M: Model>(c: fmi2Component, vr: *const u32, n: usize, v
                 match string_arg(p) {
                     Some(s) => vals.push(s),
                     None => {
-                        inst.log.error(&format!("fmi2SetString: value[{i}] is NULL"));
+                        inst.log
+                            .error(&format!("fmi2SetString: value[{i}] is NULL"));
                         return Err(fmi2Status::Error);
                     }
                 }
@@ -376,7 +464,12 @@ pub unsafe fn set_string<M: Model>(c: fmi2Component, vr: *const u32, n: usize, v
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn do_step<M: Model>(c: fmi2Component, t: f64, h: f64, _no_set_prior: fmi2Boolean) -> fmi2Status {
+pub unsafe fn do_step<M: Model>(
+    c: fmi2Component,
+    t: f64,
+    h: f64,
+    _no_set_prior: fmi2Boolean,
+) -> fmi2Status {
     unsafe { with::<M>(c, "fmi2DoStep", |inst| inst.do_step(t, h)) }
 }
 
@@ -385,7 +478,9 @@ pub unsafe fn do_step<M: Model>(c: fmi2Component, t: f64, h: f64, _no_set_prior:
 pub unsafe fn cancel_step<M: Model>(c: fmi2Component) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2CancelStep", |inst| {
-            inst.log.error("fmi2CancelStep: this FMU never returns fmi2Pending, so there is no step to cancel");
+            inst.log.error(
+                "fmi2CancelStep: this FMU never returns fmi2Pending, so there is no step to cancel",
+            );
             Err(fmi2Status::Error)
         })
     }
@@ -396,7 +491,8 @@ pub unsafe fn cancel_step<M: Model>(c: fmi2Component) -> fmi2Status {
 pub unsafe fn unsupported<M: Model>(c: fmi2Component, function: &str, why: &str) -> fmi2Status {
     unsafe {
         with::<M>(c, function, |inst| {
-            inst.log.error(&format!("{function} is not supported: {why}"));
+            inst.log
+                .error(&format!("{function} is not supported: {why}"));
             Err(fmi2Status::Error)
         })
     }
@@ -408,7 +504,8 @@ pub unsafe fn get_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut c_
     unsafe {
         with::<M>(c, "fmi2GetStatus", |inst| {
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetStatus")?;
-            inst.log.call(|| format!("fmi2GetStatus({kind}): no asynchronous step, nothing to report"));
+            inst.log
+                .call(|| format!("fmi2GetStatus({kind}): no asynchronous step, nothing to report"));
             Ok(fmi2Status::Discard)
         })
     }
@@ -416,7 +513,11 @@ pub unsafe fn get_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut c_
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_real_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut f64) -> fmi2Status {
+pub unsafe fn get_real_status<M: Model>(
+    c: fmi2Component,
+    kind: c_int,
+    value: *mut f64,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetRealStatus", |inst| {
             let out = slice_mut(inst, value, 1, "value", "fmi2GetRealStatus")?;
@@ -432,7 +533,11 @@ pub unsafe fn get_real_status<M: Model>(c: fmi2Component, kind: c_int, value: *m
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_integer_status<M: Model>(c: fmi2Component, _kind: c_int, value: *mut c_int) -> fmi2Status {
+pub unsafe fn get_integer_status<M: Model>(
+    c: fmi2Component,
+    _kind: c_int,
+    value: *mut c_int,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetIntegerStatus", |inst| {
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetIntegerStatus")?;
@@ -443,7 +548,11 @@ pub unsafe fn get_integer_status<M: Model>(c: fmi2Component, _kind: c_int, value
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_boolean_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut fmi2Boolean) -> fmi2Status {
+pub unsafe fn get_boolean_status<M: Model>(
+    c: fmi2Component,
+    kind: c_int,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetBooleanStatus", |inst| {
             let out = slice_mut(inst, value, 1, "value", "fmi2GetBooleanStatus")?;
@@ -459,7 +568,11 @@ pub unsafe fn get_boolean_status<M: Model>(c: fmi2Component, kind: c_int, value:
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn get_string_status<M: Model>(c: fmi2Component, _kind: c_int, value: *mut fmi2String) -> fmi2Status {
+pub unsafe fn get_string_status<M: Model>(
+    c: fmi2Component,
+    _kind: c_int,
+    value: *mut fmi2String,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetStringStatus", |inst| {
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetStringStatus")?;
@@ -481,7 +594,10 @@ unsafe fn state_box<'a, M: Model>(s: fmi2FMUstate) -> Option<&'a mut StateBox<M>
 }
 
 fn new_state<M: Model>(snap: Snapshot<M>) -> fmi2FMUstate {
-    Box::into_raw(Box::new(StateBox { magic: const { model_magic(M::INFO.guid) }, snap })) as fmi2FMUstate
+    Box::into_raw(Box::new(StateBox {
+        magic: const { model_magic(M::INFO.guid) },
+        snap,
+    })) as fmi2FMUstate
 }
 
 /// # Safety
@@ -500,7 +616,9 @@ pub unsafe fn get_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstate
                     Ok(fmi2Status::OK)
                 }
                 None => {
-                    inst.log.error("fmi2GetFMUstate: *FMUstate is neither NULL nor a state of this FMU");
+                    inst.log.error(
+                        "fmi2GetFMUstate: *FMUstate is neither NULL nor a state of this FMU",
+                    );
                     Err(fmi2Status::Error)
                 }
             }
@@ -515,7 +633,8 @@ pub unsafe fn set_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstate) -> 
         with::<M>(c, "fmi2SetFMUstate", |inst| match state_box::<M>(state) {
             Some(b) => ok(inst.restore(&b.snap)),
             None => {
-                inst.log.error("fmi2SetFMUstate: FMUstate is NULL or not a state of this FMU");
+                inst.log
+                    .error("fmi2SetFMUstate: FMUstate is NULL or not a state of this FMU");
                 Err(fmi2Status::Error)
             }
         })
@@ -538,7 +657,8 @@ pub unsafe fn free_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstat
                     Ok(fmi2Status::OK)
                 }
                 None => {
-                    inst.log.error("fmi2FreeFMUstate: FMUstate is not a state of this FMU");
+                    inst.log
+                        .error("fmi2FreeFMUstate: FMUstate is not a state of this FMU");
                     Err(fmi2Status::Error)
                 }
             }
@@ -548,12 +668,18 @@ pub unsafe fn free_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstat
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn serialized_fmu_state_size<M: Model>(c: fmi2Component, state: fmi2FMUstate, size: *mut usize) -> fmi2Status {
+pub unsafe fn serialized_fmu_state_size<M: Model>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SerializedFMUstateSize", |inst| {
             let out = slice_mut(inst, size, 1, "size", "fmi2SerializedFMUstateSize")?;
             let Some(b) = state_box::<M>(state) else {
-                inst.log.error("fmi2SerializedFMUstateSize: FMUstate is NULL or not a state of this FMU");
+                inst.log.error(
+                    "fmi2SerializedFMUstateSize: FMUstate is NULL or not a state of this FMU",
+                );
                 return Err(fmi2Status::Error);
             };
             match serialize(&b.snap) {
@@ -572,11 +698,17 @@ pub unsafe fn serialized_fmu_state_size<M: Model>(c: fmi2Component, state: fmi2F
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn serialize_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize) -> fmi2Status {
+pub unsafe fn serialize_fmu_state<M: Model>(
+    c: fmi2Component,
+    state: fmi2FMUstate,
+    bytes: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2SerializeFMUstate", |inst| {
             let Some(b) = state_box::<M>(state) else {
-                inst.log.error("fmi2SerializeFMUstate: FMUstate is NULL or not a state of this FMU");
+                inst.log
+                    .error("fmi2SerializeFMUstate: FMUstate is NULL or not a state of this FMU");
                 return Err(fmi2Status::Error);
             };
             let data = serialize(&b.snap).map_err(|e| {
@@ -590,7 +722,13 @@ pub unsafe fn serialize_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstat
                 ));
                 return Err(fmi2Status::Error);
             }
-            let out = slice_mut(inst, bytes as *mut u8, data.len(), "serializedState", "fmi2SerializeFMUstate")?;
+            let out = slice_mut(
+                inst,
+                bytes as *mut u8,
+                data.len(),
+                "serializedState",
+                "fmi2SerializeFMUstate",
+            )?;
             out.copy_from_slice(&data);
             Ok(fmi2Status::OK)
         })
@@ -599,10 +737,21 @@ pub unsafe fn serialize_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstat
 
 /// # Safety
 /// FMI contract.
-pub unsafe fn deserialize_fmu_state<M: Model>(c: fmi2Component, bytes: *const fmi2Byte, size: usize, state: *mut fmi2FMUstate) -> fmi2Status {
+pub unsafe fn deserialize_fmu_state<M: Model>(
+    c: fmi2Component,
+    bytes: *const fmi2Byte,
+    size: usize,
+    state: *mut fmi2FMUstate,
+) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2DeSerializeFMUstate", |inst| {
-            let data = slice(inst, bytes as *const u8, size, "serializedState", "fmi2DeSerializeFMUstate")?;
+            let data = slice(
+                inst,
+                bytes as *const u8,
+                size,
+                "serializedState",
+                "fmi2DeSerializeFMUstate",
+            )?;
             let slot = slice_mut(inst, state, 1, "FMUstate", "fmi2DeSerializeFMUstate")?;
             match deserialize::<M>(data) {
                 Ok(snap) => {
@@ -643,7 +792,12 @@ macro_rules! export_fmu {
                 x::get_version()
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetDebugLogging(c: fmi2Component, on: fmi2Boolean, n: usize, cats: *const fmi2String) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetDebugLogging(
+                c: fmi2Component,
+                on: fmi2Boolean,
+                n: usize,
+                cats: *const fmi2String,
+            ) -> fmi2Status {
                 unsafe { x::set_debug_logging::<M>(c, on, n, cats) }
             }
             #[unsafe(no_mangle)]
@@ -690,59 +844,122 @@ macro_rules! export_fmu {
                 unsafe { x::reset::<M>(c) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetReal(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *mut f64) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetReal(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *mut f64,
+            ) -> fmi2Status {
                 unsafe { x::get_real::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetInteger(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *mut c_int) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetInteger(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *mut c_int,
+            ) -> fmi2Status {
                 unsafe { x::get_integer::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetBoolean(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *mut fmi2Boolean) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetBoolean(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *mut fmi2Boolean,
+            ) -> fmi2Status {
                 unsafe { x::get_boolean::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetString(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *mut fmi2String) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetString(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *mut fmi2String,
+            ) -> fmi2Status {
                 unsafe { x::get_string::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetReal(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *const f64) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetReal(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *const f64,
+            ) -> fmi2Status {
                 unsafe { x::set_real::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetInteger(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *const c_int) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetInteger(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *const c_int,
+            ) -> fmi2Status {
                 unsafe { x::set_integer::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetBoolean(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *const fmi2Boolean) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetBoolean(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *const fmi2Boolean,
+            ) -> fmi2Status {
                 unsafe { x::set_boolean::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetString(c: fmi2Component, vr: *const fmi2ValueReference, n: usize, v: *const fmi2String) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetString(
+                c: fmi2Component,
+                vr: *const fmi2ValueReference,
+                n: usize,
+                v: *const fmi2String,
+            ) -> fmi2Status {
                 unsafe { x::set_string::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetFMUstate(c: fmi2Component, s: *mut fmi2FMUstate) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetFMUstate(
+                c: fmi2Component,
+                s: *mut fmi2FMUstate,
+            ) -> fmi2Status {
                 unsafe { x::get_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, s: fmi2FMUstate) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SetFMUstate(
+                c: fmi2Component,
+                s: fmi2FMUstate,
+            ) -> fmi2Status {
                 unsafe { x::set_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2FreeFMUstate(c: fmi2Component, s: *mut fmi2FMUstate) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2FreeFMUstate(
+                c: fmi2Component,
+                s: *mut fmi2FMUstate,
+            ) -> fmi2Status {
                 unsafe { x::free_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SerializedFMUstateSize(c: fmi2Component, s: fmi2FMUstate, size: *mut usize) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+                c: fmi2Component,
+                s: fmi2FMUstate,
+                size: *mut usize,
+            ) -> fmi2Status {
                 unsafe { x::serialized_fmu_state_size::<M>(c, s, size) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2SerializeFMUstate(c: fmi2Component, s: fmi2FMUstate, bytes: *mut fmi2Byte, size: usize) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2SerializeFMUstate(
+                c: fmi2Component,
+                s: fmi2FMUstate,
+                bytes: *mut fmi2Byte,
+                size: usize,
+            ) -> fmi2Status {
                 unsafe { x::serialize_fmu_state::<M>(c, s, bytes, size) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(c: fmi2Component, bytes: *const fmi2Byte, size: usize, s: *mut fmi2FMUstate) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+                c: fmi2Component,
+                bytes: *const fmi2Byte,
+                size: usize,
+                s: *mut fmi2FMUstate,
+            ) -> fmi2Status {
                 unsafe { x::deserialize_fmu_state::<M>(c, bytes, size, s) }
             }
             #[unsafe(no_mangle)]
@@ -755,7 +972,13 @@ macro_rules! export_fmu {
                 _dv_known: *const f64,
                 _dv_unknown: *mut f64,
             ) -> fmi2Status {
-                unsafe { x::unsupported::<M>(c, "fmi2GetDirectionalDerivative", "providesDirectionalDerivative is false") }
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2GetDirectionalDerivative",
+                        "providesDirectionalDerivative is false",
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
@@ -765,7 +988,13 @@ macro_rules! export_fmu {
                 _order: *const c_int,
                 _v: *const f64,
             ) -> fmi2Status {
-                unsafe { x::unsupported::<M>(c, "fmi2SetRealInputDerivatives", "canInterpolateInputs is false") }
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2SetRealInputDerivatives",
+                        "canInterpolateInputs is false",
+                    )
+                }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
@@ -775,10 +1004,21 @@ macro_rules! export_fmu {
                 _order: *const c_int,
                 _v: *mut f64,
             ) -> fmi2Status {
-                unsafe { x::unsupported::<M>(c, "fmi2GetRealOutputDerivatives", "maxOutputDerivativeOrder is 0") }
+                unsafe {
+                    x::unsupported::<M>(
+                        c,
+                        "fmi2GetRealOutputDerivatives",
+                        "maxOutputDerivativeOrder is 0",
+                    )
+                }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2DoStep(c: fmi2Component, t: f64, h: f64, no_prior: fmi2Boolean) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2DoStep(
+                c: fmi2Component,
+                t: f64,
+                h: f64,
+                no_prior: fmi2Boolean,
+            ) -> fmi2Status {
                 unsafe { x::do_step::<M>(c, t, h, no_prior) }
             }
             #[unsafe(no_mangle)]
@@ -786,23 +1026,43 @@ macro_rules! export_fmu {
                 unsafe { x::cancel_step::<M>(c) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetStatus(c: fmi2Component, kind: c_int, v: *mut c_int) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetStatus(
+                c: fmi2Component,
+                kind: c_int,
+                v: *mut c_int,
+            ) -> fmi2Status {
                 unsafe { x::get_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetRealStatus(c: fmi2Component, kind: c_int, v: *mut f64) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetRealStatus(
+                c: fmi2Component,
+                kind: c_int,
+                v: *mut f64,
+            ) -> fmi2Status {
                 unsafe { x::get_real_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetIntegerStatus(c: fmi2Component, kind: c_int, v: *mut c_int) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetIntegerStatus(
+                c: fmi2Component,
+                kind: c_int,
+                v: *mut c_int,
+            ) -> fmi2Status {
                 unsafe { x::get_integer_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetBooleanStatus(c: fmi2Component, kind: c_int, v: *mut fmi2Boolean) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetBooleanStatus(
+                c: fmi2Component,
+                kind: c_int,
+                v: *mut fmi2Boolean,
+            ) -> fmi2Status {
                 unsafe { x::get_boolean_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
-            pub unsafe extern "C" fn fmi2GetStringStatus(c: fmi2Component, kind: c_int, v: *mut fmi2String) -> fmi2Status {
+            pub unsafe extern "C" fn fmi2GetStringStatus(
+                c: fmi2Component,
+                kind: c_int,
+                v: *mut fmi2String,
+            ) -> fmi2Status {
                 unsafe { x::get_string_status::<M>(c, kind, v) }
             }
         }
@@ -811,11 +1071,38 @@ macro_rules! export_fmu {
 
 /// The names of the 34 functions, for tests and for the importer's symbol check.
 pub const FUNCTION_NAMES: [&str; 34] = [
-    "fmi2GetTypesPlatform", "fmi2GetVersion", "fmi2SetDebugLogging", "fmi2Instantiate", "fmi2FreeInstance",
-    "fmi2SetupExperiment", "fmi2EnterInitializationMode", "fmi2ExitInitializationMode", "fmi2Terminate", "fmi2Reset",
-    "fmi2GetReal", "fmi2GetInteger", "fmi2GetBoolean", "fmi2GetString", "fmi2SetReal", "fmi2SetInteger",
-    "fmi2SetBoolean", "fmi2SetString", "fmi2GetFMUstate", "fmi2SetFMUstate", "fmi2FreeFMUstate",
-    "fmi2SerializedFMUstateSize", "fmi2SerializeFMUstate", "fmi2DeSerializeFMUstate", "fmi2GetDirectionalDerivative",
-    "fmi2SetRealInputDerivatives", "fmi2GetRealOutputDerivatives", "fmi2DoStep", "fmi2CancelStep", "fmi2GetStatus",
-    "fmi2GetRealStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
+    "fmi2GetTypesPlatform",
+    "fmi2GetVersion",
+    "fmi2SetDebugLogging",
+    "fmi2Instantiate",
+    "fmi2FreeInstance",
+    "fmi2SetupExperiment",
+    "fmi2EnterInitializationMode",
+    "fmi2ExitInitializationMode",
+    "fmi2Terminate",
+    "fmi2Reset",
+    "fmi2GetReal",
+    "fmi2GetInteger",
+    "fmi2GetBoolean",
+    "fmi2GetString",
+    "fmi2SetReal",
+    "fmi2SetInteger",
+    "fmi2SetBoolean",
+    "fmi2SetString",
+    "fmi2GetFMUstate",
+    "fmi2SetFMUstate",
+    "fmi2FreeFMUstate",
+    "fmi2SerializedFMUstateSize",
+    "fmi2SerializeFMUstate",
+    "fmi2DeSerializeFMUstate",
+    "fmi2GetDirectionalDerivative",
+    "fmi2SetRealInputDerivatives",
+    "fmi2GetRealOutputDerivatives",
+    "fmi2DoStep",
+    "fmi2CancelStep",
+    "fmi2GetStatus",
+    "fmi2GetRealStatus",
+    "fmi2GetIntegerStatus",
+    "fmi2GetBooleanStatus",
+    "fmi2GetStringStatus",
 ];

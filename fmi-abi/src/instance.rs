@@ -9,7 +9,7 @@
 use crate::logger::Logger;
 use crate::model::{InstantiateContext, Model, StepOutcome};
 use crate::types::fmi2Status;
-use crate::variables::{Base, Start, VarIndex, VarSpec, Values};
+use crate::variables::{Base, Start, Values, VarIndex, VarSpec};
 use model_description::{Causality, Initial, Variability};
 use serde::{Deserialize, Serialize};
 use std::ffi::CString;
@@ -89,7 +89,13 @@ impl<M: Model> Instance<M> {
             parameters_dirty: false,
             initial_dirty: true,
         };
-        Ok(Instance { log, index, sim: fresh.clone(), fresh, strings_out: vec![] })
+        Ok(Instance {
+            log,
+            index,
+            sim: fresh.clone(),
+            fresh,
+            strings_out: vec![],
+        })
     }
 
     pub fn state(&self) -> State {
@@ -115,7 +121,9 @@ impl<M: Model> Instance<M> {
             return Ok(());
         }
         if self.sim.state == State::Fatal {
-            return Err(self.fail(&format!("{function}: the instance is in the fatal state; only fmi2FreeInstance is allowed")));
+            return Err(self.fail(&format!(
+                "{function}: the instance is in the fatal state; only fmi2FreeInstance is allowed"
+            )));
         }
         let names: Vec<&str> = allowed.iter().map(|s| s.name()).collect();
         Err(self.fail(&format!(
@@ -128,20 +136,28 @@ impl<M: Model> Instance<M> {
     fn spec(&self, base: Base, vr: u32, function: &str) -> Res<&'static VarSpec> {
         match self.index.row(base, vr) {
             Some(row) => Ok(&M::variables()[row]),
-            None => Err(self.fail(&format!("{function}: unknown {} value reference {vr}", base.name()))),
+            None => Err(self.fail(&format!(
+                "{function}: unknown {} value reference {vr}",
+                base.name()
+            ))),
         }
     }
 
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Res {
-        self.log.call(|| format!("fmi2SetupExperiment(startTime={start}, stopTime={stop:?})"));
+        self.log
+            .call(|| format!("fmi2SetupExperiment(startTime={start}, stopTime={stop:?})"));
         self.require("fmi2SetupExperiment", &[State::Instantiated])?;
         if !start.is_finite() {
-            return Err(self.fail(&format!("fmi2SetupExperiment: startTime {start} is not finite")));
+            return Err(self.fail(&format!(
+                "fmi2SetupExperiment: startTime {start} is not finite"
+            )));
         }
         if let Some(stop) = stop
             && !(stop >= start)
         {
-            return Err(self.fail(&format!("fmi2SetupExperiment: stopTime {stop} is before startTime {start}")));
+            return Err(self.fail(&format!(
+                "fmi2SetupExperiment: stopTime {stop} is before startTime {start}"
+            )));
         }
         self.sim.start_time = start;
         self.sim.time = start;
@@ -163,7 +179,10 @@ impl<M: Model> Instance<M> {
             if let Start::Real(_) = v.start {
                 let x = self.sim.values.real[v.vr as usize];
                 if !x.is_finite() {
-                    return Err(format!("parameter '{}' = {x} is not a finite number", v.name));
+                    return Err(format!(
+                        "parameter '{}' = {x} is not a finite number",
+                        v.name
+                    ));
                 }
                 if v.min.is_some_and(|m| x < m) || v.max.is_some_and(|m| x > m) {
                     return Err(format!(
@@ -220,13 +239,19 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn do_step(&mut self, t: f64, h: f64) -> Res<fmi2Status> {
-        self.log.call(|| format!("fmi2DoStep(currentCommunicationPoint={t}, communicationStepSize={h})"));
+        self.log.call(|| {
+            format!("fmi2DoStep(currentCommunicationPoint={t}, communicationStepSize={h})")
+        });
         self.require("fmi2DoStep", &[State::StepComplete])?;
         if !(h > 0.0) || !h.is_finite() {
-            return Err(self.fail(&format!("fmi2DoStep: communicationStepSize {h} must be a positive finite number")));
+            return Err(self.fail(&format!(
+                "fmi2DoStep: communicationStepSize {h} must be a positive finite number"
+            )));
         }
         if !t.is_finite() {
-            return Err(self.fail(&format!("fmi2DoStep: currentCommunicationPoint {t} is not finite")));
+            return Err(self.fail(&format!(
+                "fmi2DoStep: currentCommunicationPoint {t} is not finite"
+            )));
         }
         let tol = 1e-9 * t.abs().max(self.sim.time.abs()).max(1.0);
         if (t - self.sim.time).abs() > tol {
@@ -247,7 +272,11 @@ impl<M: Model> Instance<M> {
         match sim.model.do_step(&mut sim.values, t, h, &self.log) {
             Ok(outcome) => {
                 sim.time = t + h;
-                Ok(if outcome == StepOutcome::Warning { fmi2Status::Warning } else { fmi2Status::OK })
+                Ok(if outcome == StepOutcome::Warning {
+                    fmi2Status::Warning
+                } else {
+                    fmi2Status::OK
+                })
             }
             Err(e) => {
                 sim.state = State::Error;
@@ -259,7 +288,13 @@ impl<M: Model> Instance<M> {
     fn check_get(&mut self, function: &str) -> Res {
         self.require(
             function,
-            &[State::InitializationMode, State::StepComplete, State::StepFailed, State::Terminated, State::Error],
+            &[
+                State::InitializationMode,
+                State::StepComplete,
+                State::StepFailed,
+                State::Terminated,
+                State::Error,
+            ],
         )?;
         if self.sim.state == State::InitializationMode && self.sim.initial_dirty {
             self.sim.model.calculate_initial(&mut self.sim.values);
@@ -273,12 +308,16 @@ impl<M: Model> Instance<M> {
         let ok = match self.sim.state {
             State::Instantiated => {
                 v.variability != Variability::Constant
-                    && (v.causality == Causality::Input || matches!(v.initial, Some(Initial::Exact | Initial::Approx)))
+                    && (v.causality == Causality::Input
+                        || matches!(v.initial, Some(Initial::Exact | Initial::Approx)))
             }
-            State::InitializationMode => v.causality == Causality::Input || v.initial == Some(Initial::Exact),
+            State::InitializationMode => {
+                v.causality == Causality::Input || v.initial == Some(Initial::Exact)
+            }
             State::StepComplete => {
                 v.causality == Causality::Input
-                    || (v.causality == Causality::Parameter && v.variability == Variability::Tunable)
+                    || (v.causality == Causality::Parameter
+                        && v.variability == Variability::Tunable)
             }
             _ => false,
         };
@@ -287,7 +326,9 @@ impl<M: Model> Instance<M> {
         }
         let what = match (v.causality, v.variability) {
             (Causality::Output, _) => "it is an output".to_string(),
-            (Causality::Parameter, Variability::Fixed) => "it is a fixed parameter, settable only before initialization ends".into(),
+            (Causality::Parameter, Variability::Fixed) => {
+                "it is a fixed parameter, settable only before initialization ends".into()
+            }
             _ => "of its causality and variability".into(),
         };
         Err(self.fail(&format!(
@@ -347,7 +388,14 @@ impl<M: Model> Instance<M> {
     }
 
     /// Checks every reference before changing anything, so a bad call changes nothing.
-    fn set_generic<T: Copy>(&mut self, base: Base, function: &str, vr: &[u32], vals: &[T], store: fn(&mut Values, usize, T)) -> Res {
+    fn set_generic<T: Copy>(
+        &mut self,
+        base: Base,
+        function: &str,
+        vr: &[u32],
+        vals: &[T],
+        store: fn(&mut Values, usize, T),
+    ) -> Res {
         let mut rows = Vec::with_capacity(vr.len());
         for r in vr {
             let v = self.spec(base, *r, function)?;
@@ -362,22 +410,30 @@ impl<M: Model> Instance<M> {
     }
 
     pub fn set_real(&mut self, vr: &[u32], vals: &[f64]) -> Res {
-        self.log.call(|| format!("fmi2SetReal(vr={vr:?}, value={vals:?})"));
+        self.log
+            .call(|| format!("fmi2SetReal(vr={vr:?}, value={vals:?})"));
         self.set_generic(Base::Real, "fmi2SetReal", vr, vals, |s, i, x| s.real[i] = x)
     }
 
     pub fn set_integer(&mut self, vr: &[u32], vals: &[i32]) -> Res {
-        self.log.call(|| format!("fmi2SetInteger(vr={vr:?}, value={vals:?})"));
-        self.set_generic(Base::Integer, "fmi2SetInteger", vr, vals, |s, i, x| s.integer[i] = x)
+        self.log
+            .call(|| format!("fmi2SetInteger(vr={vr:?}, value={vals:?})"));
+        self.set_generic(Base::Integer, "fmi2SetInteger", vr, vals, |s, i, x| {
+            s.integer[i] = x
+        })
     }
 
     pub fn set_boolean(&mut self, vr: &[u32], vals: &[bool]) -> Res {
-        self.log.call(|| format!("fmi2SetBoolean(vr={vr:?}, value={vals:?})"));
-        self.set_generic(Base::Boolean, "fmi2SetBoolean", vr, vals, |s, i, x| s.boolean[i] = x)
+        self.log
+            .call(|| format!("fmi2SetBoolean(vr={vr:?}, value={vals:?})"));
+        self.set_generic(Base::Boolean, "fmi2SetBoolean", vr, vals, |s, i, x| {
+            s.boolean[i] = x
+        })
     }
 
     pub fn set_string(&mut self, vr: &[u32], vals: &[String]) -> Res {
-        self.log.call(|| format!("fmi2SetString(vr={vr:?}, value={vals:?})"));
+        self.log
+            .call(|| format!("fmi2SetString(vr={vr:?}, value={vals:?})"));
         let mut rows = Vec::with_capacity(vr.len());
         for r in vr {
             let v = self.spec(Base::String, *r, "fmi2SetString")?;
@@ -436,7 +492,8 @@ pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
             M::INFO.guid
         ));
     };
-    let snap: Snapshot<M> = postcard::from_bytes(body).map_err(|e| format!("the serialized state is corrupt: {e}"))?;
+    let snap: Snapshot<M> =
+        postcard::from_bytes(body).map_err(|e| format!("the serialized state is corrupt: {e}"))?;
     let expected = Values::from_table(M::variables());
     let same_shape = snap.values.real.len() == expected.real.len()
         && snap.values.integer.len() == expected.integer.len()

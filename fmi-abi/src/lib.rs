@@ -37,4 +37,4 @@ pub mod variables;
 
 pub use logger::Logger;
 pub use model::{InstantiateContext, Model, ModelInfo, StepOutcome};
-pub use variables::{VarSpec, Values};
+pub use variables::{Values, VarSpec};

@@ -10,11 +10,26 @@ use std::ffi::{CStr, CString, c_void};
 
 /// The log categories every FMU of ours declares, in the order written to the XML.
 pub const CATEGORIES: &[(&CStr, &str)] = &[
-    (c"logStatusWarning", "Warnings: a call succeeded with a caveat (for example a skipped NaN sample)."),
-    (c"logStatusError", "Errors: a call failed; the message says which argument or state was wrong."),
-    (c"logStatusFatal", "Fatal errors: an internal fault was caught; only fmi2FreeInstance is allowed."),
-    (c"logCalls", "Every FMI function call with its arguments (verbose)."),
-    (c"logModel", "Information from the model (for example when it rebuilds its matrices)."),
+    (
+        c"logStatusWarning",
+        "Warnings: a call succeeded with a caveat (for example a skipped NaN sample).",
+    ),
+    (
+        c"logStatusError",
+        "Errors: a call failed; the message says which argument or state was wrong.",
+    ),
+    (
+        c"logStatusFatal",
+        "Fatal errors: an internal fault was caught; only fmi2FreeInstance is allowed.",
+    ),
+    (
+        c"logCalls",
+        "Every FMI function call with its arguments (verbose).",
+    ),
+    (
+        c"logModel",
+        "Information from the model (for example when it rebuilds its matrices).",
+    ),
 ];
 
 /// Index into [`CATEGORIES`].
@@ -42,14 +57,26 @@ unsafe impl Send for Logger {}
 impl Logger {
     /// Status categories (warning, error, fatal) are on from the start; the debug categories
     /// follow `logging_on`, as fmi2Instantiate's loggingOn asks.
-    pub fn new(callbacks: Option<fmi2CallbackFunctions>, instance_name: &str, logging_on: bool) -> Logger {
+    pub fn new(
+        callbacks: Option<fmi2CallbackFunctions>,
+        instance_name: &str,
+        logging_on: bool,
+    ) -> Logger {
         let name = CString::new(instance_name.replace('\0', "")).unwrap_or_default();
-        Logger { callbacks, instance_name: name, enabled: [true, true, true, logging_on, logging_on] }
+        Logger {
+            callbacks,
+            instance_name: name,
+            enabled: [true, true, true, logging_on, logging_on],
+        }
     }
 
     /// A logger that drops everything, for tests and for running models outside an importer.
     pub fn silent() -> Logger {
-        Logger { callbacks: None, instance_name: CString::default(), enabled: [false; CATEGORIES.len()] }
+        Logger {
+            callbacks: None,
+            instance_name: CString::default(),
+            enabled: [false; CATEGORIES.len()],
+        }
     }
 
     pub fn instance_name(&self) -> &str {
@@ -64,7 +91,10 @@ impl Logger {
         }
         let mut unknown = vec![];
         for name in names {
-            match CATEGORIES.iter().position(|(c, _)| c.to_bytes() == name.as_bytes()) {
+            match CATEGORIES
+                .iter()
+                .position(|(c, _)| c.to_bytes() == name.as_bytes())
+            {
                 Some(i) => self.enabled[i] = on,
                 None => unknown.push(name.clone()),
             }
@@ -123,6 +153,7 @@ impl Logger {
 
     /// The environment pointer, for fmi2StepFinished (not used: we never return fmi2Pending).
     pub fn component_environment(&self) -> *mut c_void {
-        self.callbacks.map_or(std::ptr::null_mut(), |c| c.component_environment)
+        self.callbacks
+            .map_or(std::ptr::null_mut(), |c| c.component_environment)
     }
 }

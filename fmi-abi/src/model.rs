@@ -2,7 +2,7 @@
 //! else (states, checks, logging, FMU state, the C entry points) is the export layer's.
 
 use crate::logger::Logger;
-use crate::variables::{VarSpec, Values};
+use crate::variables::{Values, VarSpec};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::PathBuf;
@@ -64,5 +64,11 @@ pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
     }
 
     /// Advances from `t` to `t + h` with the inputs in `values`, writing the outputs there.
-    fn do_step(&mut self, values: &mut Values, t: f64, h: f64, log: &Logger) -> Result<StepOutcome, String>;
+    fn do_step(
+        &mut self,
+        values: &mut Values,
+        t: f64,
+        h: f64,
+        log: &Logger,
+    ) -> Result<StepOutcome, String>;
 }

@@ -16,7 +16,9 @@ pub fn resource_dir(location: &str) -> Option<PathBuf> {
     if location.starts_with('/') {
         return Some(PathBuf::from(location));
     }
-    let scheme_ok = location.get(..5).is_some_and(|s| s.eq_ignore_ascii_case("file:"));
+    let scheme_ok = location
+        .get(..5)
+        .is_some_and(|s| s.eq_ignore_ascii_case("file:"));
     if !scheme_ok || location.len() == 5 {
         return None;
     }
@@ -61,7 +63,13 @@ mod tests {
 
     #[test]
     fn non_local_locations_are_refused() {
-        for uri in ["", "http://example.com/resources", "file://otherhost/tmp/x", "resources", "file:"] {
+        for uri in [
+            "",
+            "http://example.com/resources",
+            "file://otherhost/tmp/x",
+            "resources",
+            "file:",
+        ] {
             assert_eq!(resource_dir(uri), None, "{uri}");
         }
     }

@@ -68,14 +68,7 @@ pub const FMI2_TERMINATED: c_int = 3;
 /// The variadic, printf-style logger. Rust cannot define one but can call one; we always pass
 /// the message through "%s" so that '%' in a message is never read as a conversion.
 pub type fmi2CallbackLogger = Option<
-    unsafe extern "C" fn(
-        fmi2ComponentEnvironment,
-        fmi2String,
-        c_int,
-        fmi2String,
-        fmi2String,
-        ...
-    ),
+    unsafe extern "C" fn(fmi2ComponentEnvironment, fmi2String, c_int, fmi2String, fmi2String, ...),
 >;
 pub type fmi2CallbackAllocateMemory = Option<unsafe extern "C" fn(usize, usize) -> *mut c_void>;
 pub type fmi2CallbackFreeMemory = Option<unsafe extern "C" fn(*mut c_void)>;
@@ -96,7 +89,10 @@ pub struct fmi2CallbackFunctions {
 mod tests {
     #[test]
     fn callback_struct_has_the_c_layout() {
-        assert_eq!(std::mem::size_of::<super::fmi2CallbackFunctions>(), 5 * std::mem::size_of::<usize>());
+        assert_eq!(
+            std::mem::size_of::<super::fmi2CallbackFunctions>(),
+            5 * std::mem::size_of::<usize>()
+        );
     }
 
     #[test]

@@ -32,9 +32,19 @@ pub fn unit(name: &str) -> Option<Unit> {
     let &(name, kg, m, s, rad) = KNOWN.iter().find(|u| u.0 == name)?;
     Some(Unit {
         name: name.to_string(),
-        base_unit: Some(BaseUnit { kg, m, s, rad, ..BaseUnit::default() }),
+        base_unit: Some(BaseUnit {
+            kg,
+            m,
+            s,
+            rad,
+            ..BaseUnit::default()
+        }),
         display_units: if name == "m" {
-            vec![model_description::DisplayUnit { name: "mm".into(), factor: 0.001, offset: 0.0 }]
+            vec![model_description::DisplayUnit {
+                name: "mm".into(),
+                factor: 0.001,
+                offset: 0.0,
+            }]
         } else {
             vec![]
         },

@@ -54,7 +54,13 @@ impl VarSpec {
     }
 
     /// A continuous real input; inputs carry a start value and no `initial`.
-    pub const fn real_input(vr: u32, name: &'static str, unit: &'static str, start: f64, description: &'static str) -> Self {
+    pub const fn real_input(
+        vr: u32,
+        name: &'static str,
+        unit: &'static str,
+        start: f64,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Real(start), description);
         v.causality = Causality::Input;
         v.unit = Some(unit);
@@ -62,7 +68,13 @@ impl VarSpec {
     }
 
     /// A real output computed by each step; `start` is its value before the first step.
-    pub const fn real_output(vr: u32, name: &'static str, unit: &'static str, start: f64, description: &'static str) -> Self {
+    pub const fn real_output(
+        vr: u32,
+        name: &'static str,
+        unit: &'static str,
+        start: f64,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Real(start), description);
         v.causality = Causality::Output;
         v.initial = Some(Initial::Exact);
@@ -71,7 +83,12 @@ impl VarSpec {
     }
 
     /// A real output whose initial value depends on parameters (listed in InitialUnknowns).
-    pub const fn real_output_calculated(vr: u32, name: &'static str, unit: &'static str, description: &'static str) -> Self {
+    pub const fn real_output_calculated(
+        vr: u32,
+        name: &'static str,
+        unit: &'static str,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::real_output(vr, name, unit, 0.0, description);
         v.initial = Some(Initial::Calculated);
         v.has_start = false;
@@ -79,7 +96,13 @@ impl VarSpec {
     }
 
     /// A fixed real parameter (set before initialization only).
-    pub const fn real_parameter(vr: u32, name: &'static str, unit: &'static str, start: f64, description: &'static str) -> Self {
+    pub const fn real_parameter(
+        vr: u32,
+        name: &'static str,
+        unit: &'static str,
+        start: f64,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Real(start), description);
         v.causality = Causality::Parameter;
         v.variability = Variability::Fixed;
@@ -88,7 +111,12 @@ impl VarSpec {
         v
     }
 
-    pub const fn integer_parameter(vr: u32, name: &'static str, start: i32, description: &'static str) -> Self {
+    pub const fn integer_parameter(
+        vr: u32,
+        name: &'static str,
+        start: i32,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Integer(start), description);
         v.causality = Causality::Parameter;
         v.variability = Variability::Fixed;
@@ -96,7 +124,12 @@ impl VarSpec {
         v
     }
 
-    pub const fn boolean_parameter(vr: u32, name: &'static str, start: bool, description: &'static str) -> Self {
+    pub const fn boolean_parameter(
+        vr: u32,
+        name: &'static str,
+        start: bool,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Boolean(start), description);
         v.causality = Causality::Parameter;
         v.variability = Variability::Fixed;
@@ -104,7 +137,12 @@ impl VarSpec {
         v
     }
 
-    pub const fn string_parameter(vr: u32, name: &'static str, start: &'static str, description: &'static str) -> Self {
+    pub const fn string_parameter(
+        vr: u32,
+        name: &'static str,
+        start: &'static str,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::String(start), description);
         v.causality = Causality::Parameter;
         v.variability = Variability::Fixed;
@@ -112,7 +150,12 @@ impl VarSpec {
         v
     }
 
-    pub const fn integer_output(vr: u32, name: &'static str, start: i32, description: &'static str) -> Self {
+    pub const fn integer_output(
+        vr: u32,
+        name: &'static str,
+        start: i32,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Integer(start), description);
         v.causality = Causality::Output;
         v.variability = Variability::Discrete;
@@ -120,7 +163,12 @@ impl VarSpec {
         v
     }
 
-    pub const fn boolean_output(vr: u32, name: &'static str, start: bool, description: &'static str) -> Self {
+    pub const fn boolean_output(
+        vr: u32,
+        name: &'static str,
+        start: bool,
+        description: &'static str,
+    ) -> Self {
         let mut v = Self::new(vr, name, Start::Boolean(start), description);
         v.causality = Causality::Output;
         v.variability = Variability::Discrete;
@@ -191,7 +239,12 @@ impl VarIndex {
     /// Builds the index and checks that value references are dense and unique per base type;
     /// a table that breaks this is a programming error of the FMU crate, reported by name.
     pub fn new(table: &[VarSpec]) -> Result<VarIndex, String> {
-        let mut idx = VarIndex { real: vec![], integer: vec![], boolean: vec![], string: vec![] };
+        let mut idx = VarIndex {
+            real: vec![],
+            integer: vec![],
+            boolean: vec![],
+            string: vec![],
+        };
         for (row, v) in table.iter().enumerate() {
             let list = idx.list_mut(v.base());
             let vr = v.vr as usize;
@@ -211,7 +264,11 @@ impl VarIndex {
         }
         for base in [Base::Real, Base::Integer, Base::Boolean, Base::String] {
             if let Some(gap) = idx.list(base).iter().position(|&r| r == usize::MAX) {
-                return Err(format!("{} value reference {} is not used: value references must be dense", base.name(), gap));
+                return Err(format!(
+                    "{} value reference {} is not used: value references must be dense",
+                    base.name(),
+                    gap
+                ));
             }
         }
         Ok(idx)
@@ -292,7 +349,10 @@ mod tests {
 
     #[test]
     fn duplicate_and_sparse_value_references_are_refused() {
-        let dup = [VarSpec::real_input(0, "a", "m", 0.0, ""), VarSpec::real_input(0, "b", "m", 0.0, "")];
+        let dup = [
+            VarSpec::real_input(0, "a", "m", 0.0, ""),
+            VarSpec::real_input(0, "b", "m", 0.0, ""),
+        ];
         let err = VarIndex::new(&dup).unwrap_err();
         assert!(err.contains("'a'") && err.contains("'b'"), "{err}");
         let gap = [VarSpec::real_input(1, "a", "m", 0.0, "")];

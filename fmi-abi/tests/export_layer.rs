@@ -1,0 +1,454 @@
+//! The export layer driven through its C entry points with a toy model: the state machine,
+//! argument checks, FMU state, reset, panic containment and the logger contract.
+
+use fmi_abi::export as x;
+use fmi_abi::types::*;
+use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
+use serde::{Deserialize, Serialize};
+use std::ffi::{CStr, CString, c_char, c_int, c_void};
+use std::sync::Mutex;
+
+/// dx/dt = -k x + u; y = x. A step with u = 99 panics, to test containment.
+#[derive(Clone, Serialize, Deserialize)]
+struct Toy {
+    x: f64,
+}
+
+const U: u32 = 0;
+const Y: u32 = 1;
+const K: u32 = 2;
+const GAIN: u32 = 3;
+
+static VARS: &[VarSpec] = &[
+    VarSpec::real_input(U, "u", "1", 0.0, "input"),
+    VarSpec::real_output(Y, "y", "1", 1.0, "state"),
+    VarSpec::real_parameter(K, "k", "1", 2.0, "rate").min(0.0),
+    VarSpec::real_parameter(GAIN, "gain", "1", 1.0, "tunable gain").tunable(),
+];
+
+impl Model for Toy {
+    const INFO: ModelInfo = ModelInfo {
+        model_name: "Toy",
+        model_identifier: "Toy",
+        guid: "toy-guid-1",
+        description: "test model",
+        author: "tests",
+        version: "0",
+        default_start: 0.0,
+        default_stop: 1.0,
+        default_step: 0.1,
+    };
+    fn variables() -> &'static [VarSpec] {
+        VARS
+    }
+    fn instantiate(_: &InstantiateContext, _: &Logger) -> Result<Self, String> {
+        Ok(Toy { x: 1.0 })
+    }
+    fn exit_initialization(&mut self, v: &mut Values, _: &Logger) -> Result<(), String> {
+        if v.real[K as usize] == 0.0 {
+            return Err("parameter 'k' must not be zero".into());
+        }
+        Ok(())
+    }
+    fn do_step(
+        &mut self,
+        v: &mut Values,
+        _t: f64,
+        h: f64,
+        log: &Logger,
+    ) -> Result<StepOutcome, String> {
+        let u = v.real[U as usize];
+        if u == 99.0 {
+            panic!("toy model asked to panic");
+        }
+        if u.is_nan() {
+            log.warning("u is NaN: 100% ignored");
+            return Ok(StepOutcome::Warning);
+        }
+        self.x += h * (-v.real[K as usize] * self.x + v.real[GAIN as usize] * u);
+        v.real[Y as usize] = self.x;
+        Ok(StepOutcome::Ok)
+    }
+}
+
+/// What the logger received: (instance name, status, category, message).
+type Logged = Vec<(String, i32, String, String)>;
+
+// A C-compatible logger with the fixed arguments of the variadic signature. We only ever call
+// it with "%s" and one string argument, which is read as the sixth fixed argument.
+unsafe extern "C" fn logger(
+    env: *mut c_void,
+    name: *const c_char,
+    status: c_int,
+    cat: *const c_char,
+    fmt: *const c_char,
+    msg: *const c_char,
+) {
+    let log = unsafe { &*(env as *const Mutex<Logged>) };
+    let s = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
+    assert_eq!(s(fmt), "%s");
+    log.lock().unwrap().push((s(name), status, s(cat), s(msg)));
+}
+
+struct Fmu {
+    c: fmi2Component,
+    log: Box<Mutex<Logged>>,
+    _callbacks: Box<fmi2CallbackFunctions>,
+}
+
+impl Fmu {
+    fn new(guid: &str) -> Option<Fmu> {
+        let log: Box<Mutex<Logged>> = Box::new(Mutex::new(vec![]));
+        let callbacks = Box::new(fmi2CallbackFunctions {
+            // SAFETY: see `logger`: the layer always passes exactly (…, "%s", message).
+            logger: unsafe {
+                std::mem::transmute::<*const (), fmi2CallbackLogger>(logger as *const ())
+            },
+            allocate_memory: None,
+            free_memory: None,
+            step_finished: None,
+            component_environment: &*log as *const Mutex<Logged> as *mut c_void,
+        });
+        let name = CString::new("toy #1 100%").unwrap();
+        let guid = CString::new(guid).unwrap();
+        let res = CString::new("file:///tmp/toy%20dir/resources/").unwrap();
+        let c = unsafe {
+            x::instantiate::<Toy>(
+                name.as_ptr(),
+                FMI2_CO_SIMULATION,
+                guid.as_ptr(),
+                res.as_ptr(),
+                &*callbacks,
+                0,
+                1,
+            )
+        };
+        // name and guid are dropped here: the layer must have copied what it keeps.
+        drop(name);
+        (!c.is_null()).then_some(Fmu {
+            c,
+            log,
+            _callbacks: callbacks,
+        })
+    }
+    fn init(&self) {
+        unsafe {
+            assert_eq!(
+                x::setup_experiment::<Toy>(self.c, 0, 0.0, 0.0, 0, 0.0),
+                fmi2Status::OK
+            );
+            assert_eq!(x::enter_initialization_mode::<Toy>(self.c), fmi2Status::OK);
+            assert_eq!(x::exit_initialization_mode::<Toy>(self.c), fmi2Status::OK);
+        }
+    }
+    fn set(&self, vr: u32, v: f64) -> fmi2Status {
+        unsafe { x::set_real::<Toy>(self.c, &vr, 1, &v) }
+    }
+    fn get(&self, vr: u32) -> (fmi2Status, f64) {
+        let mut v = f64::NAN;
+        let s = unsafe { x::get_real::<Toy>(self.c, &vr, 1, &mut v) };
+        (s, v)
+    }
+    fn step(&self, t: f64, h: f64) -> fmi2Status {
+        unsafe { x::do_step::<Toy>(self.c, t, h, 1) }
+    }
+    fn last(&self) -> (String, i32, String, String) {
+        self.log
+            .lock()
+            .unwrap()
+            .last()
+            .cloned()
+            .expect("something was logged")
+    }
+}
+
+impl Drop for Fmu {
+    fn drop(&mut self) {
+        unsafe { x::free_instance::<Toy>(self.c) }
+    }
+}
+
+#[test]
+fn a_normal_run_follows_the_exact_solution_of_the_euler_scheme() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    let h = 0.01;
+    let mut want = 1.0;
+    for k in 0..100 {
+        assert_eq!(f.step(k as f64 * h, h), fmi2Status::OK);
+        want += h * (-2.0 * want);
+    }
+    assert_eq!(f.get(Y), (fmi2Status::OK, want));
+}
+
+#[test]
+fn wrong_guid_and_model_exchange_are_refused_with_a_message() {
+    assert!(Fmu::new("another-guid").is_none());
+    let c = unsafe {
+        x::instantiate::<Toy>(
+            c"n".as_ptr(),
+            FMI2_MODEL_EXCHANGE,
+            c"toy-guid-1".as_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+            0,
+            0,
+        )
+    };
+    assert!(c.is_null());
+    // NULL instance name, NULL resources and NULL callbacks are tolerated.
+    let c = unsafe {
+        x::instantiate::<Toy>(
+            std::ptr::null(),
+            FMI2_CO_SIMULATION,
+            c"toy-guid-1".as_ptr(),
+            std::ptr::null(),
+            std::ptr::null(),
+            0,
+            0,
+        )
+    };
+    assert!(!c.is_null());
+    unsafe { x::free_instance::<Toy>(c) };
+    unsafe { x::free_instance::<Toy>(std::ptr::null_mut()) };
+}
+
+#[test]
+fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::Error);
+    let (name, status, cat, msg) = f.last();
+    assert_eq!(
+        (name.as_str(), status, cat.as_str()),
+        ("toy #1 100%", 3, "logStatusError")
+    );
+    assert!(
+        msg.contains("fmi2DoStep") && msg.contains("instantiated"),
+        "{msg}"
+    );
+    // Parameters and inputs before SetupExperiment are fine.
+    assert_eq!(f.set(K, 3.0), fmi2Status::OK);
+    assert_eq!(f.set(U, 0.5), fmi2Status::OK);
+    // An output with initial="exact" may have its start value set before initialization
+    // (FMI 2.0 section 4.2.4), but never afterwards.
+    assert_eq!(f.set(Y, 0.5), fmi2Status::OK);
+    f.init();
+    assert_eq!(
+        f.set(Y, 0.5),
+        fmi2Status::Error,
+        "an output is not settable after initialization"
+    );
+    assert!(
+        f.last().3.contains("'y'") && f.last().3.contains("output"),
+        "{}",
+        f.last().3
+    );
+    assert_eq!(
+        f.set(K, 4.0),
+        fmi2Status::Error,
+        "a fixed parameter after initialization"
+    );
+    assert!(f.last().3.contains("fixed parameter"));
+    assert_eq!(
+        f.set(GAIN, 2.0),
+        fmi2Status::OK,
+        "a tunable parameter after initialization"
+    );
+    assert_eq!(f.get(9999).0, fmi2Status::Error);
+    assert!(f.last().3.contains("unknown Real value reference 9999"));
+    let null = unsafe { x::get_real::<Toy>(f.c, &Y, 1, std::ptr::null_mut()) };
+    assert_eq!(null, fmi2Status::Error);
+    assert!(f.last().3.contains("NULL"));
+    for (t, h) in [
+        (0.0, -0.1),
+        (0.0, 0.0),
+        (0.0, f64::NAN),
+        (0.0, f64::INFINITY),
+        (5.0, 0.1),
+    ] {
+        assert_eq!(f.step(t, h), fmi2Status::Error, "t={t} h={h}");
+    }
+    // Still usable: the state did not change.
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::OK);
+    // A set with one bad reference among good ones changes nothing.
+    let vrs = [U, 9999];
+    let vals = [7.0, 8.0];
+    assert_eq!(
+        unsafe { x::set_real::<Toy>(f.c, vrs.as_ptr(), 2, vals.as_ptr()) },
+        fmi2Status::Error
+    );
+    assert_eq!(f.get(U).1, 0.5);
+    assert_eq!(unsafe { x::terminate::<Toy>(f.c) }, fmi2Status::OK);
+    assert_eq!(
+        f.step(0.1, 0.1),
+        fmi2Status::Error,
+        "no step after Terminate"
+    );
+    assert_eq!(
+        f.get(Y).0,
+        fmi2Status::OK,
+        "final values may be read after Terminate (FMI 2.0 4.2.4)"
+    );
+    assert_eq!(unsafe { x::cancel_step::<Toy>(f.c) }, fmi2Status::Error);
+    assert_eq!(
+        unsafe { x::enter_initialization_mode::<Toy>(std::ptr::null_mut()) },
+        fmi2Status::Error
+    );
+}
+
+#[test]
+fn warnings_pass_percent_signs_intact() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    f.set(U, f64::NAN);
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::Warning);
+    let (_, status, cat, msg) = f.last();
+    assert_eq!(
+        (status, cat.as_str(), msg.as_str()),
+        (1, "logStatusWarning", "u is NaN: 100% ignored")
+    );
+}
+
+#[test]
+fn a_panic_is_contained_and_the_instance_becomes_fatal() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    f.set(U, 99.0);
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::Fatal);
+    let (_, status, cat, msg) = f.last();
+    assert_eq!((status, cat.as_str()), (4, "logStatusFatal"));
+    assert!(msg.contains("toy model asked to panic"), "{msg}");
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::Error);
+    assert_eq!(f.set(U, 1.0), fmi2Status::Error);
+    // Another instance is unaffected.
+    let g = Fmu::new("toy-guid-1").unwrap();
+    g.init();
+    assert_eq!(g.step(0.0, 0.1), fmi2Status::OK);
+}
+
+#[test]
+fn reset_gives_a_fresh_instance() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.set(K, 5.0);
+    f.init();
+    f.set(U, 1.0);
+    for k in 0..10 {
+        f.step(k as f64 * 0.1, 0.1);
+    }
+    assert_eq!(unsafe { x::reset::<Toy>(f.c) }, fmi2Status::OK);
+    // Back in "instantiated": k and u have their start values again, time is 0.
+    f.init();
+    let (g, h) = (Fmu::new("toy-guid-1").unwrap(), 0.1);
+    g.init();
+    for k in 0..10 {
+        assert_eq!(f.step(k as f64 * h, h), fmi2Status::OK);
+        g.step(k as f64 * h, h);
+        assert_eq!(f.get(Y).1.to_bits(), g.get(Y).1.to_bits());
+    }
+}
+
+#[test]
+fn fmu_state_and_its_serialization_replay_bit_for_bit() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    let h = 0.1;
+    for k in 0..5 {
+        f.set(U, (k as f64).sin());
+        f.step(k as f64 * h, h);
+    }
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { x::get_fmu_state::<Toy>(f.c, &mut s) },
+        fmi2Status::OK
+    );
+    let run = |f: &Fmu| -> Vec<u64> {
+        (5..15)
+            .map(|k| {
+                f.set(U, (k as f64).sin());
+                assert_eq!(f.step(k as f64 * h, h), fmi2Status::OK);
+                f.get(Y).1.to_bits()
+            })
+            .collect()
+    };
+    let first = run(&f);
+    assert_eq!(unsafe { x::set_fmu_state::<Toy>(f.c, s) }, fmi2Status::OK);
+    assert_eq!(run(&f), first);
+    // Serialize, free, deserialize into a new state, restore, replay.
+    let mut size = 0usize;
+    assert_eq!(
+        unsafe { x::serialized_fmu_state_size::<Toy>(f.c, s, &mut size) },
+        fmi2Status::OK
+    );
+    let mut bytes = vec![0 as c_char; size];
+    assert_eq!(
+        unsafe { x::serialize_fmu_state::<Toy>(f.c, s, bytes.as_mut_ptr(), size) },
+        fmi2Status::OK
+    );
+    assert_eq!(
+        unsafe { x::serialize_fmu_state::<Toy>(f.c, s, bytes.as_mut_ptr(), size - 1) },
+        fmi2Status::Error
+    );
+    assert_eq!(
+        unsafe { x::free_fmu_state::<Toy>(f.c, &mut s) },
+        fmi2Status::OK
+    );
+    assert!(s.is_null());
+    let mut s2: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { x::deserialize_fmu_state::<Toy>(f.c, bytes.as_ptr(), size, &mut s2) },
+        fmi2Status::OK
+    );
+    assert_eq!(unsafe { x::set_fmu_state::<Toy>(f.c, s2) }, fmi2Status::OK);
+    assert_eq!(run(&f), first);
+    // Corrupt bytes are refused with a message.
+    bytes[0] = b'X' as c_char;
+    let mut s3: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { x::deserialize_fmu_state::<Toy>(f.c, bytes.as_ptr(), size, &mut s3) },
+        fmi2Status::Error
+    );
+    assert!(f.last().3.contains("not made by Toy"));
+    assert!(s3.is_null());
+    assert_eq!(
+        unsafe { x::free_fmu_state::<Toy>(f.c, &mut s2) },
+        fmi2Status::OK
+    );
+    assert_eq!(
+        unsafe { x::set_fmu_state::<Toy>(f.c, std::ptr::null_mut()) },
+        fmi2Status::Error
+    );
+}
+
+#[test]
+fn instances_in_parallel_threads_match_sequential_runs() {
+    let run = |gain: f64| -> Vec<u64> {
+        let f = Fmu::new("toy-guid-1").unwrap();
+        f.init();
+        f.set(GAIN, gain);
+        f.set(U, 1.0);
+        (0..20_000)
+            .map(|k| {
+                f.step(k as f64 * 1e-3, 1e-3);
+                f.get(Y).1.to_bits()
+            })
+            .collect()
+    };
+    let sequential: Vec<_> = (0..4).map(|i| run(i as f64)).collect();
+    let parallel: Vec<_> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..4).map(|i| s.spawn(move || run(i as f64))).collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert_eq!(sequential, parallel);
+}
+
+#[test]
+fn generated_model_description_is_valid() {
+    let md = fmi_abi::description::model_description::<Toy>();
+    assert_eq!(md.validate(), vec![]);
+    let xml = md.to_xml();
+    let back = model_description::ModelDescription::from_xml(&xml).unwrap();
+    assert_eq!(back, md);
+    assert!(xml.contains("canGetAndSetFMUstate=\"true\""));
+    assert!(xml.contains("canNotUseMemoryManagementFunctions=\"true\""));
+    assert!(xml.contains("canHandleVariableCommunicationStepSize=\"true\""));
+}
