@@ -22,7 +22,14 @@ unsafe extern "C" {
         logging_on: fmi2Boolean,
     ) -> fmi2Component;
     fn fmi2FreeInstance(c: fmi2Component);
-    fn fmi2SetupExperiment(c: fmi2Component, td: fmi2Boolean, tol: f64, start: f64, sd: fmi2Boolean, stop: f64) -> fmi2Status;
+    fn fmi2SetupExperiment(
+        c: fmi2Component,
+        td: fmi2Boolean,
+        tol: f64,
+        start: f64,
+        sd: fmi2Boolean,
+        stop: f64,
+    ) -> fmi2Status;
     fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status;
     fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status;
     fn fmi2DoStep(c: fmi2Component, t: f64, h: f64, nsp: fmi2Boolean) -> fmi2Status;
@@ -36,7 +43,15 @@ fn instance(scheme: i32) -> fmi2Component {
     let guid = CString::new(<fmu_estimator::Estimator as fmi_abi::Model>::INFO.guid).unwrap();
     let res = CString::new(format!("file://{}/resources", env!("CARGO_MANIFEST_DIR"))).unwrap();
     unsafe {
-        let c = fmi2Instantiate(name.as_ptr(), FMI2_CO_SIMULATION, guid.as_ptr(), res.as_ptr(), std::ptr::null(), 0, 0);
+        let c = fmi2Instantiate(
+            name.as_ptr(),
+            FMI2_CO_SIMULATION,
+            guid.as_ptr(),
+            res.as_ptr(),
+            std::ptr::null(),
+            0,
+            0,
+        );
         assert!(!c.is_null());
         fmi2SetInteger(c, &vr::DISCRETIZATION, 1, &scheme);
         fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
@@ -61,21 +76,24 @@ fn bench(c: &mut Criterion) {
         let inputs = [vr::WS_ACC_Y, vr::WS_YAW_RATE, vr::FRAME_ACC_Y, vr::SPEED];
         let outputs = [vr::ALIGNMENT, vr::ALIGNMENT_STD];
         let mut k = 0u64;
-        c.bench_function(&format!("SetReal(4) + fmi2DoStep + GetReal(2) ({label})"), |b| {
-            b.iter(|| {
-                k += 1;
-                let x = (k as f64 * 1e-3).sin();
-                let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0];
-                let mut out = [0.0; 2];
-                unsafe {
-                    fmi2SetReal(comp, inputs.as_ptr(), 4, vals.as_ptr());
-                    fmi2DoStep(comp, t, h, 1);
-                    fmi2GetReal(comp, outputs.as_ptr(), 2, out.as_mut_ptr());
-                }
-                t += h;
-                black_box(out)
-            })
-        });
+        c.bench_function(
+            &format!("SetReal(4) + fmi2DoStep + GetReal(2) ({label})"),
+            |b| {
+                b.iter(|| {
+                    k += 1;
+                    let x = (k as f64 * 1e-3).sin();
+                    let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0];
+                    let mut out = [0.0; 2];
+                    unsafe {
+                        fmi2SetReal(comp, inputs.as_ptr(), 4, vals.as_ptr());
+                        fmi2DoStep(comp, t, h, 1);
+                        fmi2GetReal(comp, outputs.as_ptr(), 2, out.as_mut_ptr());
+                    }
+                    t += h;
+                    black_box(out)
+                })
+            },
+        );
         unsafe { fmi2FreeInstance(comp) };
     }
 }

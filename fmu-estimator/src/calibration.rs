@@ -54,27 +54,42 @@ struct File {
     r: Option<Vec<Vec<f64>>>,
 }
 
-fn matrix<const N: usize>(rows: &[Vec<f64>], name: &str, file: &Path) -> Result<nalgebra::SMatrix<f64, N, N>, String> {
+fn matrix<const N: usize>(
+    rows: &[Vec<f64>],
+    name: &str,
+    file: &Path,
+) -> Result<nalgebra::SMatrix<f64, N, N>, String> {
     if rows.len() != N || rows.iter().any(|r| r.len() != N) {
-        return Err(format!("{}: '{name}' must be {N} rows of {N} numbers", file.display()));
+        return Err(format!(
+            "{}: '{name}' must be {N} rows of {N} numbers",
+            file.display()
+        ));
     }
     let m = nalgebra::SMatrix::<f64, N, N>::from_fn(|i, j| rows[i][j]);
     if m.iter().any(|x| !x.is_finite()) {
-        return Err(format!("{}: '{name}' holds a non-finite number", file.display()));
+        return Err(format!(
+            "{}: '{name}' holds a non-finite number",
+            file.display()
+        ));
     }
     if (m - m.transpose()).amax() > 1e-12 * m.amax() {
         return Err(format!("{}: '{name}' is not symmetric", file.display()));
     }
     if (0..N).any(|i| m[(i, i)] < 0.0) {
-        return Err(format!("{}: '{name}' has a negative diagonal entry", file.display()));
+        return Err(format!(
+            "{}: '{name}' has a negative diagonal entry",
+            file.display()
+        ));
     }
     Ok(m)
 }
 
 /// Reads a calibration file. `Ok(None)`: the file holds no matrices (not yet calibrated).
 pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read calibration file {}: {e}", path.display()))?;
-    let file: File = toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read calibration file {}: {e}", path.display()))?;
+    let file: File =
+        toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
     let status = file.status.unwrap_or_else(|| "unspecified".into());
     match (file.q, file.r) {
         (None, None) => Ok(None),
@@ -82,15 +97,28 @@ pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
             let step_size = file
                 .step_size
                 .filter(|h| *h > 0.0 && h.is_finite())
-                .ok_or_else(|| format!("{}: 'step_size' (the step Q was computed for) must be a positive number", path.display()))?;
+                .ok_or_else(|| {
+                    format!(
+                        "{}: 'step_size' (the step Q was computed for) must be a positive number",
+                        path.display()
+                    )
+                })?;
             let q = matrix::<7>(&q, "q", path)?;
             let r = matrix::<4>(&r, "r", path)?;
             if r.cholesky().is_none() {
                 return Err(format!("{}: 'r' is not positive definite", path.display()));
             }
-            Ok(Some(Calibration { status, step_size, q, r }))
+            Ok(Some(Calibration {
+                status,
+                step_size,
+                q,
+                r,
+            }))
         }
-        _ => Err(format!("{}: give both 'q' and 'r', or neither", path.display())),
+        _ => Err(format!(
+            "{}: give both 'q' and 'r', or neither",
+            path.display()
+        )),
     }
 }
 
@@ -99,7 +127,8 @@ mod tests {
     use super::*;
 
     fn write(name: &str, text: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("fmu-estimator-cal-{}-{name}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("fmu-estimator-cal-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let p = dir.join("calibration.toml");
         std::fs::write(&p, text).unwrap();
@@ -114,9 +143,36 @@ mod tests {
 
     #[test]
     fn a_full_calibration_is_read() {
-        let q: Vec<String> = (0..7).map(|i| format!("[{}]", (0..7).map(|j| if i == j { "1e-6" } else { "0" }).collect::<Vec<_>>().join(","))).collect();
-        let r: Vec<String> = (0..4).map(|i| format!("[{}]", (0..4).map(|j| if i == j { "2e-4" } else { "0" }).collect::<Vec<_>>().join(","))).collect();
-        let p = write("full", &format!("status = \"test\"\nstep_size = 0.001\nq = [{}]\nr = [{}]\n", q.join(","), r.join(",")));
+        let q: Vec<String> = (0..7)
+            .map(|i| {
+                format!(
+                    "[{}]",
+                    (0..7)
+                        .map(|j| if i == j { "1e-6" } else { "0" })
+                        .collect::<Vec<_>>()
+                        .join(",")
+                )
+            })
+            .collect();
+        let r: Vec<String> = (0..4)
+            .map(|i| {
+                format!(
+                    "[{}]",
+                    (0..4)
+                        .map(|j| if i == j { "2e-4" } else { "0" })
+                        .collect::<Vec<_>>()
+                        .join(",")
+                )
+            })
+            .collect();
+        let p = write(
+            "full",
+            &format!(
+                "status = \"test\"\nstep_size = 0.001\nq = [{}]\nr = [{}]\n",
+                q.join(","),
+                r.join(",")
+            ),
+        );
         let c = load(&p).unwrap().unwrap();
         assert_eq!(c.q[(6, 6)], 1e-6);
         assert_eq!(c.r[(3, 3)], 2e-4);
@@ -127,7 +183,10 @@ mod tests {
     fn bad_files_are_refused_with_the_file_and_entry_named() {
         let p = write("bad1", "q = [[1.0]]\nr = [[1.0]]\nstep_size = 0.001\n");
         let e = load(&p).unwrap_err();
-        assert!(e.contains("calibration.toml") && e.contains("'q' must be 7 rows"), "{e}");
+        assert!(
+            e.contains("calibration.toml") && e.contains("'q' must be 7 rows"),
+            "{e}"
+        );
         let p = write("bad2", "q = [[1.0]]\n");
         assert!(load(&p).unwrap_err().contains("both"));
         let p = write("bad3", "this is = not toml [");

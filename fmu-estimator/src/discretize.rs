@@ -59,7 +59,10 @@ mod tests {
         let x0 = SVector::<f64, 7>::from_column_slice(&[0.002, 0.001, 0.0, 0.0, 0.0, 0.0, 0.003]);
         let diff = |h: f64| {
             let n = (1.0 / h).round() as usize;
-            let (ft, fe) = (transition(&fc, h, Scheme::Taylor2), transition(&fc, h, Scheme::Exact));
+            let (ft, fe) = (
+                transition(&fc, h, Scheme::Taylor2),
+                transition(&fc, h, Scheme::Exact),
+            );
             let (mut xt, mut xe) = (x0, x0);
             for _ in 0..n {
                 xt = ft * xt;

@@ -11,7 +11,7 @@ use crate::filter::{Kalman, Mat4, Vec4, Vec7};
 use crate::model::{Mat4x7, Mat7, measurement_matrix, state_matrix};
 use crate::observability::pbh_rank;
 use crate::params::Params;
-use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, VarSpec, Values};
+use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -231,7 +231,10 @@ impl Estimator {
             && let Some(c) = &self.calibration
             && (h - c.step_size).abs() > 1e-12 * h
         {
-            log.info(&format!("calibrated Q was computed for a step of {} s; scaled to {h} s", c.step_size));
+            log.info(&format!(
+                "calibrated Q was computed for a step of {} s; scaled to {h} s",
+                c.step_size
+            ));
         }
         self.discrete = Some(Discrete { speed, h, f, hm, q });
         self.rebuilds += 1;
@@ -282,15 +285,32 @@ impl Model for Estimator {
         self.params = params;
         self.scheme = Scheme::from_fmi(v.integer[vr::DISCRETIZATION as usize])?;
         let r = |i: u32| v.real[i as usize];
-        let sig = [r(vr::SIGMA_ACC_WS), r(vr::SIGMA_YAW_RATE), r(vr::SIGMA_ACC_FRAME), r(vr::SIGMA_XI)];
+        let sig = [
+            r(vr::SIGMA_ACC_WS),
+            r(vr::SIGMA_YAW_RATE),
+            r(vr::SIGMA_ACC_FRAME),
+            r(vr::SIGMA_XI),
+        ];
         self.r = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
-        let q = [0.0, 0.0, 0.0, r(vr::Q_ACC_WS), r(vr::Q_YAW_ACC), r(vr::Q_ACC_FRAME), r(vr::Q_XI)];
+        let q = [
+            0.0,
+            0.0,
+            0.0,
+            r(vr::Q_ACC_WS),
+            r(vr::Q_YAW_ACC),
+            r(vr::Q_ACC_FRAME),
+            r(vr::Q_XI),
+        ];
         self.q_rate = Mat7::from_diagonal(&Vec7::from_fn(|i, _| q[i]));
         self.min_speed = r(vr::MIN_SPEED);
         self.calibration = None;
         if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
             let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
-            let path = if name.is_absolute() { Some(name) } else { self.resources.as_ref().map(|d| d.join(&name)) };
+            let path = if name.is_absolute() {
+                Some(name)
+            } else {
+                self.resources.as_ref().map(|d| d.join(&name))
+            };
             match path {
                 Some(path) if path.exists() => match calibration::load(&path)? {
                     Some(c) => {
@@ -325,7 +345,13 @@ impl Model for Estimator {
         Ok(())
     }
 
-    fn do_step(&mut self, v: &mut Values, _t: f64, h: f64, log: &Logger) -> Result<StepOutcome, String> {
+    fn do_step(
+        &mut self,
+        v: &mut Values,
+        _t: f64,
+        h: f64,
+        log: &Logger,
+    ) -> Result<StepOutcome, String> {
         let speed = v.real[vr::SPEED as usize];
         let mut outcome = StepOutcome::Ok;
         if speed.is_finite() {
@@ -333,7 +359,10 @@ impl Model for Estimator {
         }
         if !(speed >= self.min_speed) || !speed.is_finite() {
             if !self.holding {
-                log.info(&format!("speed {speed} m/s is below min_speed {} m/s: holding the estimate", self.min_speed));
+                log.info(&format!(
+                    "speed {speed} m/s is below min_speed {} m/s: holding the estimate",
+                    self.min_speed
+                ));
                 self.holding = true;
             }
             if !speed.is_finite() {
@@ -347,7 +376,12 @@ impl Model for Estimator {
         self.ensure_discrete(speed, h, log);
         let d = self.discrete.as_ref().expect("built above");
         self.filter.predict(&d.f, &d.q);
-        let z = Vec4::new(v.real[vr::WS_ACC_Y as usize], v.real[vr::WS_YAW_RATE as usize], v.real[vr::FRAME_ACC_Y as usize], 0.0);
+        let z = Vec4::new(
+            v.real[vr::WS_ACC_Y as usize],
+            v.real[vr::WS_YAW_RATE as usize],
+            v.real[vr::FRAME_ACC_Y as usize],
+            0.0,
+        );
         let mut updated = false;
         if z.iter().all(|x| x.is_finite()) {
             match self.filter.update(&d.hm, &self.r, &z) {
@@ -356,7 +390,9 @@ impl Model for Estimator {
                     updated = true;
                 }
                 None => {
-                    log.warning("innovation covariance not positive definite: measurement update skipped");
+                    log.warning(
+                        "innovation covariance not positive definite: measurement update skipped",
+                    );
                     outcome = StepOutcome::Warning;
                 }
             }

@@ -97,7 +97,12 @@ pub fn second_order(p: &Params, v: f64) -> SecondOrder {
         -2.0 * p.f23 / v,        c_psi + 2.0 * (p.f11 * p.l * p.l + p.f33) / v,    0.0,
         -p.cy,                   0.0,                                              p.cy,
     );
-    SecondOrder { mass, stiffness, damping, k_d: Vector3::new(k_grav, k_yaw_creep, 0.0) }
+    SecondOrder {
+        mass,
+        stiffness,
+        damping,
+        k_d: Vector3::new(k_grav, k_yaw_creep, 0.0),
+    }
 }
 
 /// The continuous state matrix `F_c` (7x7).
@@ -142,18 +147,34 @@ mod tests {
     /// at half the speed.
     #[test]
     fn klingel_frequency_of_a_free_wheelset() {
-        let p = Params { kx: 0.0, cx: 0.0, ky: 0.0, cy: 0.0, f23: 0.0, f33: 0.0, g: 0.0, ..Params::default() };
+        let p = Params {
+            kx: 0.0,
+            cx: 0.0,
+            ky: 0.0,
+            cy: 0.0,
+            f23: 0.0,
+            f33: 0.0,
+            g: 0.0,
+            ..Params::default()
+        };
         let rel_error = |v: f64| {
             let eig = state_matrix(&p, v).complex_eigenvalues();
             // The free wheelset is unstable at every speed (railway.md section 5).
-            assert!(eig.iter().any(|e| e.re > 0.0 && e.im.abs() > 0.0), "no unstable mode at {v} m/s");
+            assert!(
+                eig.iter().any(|e| e.re > 0.0 && e.im.abs() > 0.0),
+                "no unstable mode at {v} m/s"
+            );
             let omega = eig.iter().map(|e| e.im).fold(0.0, f64::max);
             let klingel = v / (2.0 * std::f64::consts::PI * (p.r_0 * p.l / p.alpha).sqrt());
             omega / (2.0 * std::f64::consts::PI) / klingel - 1.0
         };
         let (e10, e5) = (rel_error(10.0), rel_error(5.0));
         assert!(e10.abs() < 1e-3, "relative error {e10} at 10 m/s");
-        assert!((e10 / e5 - 16.0).abs() < 0.2, "error ratio {} should be 16 (V^4)", e10 / e5);
+        assert!(
+            (e10 / e5 - 16.0).abs() < 0.2,
+            "error ratio {} should be 16 (V^4)",
+            e10 / e5
+        );
     }
 
     /// The 11.22 m Klingel wavelength of railway.md section 5 follows from our r_0 = 0.425 m.
@@ -168,9 +189,18 @@ mod tests {
     fn equations_conserve_momentum_between_wheelset_and_frame() {
         // The suspension forces on wheelset and frame are equal and opposite: with creep,
         // gravity and alignment off, m ydd + m_f y_fdd = 0 for any state.
-        let p = Params { f11: 0.0, f22: 0.0, f23: 0.0, f33: 0.0, g: 0.0, ..Params::default() };
+        let p = Params {
+            f11: 0.0,
+            f22: 0.0,
+            f23: 0.0,
+            f33: 0.0,
+            g: 0.0,
+            ..Params::default()
+        };
         let fc = state_matrix(&p, 20.0);
-        let x = nalgebra::SVector::<f64, 7>::from_column_slice(&[0.003, 0.001, -0.002, 0.1, -0.2, 0.05, 0.004]);
+        let x = nalgebra::SVector::<f64, 7>::from_column_slice(&[
+            0.003, 0.001, -0.002, 0.1, -0.2, 0.05, 0.004,
+        ]);
         let xd = fc * x;
         assert!((p.m * xd[3] + p.m_f * xd[5]).abs() < 1e-9);
     }

@@ -16,7 +16,11 @@ pub fn pbh_rank(f: &Mat7, h: &Mat4x7) -> (usize, Complex<f64>) {
         let mut m = DMatrix::<Complex<f64>>::zeros(n + h.nrows(), n);
         for i in 0..n {
             for j in 0..n {
-                let d = if i == j { *lambda } else { Complex::new(0.0, 0.0) };
+                let d = if i == j {
+                    *lambda
+                } else {
+                    Complex::new(0.0, 0.0)
+                };
                 m[(i, j)] = (d - Complex::new(f[(i, j)], 0.0)) / scale;
             }
         }
@@ -52,7 +56,11 @@ mod tests {
     fn a_frame_without_suspension_is_not_observable() {
         // Without ky and cy the frame neither moves with the wheelset nor shows in any sensor:
         // its position and velocity cannot be observed.
-        let p = Params { ky: 0.0, cy: 0.0, ..Params::default() };
+        let p = Params {
+            ky: 0.0,
+            cy: 0.0,
+            ..Params::default()
+        };
         let fc = state_matrix(&p, 20.0);
         let (rank, lambda) = pbh_rank(&fc, &measurement_matrix(&fc));
         assert!(rank < 7, "rank {rank}");

@@ -85,7 +85,9 @@ impl Params {
         ];
         for (name, v) in positive {
             if !(v > 0.0) || !v.is_finite() {
-                return Err(format!("parameter '{name}' = {v} must be a positive finite number"));
+                return Err(format!(
+                    "parameter '{name}' = {v} must be a positive finite number"
+                ));
             }
         }
         if !(self.alpha > 0.0) || !self.alpha.is_finite() {
@@ -108,7 +110,9 @@ impl Params {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0) || !v.is_finite() {
-                return Err(format!("parameter '{name}' = {v} must be a non-negative finite number"));
+                return Err(format!(
+                    "parameter '{name}' = {v} must be a non-negative finite number"
+                ));
             }
         }
         Ok(())
