@@ -1,1 +1,239 @@
-fn main() {}
+//! Project automation, run as `cargo xtask <command>` (an alias in .cargo/config.toml):
+//!
+//! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
+//! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo test, packaging, the Python
+//!   harness (tests/, run with pytest in `.venv`, created on demand), and a summary;
+//! - `demo [-- <demo.py args>]`: package the estimator and run tests/demo.py on synthetic data.
+
+mod fmus;
+mod package;
+mod python;
+mod workspace;
+
+use anyhow::{Context, Result, bail};
+use std::path::PathBuf;
+use std::process::{Command, ExitCode};
+use std::time::Instant;
+
+const USAGE: &str = "\
+usage: cargo xtask <command>
+
+commands:
+  fmu                          build (release) and package target/fmu/<id>.fmu
+  test [--rust-only | --python-only] [-- <pytest args>]
+                               cargo test --workspace, packaging, pytest tests/ in .venv
+  demo [-- <demo.py args>]     package the estimator and run tests/demo.py
+  help                         this text";
+
+/// The environment variable telling the Python harness where the packaged FMUs are (the target
+/// directory may be moved by CARGO_TARGET_DIR or cargo config).
+const FMU_DIR_ENV: &str = "XTASK_FMU_DIR";
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("fmu") if args.len() == 1 => package::build_and_package().map(|_| true),
+        Some("test") => TestOptions::parse(&args[1..]).and_then(test),
+        Some("demo") => passthrough(&args[1..]).and_then(demo).map(|_| true),
+        Some("help" | "-h" | "--help") => {
+            println!("{USAGE}");
+            Ok(true)
+        }
+        _ => {
+            eprintln!("{USAGE}");
+            return ExitCode::from(2);
+        }
+    };
+    match result {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Arguments after a leading `--` (or none); anything else is a usage error.
+fn passthrough(args: &[String]) -> Result<Vec<String>> {
+    match args.split_first() {
+        None => Ok(vec![]),
+        Some((first, rest)) if first == "--" => Ok(rest.to_vec()),
+        Some((first, _)) => {
+            bail!("unexpected argument '{first}' (extra arguments go after `--`)\n\n{USAGE}")
+        }
+    }
+}
+
+struct TestOptions {
+    rust: bool,
+    python: bool,
+    pytest_args: Vec<String>,
+}
+
+impl TestOptions {
+    fn parse(args: &[String]) -> Result<TestOptions> {
+        let mut o = TestOptions {
+            rust: true,
+            python: true,
+            pytest_args: vec![],
+        };
+        let mut i = 0;
+        while i < args.len() {
+            match args[i].as_str() {
+                "--rust-only" => o.python = false,
+                "--python-only" => o.rust = false,
+                "--" => {
+                    o.pytest_args = args[i + 1..].to_vec();
+                    break;
+                }
+                other => bail!(
+                    "unknown option '{other}' for `test` (pytest arguments go after `--`)\n\n{USAGE}"
+                ),
+            }
+            i += 1;
+        }
+        if !o.rust && !o.python {
+            bail!("--rust-only and --python-only exclude each other");
+        }
+        Ok(o)
+    }
+}
+
+enum Outcome {
+    Passed,
+    Failed(String),
+    Skipped(String),
+}
+
+struct Stage {
+    name: &'static str,
+    outcome: Outcome,
+    seconds: f64,
+}
+
+fn timed(name: &'static str, f: impl FnOnce() -> Result<()>) -> Stage {
+    println!("\n==> {name}");
+    let start = Instant::now();
+    let outcome = match f() {
+        Ok(()) => Outcome::Passed,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            Outcome::Failed(
+                format!("{e:#}")
+                    .lines()
+                    .next()
+                    .unwrap_or_default()
+                    .to_string(),
+            )
+        }
+    };
+    Stage {
+        name,
+        outcome,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// Runs every selected stage (a failure does not stop the independent ones), prints a summary and
+/// returns whether everything passed.
+fn test(o: TestOptions) -> Result<bool> {
+    let mut stages = Vec::new();
+    if o.rust {
+        stages.push(timed("cargo test --workspace", || {
+            workspace::run(workspace::cargo().args(["test", "--workspace"]))
+        }));
+    }
+    let mut fmu_dir: Option<PathBuf> = None;
+    stages.push(timed("package FMUs (release build)", || {
+        let packaged = package::build_and_package()?;
+        fmu_dir = packaged
+            .first()
+            .and_then(|p| p.path.parent())
+            .map(PathBuf::from);
+        Ok(())
+    }));
+    if o.python {
+        let mut venv_ok = false;
+        stages.push(timed("python venv (.venv, tests/requirements.txt)", || {
+            python::ensure_venv()?;
+            venv_ok = true;
+            Ok(())
+        }));
+        let pytest = "pytest tests";
+        match (&fmu_dir, venv_ok) {
+            (Some(dir), true) => stages.push(timed(pytest, || run_pytest(dir, &o.pytest_args))),
+            (None, _) => stages.push(Stage {
+                name: pytest,
+                outcome: Outcome::Skipped("no FMU was packaged".into()),
+                seconds: 0.0,
+            }),
+            (_, false) => stages.push(Stage {
+                name: pytest,
+                outcome: Outcome::Skipped("no Python environment".into()),
+                seconds: 0.0,
+            }),
+        }
+    }
+
+    println!("\n==> summary");
+    let mut all_passed = true;
+    for s in &stages {
+        let (word, detail) = match &s.outcome {
+            Outcome::Passed => ("ok", String::new()),
+            Outcome::Failed(why) => {
+                all_passed = false;
+                ("FAILED", format!(": {why}"))
+            }
+            Outcome::Skipped(why) => {
+                all_passed = false;
+                ("SKIPPED", format!(": {why}"))
+            }
+        };
+        println!("  {word:<7} {:<46} {:>7.1} s{detail}", s.name, s.seconds);
+    }
+    println!("{}", if all_passed { "all passed" } else { "FAILED" });
+    Ok(all_passed)
+}
+
+fn run_pytest(fmu_dir: &std::path::Path, extra: &[String]) -> Result<()> {
+    let mut cmd = Command::new(python::python());
+    cmd.current_dir(workspace::root())
+        .env(FMU_DIR_ENV, fmu_dir)
+        .args(["-m", "pytest", "-q"]);
+    // `tests` unless the extra arguments name test files themselves (pytest would run both).
+    if !extra
+        .iter()
+        .any(|a| a == "tests" || a.starts_with("tests/"))
+    {
+        cmd.arg("tests");
+    }
+    cmd.args(extra);
+    let line = workspace::command_line(&cmd);
+    let status = cmd
+        .status()
+        .with_context(|| format!("could not start `{line}`"))?;
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(5) => bail!("pytest collected no tests (exit code 5)"),
+        _ => bail!("`{line}` failed ({status})"),
+    }
+}
+
+/// Packages the FMUs, makes sure of the venv and runs tests/demo.py on the estimator.
+fn demo(extra: Vec<String>) -> Result<()> {
+    let packaged = package::build_and_package()?;
+    let estimator = packaged
+        .iter()
+        .find(|p| p.model_identifier == "AlignmentEstimator")
+        .context("the estimator FMU was not packaged")?;
+    let python = python::ensure_venv()?;
+    println!();
+    let mut cmd = Command::new(python);
+    cmd.current_dir(workspace::root())
+        .arg("tests/demo.py")
+        .arg("--fmu")
+        .arg(&estimator.path)
+        .args(extra);
+    workspace::run(&mut cmd)
+}

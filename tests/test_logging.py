@@ -1,0 +1,47 @@
+"""What the FMU hands the importer's logger (fmi.md section 7, item 4): our componentEnvironment
+back (the router in fmi_harness finds the instance's sink by it), the instance name, a declared
+non-NULL category, and the message text intact even when it contains '%' (the FMU must pass it
+as an argument of a "%s" format, never as the format)."""
+
+from __future__ import annotations
+
+from fmi_harness import ERROR, OK, WARNING
+
+TRICKY = "does%snot%dexist.toml"
+
+
+def test_warning_names_a_missing_calibration_file_with_percent_signs_intact(make_slave, model_description):
+    s = make_slave("logger%s#1")
+    status = s.initialize(strings={"calibration_file": TRICKY})
+    assert status in (OK, WARNING)
+    warnings = [r for r in s.log.records if r.status == WARNING]
+    assert any(TRICKY in r.message for r in warnings), s.log.records
+    categories = {c.name for c in model_description.logCategories}
+    for r in s.log.records:
+        assert r.instance_name == "logger%s#1"
+        assert r.category is not None and r.category in categories, r
+    # a missing calibration only degrades to the diagonal model: the instance steps normally
+    assert s.step(0.0, 1e-3) == OK
+
+
+def test_error_messages_reach_the_right_instance(make_slave):
+    quiet, noisy = make_slave("quiet"), make_slave("noisy")
+    assert quiet.initialize() == OK and noisy.initialize() == OK
+    quiet.log.clear()
+    assert noisy.step(0.0, -1.0) == ERROR
+    assert quiet.log.records == []
+    [record] = noisy.log.records
+    assert (record.instance_name, record.status, record.category) == ("noisy", ERROR, "logStatusError")
+
+
+def test_debug_categories_follow_set_debug_logging(make_slave):
+    """Status categories are always on; logCalls only after fmi2SetDebugLogging switches it on."""
+    s = make_slave("debug")
+    assert s.initialize() == OK
+    s.log.clear()
+    assert s.step(0.0, 1e-3) == OK
+    assert [r for r in s.log.records if r.category == "logCalls"] == []
+    s.fmu.setDebugLogging(True, ["logCalls"])
+    assert s.step(1e-3, 1e-3) == OK
+    calls = [r for r in s.log.records if r.category == "logCalls"]
+    assert any("fmi2DoStep" in r.message for r in calls), s.log.records

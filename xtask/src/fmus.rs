@@ -1,0 +1,32 @@
+//! The FMUs this workspace ships. Adding one (the coming `fmu-vehicle`) is one more entry in
+//! [`FMUS`] plus the crate in xtask's dependencies (for its model description and documentation).
+
+use model_description::ModelDescription;
+
+/// What the packager needs to know about one FMU crate.
+pub struct FmuSpec {
+    /// Cargo package name, built with `cargo build --release -p <package>`.
+    pub package: &'static str,
+    /// The library target's name (`[lib] name`), which names the built shared library.
+    pub lib_name: &'static str,
+    /// `CoSimulation/@modelIdentifier`: names the .fmu, the binary inside it and must match the XML.
+    pub model_identifier: &'static str,
+    /// The modelDescription.xml content, from the crate's variable table.
+    pub model_description: fn() -> ModelDescription,
+    /// `documentation/index.html`, given the crate's method description.
+    pub documentation: fn(&str) -> String,
+    /// The method, an HTML fragment written by the FMU crate.
+    pub method_html: &'static str,
+    /// Directory (relative to the workspace root) whose files go to `resources/`, if any.
+    pub resources: Option<&'static str>,
+}
+
+pub const FMUS: &[FmuSpec] = &[FmuSpec {
+    package: "fmu-estimator",
+    lib_name: "fmu_estimator",
+    model_identifier: "AlignmentEstimator",
+    model_description: fmu_estimator::model_description,
+    documentation: fmi_abi::description::documentation_html::<fmu_estimator::Estimator>,
+    method_html: fmu_estimator::METHOD_HTML,
+    resources: Some("fmu-estimator/resources"),
+}];

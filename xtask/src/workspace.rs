@@ -1,0 +1,108 @@
+//! Where things are: the workspace root, cargo, the target directory; and running commands.
+
+use anyhow::{Context, Result, bail};
+use std::ffi::OsStr;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The workspace root (xtask lives one level below it).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask is inside the workspace")
+        .to_path_buf()
+}
+
+/// The cargo that runs us (`cargo xtask` sets `CARGO`), so nested builds use the same toolchain.
+pub fn cargo() -> Command {
+    let mut cmd = Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()));
+    cmd.current_dir(root());
+    cmd
+}
+
+/// Cargo's target directory, as cargo itself resolves it (CARGO_TARGET_DIR, `build.target-dir`
+/// in a config file, or `<workspace>/target`).
+pub fn target_dir() -> Result<PathBuf> {
+    let out = cargo()
+        .args(["metadata", "--format-version", "1", "--no-deps"])
+        .output()
+        .context("running cargo metadata")?;
+    if !out.status.success() {
+        bail!(
+            "cargo metadata failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let json = String::from_utf8(out.stdout).context("cargo metadata printed non-UTF-8")?;
+    json_string_field(&json, "target_directory")
+        .map(PathBuf::from)
+        .context("cargo metadata's output has no \"target_directory\"")
+}
+
+/// The string value of the first `"key":"..."` in a JSON text (enough for cargo metadata's
+/// top-level `target_directory`, which comes after the packages but is the only key of that name).
+fn json_string_field(json: &str, key: &str) -> Option<String> {
+    let pattern = format!("\"{key}\":\"");
+    let start = json.rfind(&pattern)? + pattern.len();
+    let mut out = String::new();
+    let mut chars = json[start..].chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => return Some(out),
+            '\\' => match chars.next()? {
+                'n' => out.push('\n'),
+                't' => out.push('\t'),
+                'r' => out.push('\r'),
+                'b' => out.push('\u{8}'),
+                'f' => out.push('\u{c}'),
+                'u' => {
+                    let hex: String = chars.by_ref().take(4).collect();
+                    out.push(char::from_u32(u32::from_str_radix(&hex, 16).ok()?)?);
+                }
+                other => out.push(other), // \" \\ \/
+            },
+            c => out.push(c),
+        }
+    }
+    None
+}
+
+/// Runs a command with inherited stdio, failing with the command line if it does not succeed.
+pub fn run(cmd: &mut Command) -> Result<()> {
+    let line = command_line(cmd);
+    let status = cmd
+        .status()
+        .with_context(|| format!("could not start `{line}`"))?;
+    if !status.success() {
+        bail!("`{line}` failed ({status})");
+    }
+    Ok(())
+}
+
+/// A command as a readable line, for messages.
+pub fn command_line(cmd: &Command) -> String {
+    let program = Path::new(cmd.get_program())
+        .file_name()
+        .unwrap_or(OsStr::new("?"))
+        .to_string_lossy()
+        .into_owned();
+    std::iter::once(program)
+        .chain(cmd.get_args().map(|a| a.to_string_lossy().into_owned()))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_target_directory_with_escapes() {
+        let json = r#"{"packages":[],"target_directory":"/a \"b\"\\c\u00e9","version":1}"#;
+        assert_eq!(
+            json_string_field(json, "target_directory").unwrap(),
+            "/a \"b\"\\c\u{e9}"
+        );
+        assert_eq!(json_string_field(json, "missing"), None);
+    }
+}
