@@ -34,6 +34,29 @@ fn gaussian<const N: usize>(
     l * e
 }
 
+/// The FMU's diagonal process-noise intensities, read from its variable table (so this test
+/// follows the shipped defaults).
+fn default_q_rate() -> Mat7 {
+    let start = |name: &str| match fmu_estimator::fmu::VARIABLES
+        .iter()
+        .find(|v| v.name == name)
+        .map(|v| v.start)
+    {
+        Some(fmi_abi::variables::Start::Real(x)) => x,
+        other => panic!("{name}: {other:?}"),
+    };
+    let q = [
+        0.0,
+        0.0,
+        0.0,
+        start("q_acc_ws"),
+        start("q_yaw_acc"),
+        start("q_acc_frame"),
+        start("q_xi"),
+    ];
+    Mat7::from_diagonal(&Vec7::from_column_slice(&q))
+}
+
 struct Run {
     nis_mean: f64,
     nis_within_99: f64,
@@ -47,9 +70,7 @@ fn run(scheme: Scheme, steps: usize, seed: u64) -> Run {
     let f = transition(&fc, h, scheme);
     let hm = measurement_matrix(&fc);
     // The FMU's diagonal model with its default intensities and sigmas.
-    let q = Mat7::from_diagonal(&Vec7::from_column_slice(&[
-        0.0, 0.0, 0.0, 1e-2, 1e-2, 1e-3, 1e-5,
-    ])) * h;
+    let q = default_q_rate() * h;
     let r = Mat4::from_diagonal(&Vec4::new(
         0.01f64.powi(2),
         0.0005f64.powi(2),
@@ -114,9 +135,7 @@ fn a_mis_specified_filter_is_detected_by_the_same_statistics() {
     let fc = state_matrix(&p, speed);
     let f = transition(&fc, h, Scheme::Exact);
     let hm = measurement_matrix(&fc);
-    let q = Mat7::from_diagonal(&Vec7::from_column_slice(&[
-        0.0, 0.0, 0.0, 1e-2, 1e-2, 1e-3, 1e-5,
-    ])) * h;
+    let q = default_q_rate() * h;
     let r = Mat4::from_diagonal(&Vec4::new(1e-4, 2.5e-7, 1e-4, 2.5e-5));
     let mut rng = StdRng::seed_from_u64(3);
     let mut x = Vec7::zeros();
@@ -154,9 +173,7 @@ fn the_fmu_runs_the_same_filter() {
     let fc = state_matrix(&p, 20.0);
     let f = transition(&fc, h, Scheme::Exact);
     let hm = measurement_matrix(&fc);
-    let q = Mat7::from_diagonal(&Vec7::from_column_slice(&[
-        0.0, 0.0, 0.0, 1e-2, 1e-2, 1e-3, 1e-5,
-    ])) * h;
+    let q = default_q_rate() * h;
     let r = Mat4::from_diagonal(&Vec4::new(1e-4, 2.5e-7, 1e-4, 2.5e-5));
     let s0 = [5e-3, 1e-3, 5e-3, 5e-2, 1e-2, 5e-2, 5e-3];
     let mut kf = Kalman::new(
