@@ -45,3 +45,16 @@ def test_debug_categories_follow_set_debug_logging(make_slave):
     assert s.step(1e-3, 1e-3) == OK
     calls = [r for r in s.log.records if r.category == "logCalls"]
     assert any("fmi2DoStep" in r.message for r in calls), s.log.records
+
+
+def test_an_unobservable_model_is_reported_by_the_pbh_test(make_slave):
+    """Without lateral primary suspension the frame neither moves with the wheelset nor shows in
+    any sensor: the PBH test at initialization must say so with a warning (and the FMU still runs)."""
+    s = make_slave("unobservable")
+    assert s.initialize({"ky": 0.0, "cy": 0.0}) == OK
+    warnings = [r.message for r in s.log.records if r.status == WARNING]
+    assert any("not observable" in m and "PBH rank" in m for m in warnings), s.log.records
+    observable = make_slave("observable")
+    assert observable.initialize() == OK
+    assert not any("observable" in r.message for r in observable.log.records)
+    assert s.step(0.0, 1e-3) == OK
