@@ -1,0 +1,637 @@
+//! The vehicle as an FMI model: its variable table and what each FMI phase does.
+//!
+//! Initialization reads the vehicle parameter set, builds the track (synthesized from the
+//! spectrum and seed, or read from `track_file`), and starts the vehicle in static equilibrium at
+//! `distance = 0` (leading wheelset). Each `fmi2DoStep(t, h)` integrates exactly to `t + h` with
+//! the speed input held over the step and reports sensors and truth at `t + h`.
+
+use crate::dynamics::{ContactOptions, Vehicle};
+use crate::params::VehicleParams;
+use crate::simulation::{SensorNoise, SimConfig, Simulation};
+use crate::track::{Spectrum, Track, TrackSpec};
+use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// Value references.
+pub mod vr {
+    // Real
+    pub const SPEED: u32 = 0;
+    pub const WS_ACC_Y: u32 = 1;
+    pub const WS_YAW_RATE: u32 = 2;
+    pub const FRAME_ACC_Y: u32 = 3;
+    pub const DISTANCE: u32 = 4;
+    pub const ALIGNMENT: u32 = 5;
+    pub const VERTICAL_PROFILE: u32 = 6;
+    pub const CROSS_LEVEL: u32 = 7;
+    pub const WS_Y: u32 = 8;
+    pub const WS_YAW: u32 = 9;
+    pub const WS_VY: u32 = 10;
+    pub const WS_YAW_RATE_TRUE: u32 = 11;
+    pub const FRAME_Y: u32 = 12;
+    pub const FRAME_VY: u32 = 13;
+    pub const WS_ACC_Y_CLEAN: u32 = 14;
+    pub const FRAME_ACC_Y_CLEAN: u32 = 15;
+    pub const WS_ROLL: u32 = 16;
+    pub const BOGIE_Y: u32 = 17;
+    pub const BOGIE_ROLL: u32 = 18;
+    pub const BOGIE_YAW: u32 = 19;
+    pub const BODY_Y: u32 = 20;
+    pub const BODY_ROLL: u32 = 21;
+    pub const BODY_YAW: u32 = 22;
+    pub const BODY_Z: u32 = 23;
+    pub const WHEEL_LOAD_LEFT: u32 = 24;
+    pub const WHEEL_LOAD_RIGHT: u32 = 25;
+    pub const CONICITY: u32 = 26;
+    pub const KALKER_SCALE: u32 = 27;
+    pub const HARMONIC_AMPLITUDE: u32 = 28;
+    pub const HARMONIC_WAVELENGTH: u32 = 29;
+    pub const RAMP_LENGTH: u32 = 30;
+    pub const MIN_WAVELENGTH: u32 = 31;
+    pub const MAX_WAVELENGTH: u32 = 32;
+    pub const SIGMA_ACC: u32 = 33;
+    pub const SIGMA_GYRO: u32 = 34;
+    pub const FRICTION: u32 = 35;
+    pub const FLANGE_CLEARANCE: u32 = 36;
+    pub const FLANGE_STIFFNESS: u32 = 37;
+    pub const MAX_INTERNAL_STEP: u32 = 38;
+    pub const MIN_SPEED: u32 = 39;
+    // Integer
+    pub const TRACK_SEED: u32 = 0;
+    pub const SPECTRUM: u32 = 1;
+    pub const NOISE_SEED: u32 = 2;
+    // Boolean
+    pub const LATERAL_IRREGULARITY: u32 = 0;
+    pub const VERTICAL_IRREGULARITY: u32 = 1;
+    pub const SENSOR_NOISE: u32 = 2;
+    pub const CREEP_SATURATION: u32 = 3;
+    pub const FLANGE_CONTACT: u32 = 4;
+    // String
+    pub const VEHICLE: u32 = 0;
+    pub const TRACK_FILE: u32 = 1;
+}
+
+pub static VARIABLES: &[VarSpec] = &[
+    VarSpec::real_input(
+        vr::SPEED,
+        "speed",
+        "m/s",
+        20.0,
+        "Forward speed, held over each communication step; below min_speed the vehicle stands still",
+    ),
+    VarSpec::real_output(
+        vr::WS_ACC_Y,
+        "ws_acc_y",
+        "m/s2",
+        0.0,
+        "Axle-box accelerometer on the leading wheelset: specific force along the axle (gravity enters through roll), with noise",
+    ),
+    VarSpec::real_output(
+        vr::WS_YAW_RATE,
+        "ws_yaw_rate",
+        "rad/s",
+        0.0,
+        "Yaw gyroscope on the leading wheelset, with noise",
+    ),
+    VarSpec::real_output(
+        vr::FRAME_ACC_Y,
+        "frame_acc_y",
+        "m/s2",
+        0.0,
+        "Lateral accelerometer on the leading bogie frame above the leading wheelset, with noise",
+    ),
+    VarSpec::real_output(
+        vr::DISTANCE,
+        "distance",
+        "m",
+        0.0,
+        "Position of the leading wheelset along the track",
+    ),
+    VarSpec::real_output(
+        vr::ALIGNMENT,
+        "alignment",
+        "m",
+        0.0,
+        "True lateral alignment at the leading wheelset (after the run-in ramp)",
+    ),
+    VarSpec::real_output(
+        vr::VERTICAL_PROFILE,
+        "vertical_profile",
+        "m",
+        0.0,
+        "True vertical profile at the leading wheelset",
+    ),
+    VarSpec::real_output(
+        vr::CROSS_LEVEL,
+        "cross_level",
+        "m",
+        0.0,
+        "True cross-level (left rail minus right rail height) at the leading wheelset",
+    ),
+    VarSpec::real_output(
+        vr::WS_Y,
+        "ws_y",
+        "m",
+        0.0,
+        "Leading wheelset lateral displacement from the ideal track centre line",
+    ),
+    VarSpec::real_output(
+        vr::WS_YAW,
+        "ws_yaw",
+        "rad",
+        0.0,
+        "Leading wheelset yaw angle",
+    ),
+    VarSpec::real_output(
+        vr::WS_VY,
+        "ws_vy",
+        "m/s",
+        0.0,
+        "Leading wheelset lateral velocity",
+    ),
+    VarSpec::real_output(
+        vr::WS_YAW_RATE_TRUE,
+        "ws_yaw_rate_true",
+        "rad/s",
+        0.0,
+        "Leading wheelset yaw rate (no noise)",
+    ),
+    VarSpec::real_output(
+        vr::FRAME_Y,
+        "frame_y",
+        "m",
+        0.0,
+        "Leading bogie frame lateral displacement at the point above the leading wheelset",
+    ),
+    VarSpec::real_output(
+        vr::FRAME_VY,
+        "frame_vy",
+        "m/s",
+        0.0,
+        "Lateral velocity of that point",
+    ),
+    VarSpec::real_output(
+        vr::WS_ACC_Y_CLEAN,
+        "ws_acc_y_clean",
+        "m/s2",
+        0.0,
+        "ws_acc_y without noise",
+    ),
+    VarSpec::real_output(
+        vr::FRAME_ACC_Y_CLEAN,
+        "frame_acc_y_clean",
+        "m/s2",
+        0.0,
+        "frame_acc_y without noise",
+    ),
+    VarSpec::real_output(
+        vr::WS_ROLL,
+        "ws_roll",
+        "rad",
+        0.0,
+        "Leading wheelset roll (cross-level plus cone roll)",
+    ),
+    VarSpec::real_output(
+        vr::BOGIE_Y,
+        "bogie_y",
+        "m",
+        0.0,
+        "Leading bogie frame lateral displacement (centre of gravity)",
+    ),
+    VarSpec::real_output(
+        vr::BOGIE_ROLL,
+        "bogie_roll",
+        "rad",
+        0.0,
+        "Leading bogie frame roll",
+    ),
+    VarSpec::real_output(
+        vr::BOGIE_YAW,
+        "bogie_yaw",
+        "rad",
+        0.0,
+        "Leading bogie frame yaw",
+    ),
+    VarSpec::real_output(
+        vr::BODY_Y,
+        "body_y",
+        "m",
+        0.0,
+        "Car body lateral displacement",
+    ),
+    VarSpec::real_output(vr::BODY_ROLL, "body_roll", "rad", 0.0, "Car body roll"),
+    VarSpec::real_output(vr::BODY_YAW, "body_yaw", "rad", 0.0, "Car body yaw"),
+    VarSpec::real_output(
+        vr::BODY_Z,
+        "body_z",
+        "m",
+        0.0,
+        "Car body bounce (from static equilibrium)",
+    ),
+    VarSpec::real_output(
+        vr::WHEEL_LOAD_LEFT,
+        "wheel_load_left",
+        "N",
+        0.0,
+        "Normal load on the leading wheelset's left wheel",
+    ),
+    VarSpec::real_output(
+        vr::WHEEL_LOAD_RIGHT,
+        "wheel_load_right",
+        "N",
+        0.0,
+        "Normal load on the leading wheelset's right wheel",
+    ),
+    VarSpec::real_parameter(
+        vr::CONICITY,
+        "conicity",
+        "1",
+        0.0,
+        "Tread conicity; 0 takes the vehicle file's value (0.1 for ML95)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::KALKER_SCALE,
+        "kalker_scale",
+        "1",
+        1.0,
+        "Multiplies every Kalker creep coefficient (0.5: the paper's -50 % case)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::HARMONIC_AMPLITUDE,
+        "harmonic_amplitude",
+        "m",
+        0.0,
+        "Amplitude of a harmonic alignment added to the track (the paper's resonance case: 0.001)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::HARMONIC_WAVELENGTH,
+        "harmonic_wavelength",
+        "m",
+        15.66,
+        "Wavelength of the harmonic alignment",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::RAMP_LENGTH,
+        "ramp_length",
+        "m",
+        10.0,
+        "Irregularities fade in smoothly over this distance from the start",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::MIN_WAVELENGTH,
+        "min_wavelength",
+        "m",
+        1.0,
+        "Shortest wavelength of the synthesized irregularities",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::MAX_WAVELENGTH,
+        "max_wavelength",
+        "m",
+        250.0,
+        "Longest wavelength of the synthesized irregularities",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::SIGMA_ACC,
+        "sigma_acc",
+        "m/s2",
+        0.01,
+        "Noise sigma of both accelerometers (per sample)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::SIGMA_GYRO,
+        "sigma_gyro",
+        "rad/s",
+        0.0005,
+        "Noise sigma of the gyroscope (per sample)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::FRICTION,
+        "friction",
+        "1",
+        0.4,
+        "Wheel-rail friction coefficient (creep saturation only)",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::FLANGE_CLEARANCE,
+        "flange_clearance",
+        "m",
+        0.009,
+        "Lateral free play before flange contact",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::FLANGE_STIFFNESS,
+        "flange_stiffness",
+        "N/m",
+        1.2e7,
+        "Lateral stiffness of flange contact",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::MAX_INTERNAL_STEP,
+        "max_internal_step",
+        "s",
+        1e-3,
+        "Largest internal Runge-Kutta step",
+    )
+    .min(1e-7),
+    VarSpec::real_parameter(
+        vr::MIN_SPEED,
+        "min_speed",
+        "m/s",
+        0.5,
+        "Below this speed the vehicle stands still",
+    )
+    .min(0.0),
+    VarSpec::integer_parameter(
+        vr::TRACK_SEED,
+        "track_seed",
+        1,
+        "Seed of the synthesized track irregularities",
+    )
+    .min(0.0),
+    VarSpec::integer_parameter(
+        vr::SPECTRUM,
+        "spectrum",
+        1,
+        "1: German low disturbance, 2: German high, 3: FRA class 5, 4: FRA class 6",
+    )
+    .min(1.0)
+    .max(4.0),
+    VarSpec::integer_parameter(vr::NOISE_SEED, "noise_seed", 2, "Seed of the sensor noise")
+        .min(0.0),
+    VarSpec::boolean_parameter(
+        vr::LATERAL_IRREGULARITY,
+        "lateral_irregularity",
+        true,
+        "Stochastic alignment on",
+    ),
+    VarSpec::boolean_parameter(
+        vr::VERTICAL_IRREGULARITY,
+        "vertical_irregularity",
+        true,
+        "Stochastic vertical profile and cross-level on",
+    ),
+    VarSpec::boolean_parameter(
+        vr::SENSOR_NOISE,
+        "sensor_noise",
+        true,
+        "Gaussian noise on the sensor outputs",
+    ),
+    VarSpec::boolean_parameter(
+        vr::CREEP_SATURATION,
+        "creep_saturation",
+        false,
+        "Shen-Hedrick-Elkins saturation of the creep forces",
+    ),
+    VarSpec::boolean_parameter(
+        vr::FLANGE_CONTACT,
+        "flange_contact",
+        false,
+        "Flange contact (dead band plus stiffness)",
+    ),
+    VarSpec::string_parameter(
+        vr::VEHICLE,
+        "vehicle",
+        "ml95.toml",
+        "Vehicle parameter file: ml95.toml or manchester.toml in the resources, or an absolute path",
+    ),
+    VarSpec::string_parameter(
+        vr::TRACK_FILE,
+        "track_file",
+        "",
+        "Measured track CSV (distance, alignment, vertical, cross_level); empty: synthesize",
+    ),
+];
+
+/// The FMI model state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RailVehicle {
+    resources: Option<PathBuf>,
+    sim: Option<Simulation>,
+}
+
+impl RailVehicle {
+    fn load_params(&self, name: &str) -> Result<VehicleParams, String> {
+        let path = PathBuf::from(name);
+        if path.is_absolute() {
+            return VehicleParams::load(&path);
+        }
+        if let Some(dir) = &self.resources {
+            let p = dir.join(&path);
+            if p.exists() {
+                return VehicleParams::load(&p);
+            }
+        }
+        match name {
+            "ml95.toml" | "ml95" => Ok(VehicleParams::ml95()),
+            "manchester.toml" | "manchester" => Ok(VehicleParams::manchester()),
+            other => Err(format!(
+                "parameter 'vehicle': no vehicle file '{other}' in the resources (ml95.toml, manchester.toml) and not an absolute path"
+            )),
+        }
+    }
+
+    fn write_outputs(&self, v: &mut Values) {
+        let Some(sim) = &self.sim else { return };
+        let o = &sim.outputs;
+        let r = &mut v.real;
+        for (i, x) in [
+            (vr::WS_ACC_Y, o.ws_acc_y),
+            (vr::WS_YAW_RATE, o.ws_yaw_rate),
+            (vr::FRAME_ACC_Y, o.frame_acc_y),
+            (vr::DISTANCE, o.distance),
+            (vr::ALIGNMENT, o.alignment),
+            (vr::VERTICAL_PROFILE, o.vertical_profile),
+            (vr::CROSS_LEVEL, o.cross_level),
+            (vr::WS_Y, o.ws_y),
+            (vr::WS_YAW, o.ws_yaw),
+            (vr::WS_VY, o.ws_vy),
+            (vr::WS_YAW_RATE_TRUE, o.ws_yaw_rate_clean),
+            (vr::FRAME_Y, o.frame_y),
+            (vr::FRAME_VY, o.frame_vy),
+            (vr::WS_ACC_Y_CLEAN, o.ws_acc_y_clean),
+            (vr::FRAME_ACC_Y_CLEAN, o.frame_acc_y_clean),
+            (vr::WS_ROLL, o.ws_roll),
+            (vr::BOGIE_Y, o.bogie_y),
+            (vr::BOGIE_ROLL, o.bogie_roll),
+            (vr::BOGIE_YAW, o.bogie_yaw),
+            (vr::BODY_Y, o.body_y),
+            (vr::BODY_ROLL, o.body_roll),
+            (vr::BODY_YAW, o.body_yaw),
+            (vr::BODY_Z, o.body_z),
+            (vr::WHEEL_LOAD_LEFT, o.wheel_load_left),
+            (vr::WHEEL_LOAD_RIGHT, o.wheel_load_right),
+        ] {
+            r[i as usize] = x;
+        }
+    }
+}
+
+/// Builds the simulation from the FMI parameter values (shared with tests and tools).
+pub fn build_simulation(
+    model: &RailVehicle,
+    v: &Values,
+    log: &Logger,
+) -> Result<Simulation, String> {
+    let real = |i: u32| v.real[i as usize];
+    let int = |i: u32| v.integer[i as usize];
+    let boolean = |i: u32| v.boolean[i as usize];
+    let params = model.load_params(&v.string[vr::VEHICLE as usize])?;
+    let conicity = if real(vr::CONICITY) > 0.0 {
+        real(vr::CONICITY)
+    } else {
+        params.wheelset.conicity
+    };
+    let options = ContactOptions {
+        kalker_scale: real(vr::KALKER_SCALE),
+        saturation: boolean(vr::CREEP_SATURATION),
+        friction: real(vr::FRICTION),
+        flange: boolean(vr::FLANGE_CONTACT),
+        flange_clearance: real(vr::FLANGE_CLEARANCE),
+        flange_stiffness: real(vr::FLANGE_STIFFNESS),
+        normal_force_lateral: true,
+        cone_roll: true,
+    };
+    if options.kalker_scale <= 0.0 {
+        return Err(format!(
+            "parameter 'kalker_scale' = {} must be positive",
+            options.kalker_scale
+        ));
+    }
+    let vehicle = Vehicle::new(params, conicity, options);
+    let track_file = v.string[vr::TRACK_FILE as usize].trim().to_string();
+    let speed = real(vr::SPEED).abs().max(20.0);
+    let (s_min, s_max) = (-vehicle.wheelset_offset(3) - 5.0, 25.0 * speed + 50.0);
+    let track = if track_file.is_empty() {
+        let (min_wl, max_wl) = (real(vr::MIN_WAVELENGTH), real(vr::MAX_WAVELENGTH));
+        if !(min_wl > 0.0 && max_wl > min_wl) {
+            return Err(format!(
+                "parameters 'min_wavelength' = {min_wl} and 'max_wavelength' = {max_wl} must satisfy 0 < min < max"
+            ));
+        }
+        let harmonic = real(vr::HARMONIC_AMPLITUDE);
+        if harmonic > 0.0 && !(real(vr::HARMONIC_WAVELENGTH) > 0.0) {
+            return Err(
+                "parameter 'harmonic_wavelength' must be positive when harmonic_amplitude is set"
+                    .into(),
+            );
+        }
+        let spec = TrackSpec {
+            spectrum: Spectrum::from_fmi(int(vr::SPECTRUM))?,
+            seed: int(vr::TRACK_SEED) as u64,
+            lateral: boolean(vr::LATERAL_IRREGULARITY),
+            vertical: boolean(vr::VERTICAL_IRREGULARITY),
+            harmonic_amplitude: harmonic,
+            harmonic_wavelength: real(vr::HARMONIC_WAVELENGTH),
+            min_wavelength: min_wl,
+            max_wavelength: max_wl,
+        };
+        spec.validate()?;
+        Track::generate(&spec, s_min, s_max)
+    } else {
+        let path = PathBuf::from(&track_file);
+        let path = if path.is_absolute() {
+            path
+        } else {
+            model
+                .resources
+                .as_ref()
+                .map(|d| d.join(&path))
+                .unwrap_or(path)
+        };
+        log.info(&format!("track from {}", path.display()));
+        Track::from_csv(&path)?
+    };
+    let config = SimConfig {
+        max_internal_step: real(vr::MAX_INTERNAL_STEP),
+        ramp_length: real(vr::RAMP_LENGTH),
+        min_speed: real(vr::MIN_SPEED).max(1e-3),
+    };
+    let noise = SensorNoise {
+        enabled: boolean(vr::SENSOR_NOISE),
+        sigma_acc: real(vr::SIGMA_ACC),
+        sigma_gyro: real(vr::SIGMA_GYRO),
+    };
+    Ok(Simulation::new(
+        vehicle,
+        track,
+        config,
+        noise,
+        int(vr::NOISE_SEED) as u64,
+    ))
+}
+
+impl Model for RailVehicle {
+    const INFO: ModelInfo = ModelInfo {
+        model_name: "RailVehicle",
+        model_identifier: "RailVehicle",
+        guid: "c3a9e1f2-6d47-4b8a-b0e5-91f2d4a7c6e3",
+        description: "A metro car (car body, two bogies, four wheelsets) on an irregular straight track with lateral and vertical dynamics, Kalker creep and virtual inertial sensors.",
+        author: "railway track-geometry toolkit",
+        version: env!("CARGO_PKG_VERSION"),
+        default_start: 0.0,
+        default_stop: 20.0,
+        default_step: 0.001,
+    };
+
+    fn variables() -> &'static [VarSpec] {
+        VARIABLES
+    }
+
+    fn instantiate(ctx: &InstantiateContext, _log: &Logger) -> Result<Self, String> {
+        Ok(RailVehicle {
+            resources: ctx.resources.clone(),
+            sim: None,
+        })
+    }
+
+    fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {
+        let sim = build_simulation(self, v, log)?;
+        self.sim = Some(sim);
+        self.write_outputs(v);
+        Ok(())
+    }
+
+    fn do_step(
+        &mut self,
+        v: &mut Values,
+        _t: f64,
+        h: f64,
+        log: &Logger,
+    ) -> Result<StepOutcome, String> {
+        let speed = v.real[vr::SPEED as usize];
+        let sim = self.sim.as_mut().ok_or("not initialized")?;
+        let mut outcome = StepOutcome::Ok;
+        if !speed.is_finite() || speed < 0.0 {
+            log.warning(&format!(
+                "speed input {speed} is not a finite non-negative number: the vehicle is held"
+            ));
+            outcome = StepOutcome::Warning;
+        }
+        sim.step(h, if speed.is_finite() { speed } else { 0.0 });
+        let o = &sim.outputs;
+        if ![o.ws_acc_y, o.ws_yaw_rate, o.frame_acc_y, o.ws_y]
+            .iter()
+            .all(|x| x.is_finite())
+        {
+            return Err(format!(
+                "the vehicle state became non-finite at distance {} m",
+                sim.s
+            ));
+        }
+        self.write_outputs(v);
+        Ok(outcome)
+    }
+}

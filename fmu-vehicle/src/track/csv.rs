@@ -1,0 +1,166 @@
+//! Reading a measured profile from CSV and resampling it onto a uniform grid.
+
+use std::path::Path;
+
+/// The required columns, in the order of the channels.
+pub(super) const COLUMNS: [&str; 4] = ["distance", "alignment", "vertical", "cross_level"];
+
+/// A measured profile as read: strictly increasing distances and the three channels.
+pub(super) struct Profile {
+    pub distance: Vec<f64>,
+    pub channels: [Vec<f64>; 3],
+}
+
+/// Parses the CSV text of `path` (used only in messages).
+pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
+    let file = path.display();
+    let mut header: Option<(usize, Vec<usize>, usize)> = None; // (line, column index per COLUMNS, width)
+    let mut prof = Profile {
+        distance: Vec::new(),
+        channels: [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let mut prev_line = 0;
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let Some((_, index, width)) = &header else {
+            let mut index = Vec::with_capacity(COLUMNS.len());
+            for name in COLUMNS {
+                match cells.iter().position(|c| *c == name) {
+                    Some(p) => index.push(p),
+                    None => {
+                        return Err(format!(
+                            "{file}: line {line_no}: header has no column '{name}' (found: {}); \
+                             expected the header 'distance,alignment,vertical,cross_level'",
+                            cells.join(",")
+                        ));
+                    }
+                }
+            }
+            for (p, c) in cells.iter().enumerate() {
+                if cells[..p].contains(c) {
+                    return Err(format!(
+                        "{file}: line {line_no}, column {}: duplicate column '{c}'",
+                        p + 1
+                    ));
+                }
+            }
+            header = Some((line_no, index, cells.len()));
+            continue;
+        };
+        if cells.len() != *width {
+            return Err(format!(
+                "{file}: line {line_no}: {} column(s), the header has {width}",
+                cells.len()
+            ));
+        }
+        let mut row = [0.0; 4];
+        for (k, name) in COLUMNS.iter().enumerate() {
+            let col = index[k];
+            let cell = cells[col];
+            row[k] = match cell.parse::<f64>() {
+                Ok(x) if x.is_finite() => x,
+                _ => {
+                    return Err(format!(
+                        "{file}: line {line_no}, column {} ('{name}'): '{cell}' is not a finite number",
+                        col + 1
+                    ));
+                }
+            };
+        }
+        if let Some(&last) = prof.distance.last()
+            && row[0] <= last
+        {
+            return Err(format!(
+                "{file}: line {line_no}, column {} ('distance'): distance {} m is not greater than \
+                 {} m on line {prev_line}; distances must be strictly increasing",
+                index[0] + 1,
+                row[0],
+                last
+            ));
+        }
+        prof.distance.push(row[0]);
+        for ch in 0..3 {
+            prof.channels[ch].push(row[ch + 1]);
+        }
+        prev_line = line_no;
+    }
+    if header.is_none() {
+        return Err(format!(
+            "{file}: no header line 'distance,alignment,vertical,cross_level'"
+        ));
+    }
+    if prof.distance.len() < 2 {
+        return Err(format!(
+            "{file}: needs at least two data lines, found {}",
+            prof.distance.len()
+        ));
+    }
+    Ok(prof)
+}
+
+/// A natural cubic spline (zero second derivative at both ends) through `(x, y)`, `x` strictly
+/// increasing, `x.len() >= 2`.
+pub(super) struct Spline<'a> {
+    x: &'a [f64],
+    y: &'a [f64],
+    m: Vec<f64>,
+}
+
+impl<'a> Spline<'a> {
+    pub fn new(x: &'a [f64], y: &'a [f64]) -> Spline<'a> {
+        let n = x.len();
+        let mut m = vec![0.0; n];
+        if n > 2 {
+            // Tridiagonal system for the interior second derivatives (Thomas algorithm).
+            let k = n - 2;
+            let mut diag = vec![0.0; k];
+            let mut rhs = vec![0.0; k];
+            let mut upper = vec![0.0; k];
+            for i in 1..n - 1 {
+                let h0 = x[i] - x[i - 1];
+                let h1 = x[i + 1] - x[i];
+                diag[i - 1] = 2.0 * (h0 + h1);
+                upper[i - 1] = h1;
+                rhs[i - 1] = 6.0 * ((y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0);
+            }
+            for j in 1..k {
+                let lower = x[j + 1] - x[j]; // h of the row j+1's sub-diagonal = h0 of row j+1
+                let w = lower / diag[j - 1];
+                diag[j] -= w * upper[j - 1];
+                rhs[j] -= w * rhs[j - 1];
+            }
+            m[k] = rhs[k - 1] / diag[k - 1];
+            for j in (0..k - 1).rev() {
+                m[j + 1] = (rhs[j] - upper[j] * m[j + 2]) / diag[j];
+            }
+        }
+        Spline { x, y, m }
+    }
+
+    /// Value and first and second derivative at `t` in interval `i` (`x[i] <= t <= x[i + 1]`).
+    pub fn eval(&self, i: usize, t: f64) -> [f64; 3] {
+        let (x, y, m) = (self.x, self.y, &self.m);
+        let h = x[i + 1] - x[i];
+        let a = (x[i + 1] - t) / h;
+        let b = (t - x[i]) / h;
+        let v = a * y[i]
+            + b * y[i + 1]
+            + ((a * a * a - a) * m[i] + (b * b * b - b) * m[i + 1]) * h * h / 6.0;
+        let d = (y[i + 1] - y[i]) / h - (3.0 * a * a - 1.0) / 6.0 * h * m[i]
+            + (3.0 * b * b - 1.0) / 6.0 * h * m[i + 1];
+        let dd = a * m[i] + b * m[i + 1];
+        [v, d, dd]
+    }
+}
+
+/// Reads and parses `path`.
+pub(super) fn read(path: &Path) -> Result<Profile, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    parse(path, &text)
+}

@@ -1,0 +1,349 @@
+//! Physics checks of the vehicle model against analytic and structural oracles.
+
+use fmi_abi::{InstantiateContext, Logger, Model, Values};
+use fmu_vehicle::dynamics::{ContactOptions, GRAVITY, Vehicle};
+use fmu_vehicle::fmu::{RailVehicle, VARIABLES, build_simulation, vr};
+use fmu_vehicle::modal;
+use fmu_vehicle::params::VehicleParams;
+use fmu_vehicle::simulation::{Outputs, Simulation};
+
+/// A simulation built through the FMU's own parameter path, with `edit` applied to the values.
+fn simulation(edit: impl FnOnce(&mut Values)) -> Simulation {
+    let mut v = Values::from_table(VARIABLES);
+    edit(&mut v);
+    let model =
+        RailVehicle::instantiate(&InstantiateContext::default(), &Logger::silent()).unwrap();
+    build_simulation(&model, &v, &Logger::silent()).unwrap()
+}
+
+fn run(sim: &mut Simulation, seconds: f64, h: f64, speed: f64) -> Vec<Outputs> {
+    let n = (seconds / h).round() as usize;
+    (0..n)
+        .map(|_| {
+            sim.step(h, speed);
+            sim.outputs
+        })
+        .collect()
+}
+
+fn rms(x: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for v in x {
+        s += v * v;
+        n += 1;
+    }
+    (s / n as f64).sqrt()
+}
+
+#[test]
+fn static_wheel_loads_sum_to_the_vehicle_weight() {
+    for p in [VehicleParams::ml95(), VehicleParams::manchester()] {
+        let weight = p.total_mass() * GRAVITY;
+        let v = Vehicle::new(p.clone(), p.wheelset.conicity, ContactOptions::default());
+        let sum: f64 = v.static_wheel_load.iter().sum::<f64>() * 2.0;
+        assert!(
+            (sum - weight).abs() < 1e-9 * weight,
+            "{}: {sum} vs {weight}",
+            p.name
+        );
+    }
+    // And the loads the dynamics computes on a perfect track, at rest in equilibrium.
+    let mut sim = simulation(|v| {
+        v.boolean[vr::LATERAL_IRREGULARITY as usize] = false;
+        v.boolean[vr::VERTICAL_IRREGULARITY as usize] = false;
+    });
+    sim.step(1e-3, 20.0);
+    let o = sim.outputs;
+    let expected = sim.vehicle.static_wheel_load[0];
+    assert!(
+        (o.wheel_load_left - expected).abs() < 1e-6 && (o.wheel_load_right - expected).abs() < 1e-6
+    );
+}
+
+#[test]
+fn without_irregularities_every_dynamic_output_stays_zero() {
+    let mut sim = simulation(|v| {
+        v.boolean[vr::LATERAL_IRREGULARITY as usize] = false;
+        v.boolean[vr::VERTICAL_IRREGULARITY as usize] = false;
+        v.boolean[vr::SENSOR_NOISE as usize] = false;
+    });
+    for o in run(&mut sim, 2.0, 1e-3, 20.0) {
+        for x in [
+            o.ws_acc_y,
+            o.ws_yaw_rate,
+            o.frame_acc_y,
+            o.ws_y,
+            o.ws_yaw,
+            o.frame_y,
+            o.body_y,
+            o.body_roll,
+            o.body_z,
+            o.bogie_roll,
+        ] {
+            assert_eq!(x, 0.0);
+        }
+    }
+    assert!((sim.s - 40.0).abs() < 1e-9, "distance {}", sim.s);
+}
+
+fn write_track(name: &str, f: impl Fn(f64) -> (f64, f64, f64)) -> std::path::PathBuf {
+    let path = std::env::temp_dir().join(format!("fmu-vehicle-{}-{name}.csv", std::process::id()));
+    let mut text = String::from("distance,alignment,vertical,cross_level\n");
+    let mut s = -30.0;
+    while s <= 200.0 {
+        let (a, v, c) = f(s);
+        text.push_str(&format!("{s},{a:e},{v:e},{c:e}\n"));
+        s += 0.05;
+    }
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn with_track(path: &std::path::Path) -> Simulation {
+    let p = path.to_str().unwrap().to_string();
+    simulation(move |v| {
+        v.string[vr::TRACK_FILE as usize] = p;
+        v.boolean[vr::SENSOR_NOISE as usize] = false;
+    })
+}
+
+#[test]
+fn a_symmetric_input_gives_a_symmetric_response() {
+    // Vertical profile only: nothing may move laterally.
+    let path = write_track("vertical", |s| (0.0, 0.002 * (s / 7.0).sin(), 0.0));
+    let mut sim = with_track(&path);
+    let out = run(&mut sim, 3.0, 1e-3, 20.0);
+    assert!(
+        out.iter().any(|o| o.body_z.abs() > 1e-5),
+        "the vertical input does move the car body"
+    );
+    for o in &out {
+        for x in [
+            o.ws_y,
+            o.ws_yaw,
+            o.frame_y,
+            o.body_y,
+            o.body_roll,
+            o.bogie_roll,
+            o.ws_acc_y,
+        ] {
+            assert!(x.abs() < 1e-12, "lateral response {x} to a vertical input");
+        }
+    }
+    // Mirrored lateral input (alignment and cross-level negated): mirrored response.
+    let a = write_track("mirror_a", |s| {
+        (
+            0.002 * (s / 5.0).sin(),
+            0.001 * (s / 9.0).cos(),
+            0.001 * (s / 4.0).sin(),
+        )
+    });
+    let b = write_track("mirror_b", |s| {
+        (
+            -0.002 * (s / 5.0).sin(),
+            0.001 * (s / 9.0).cos(),
+            -0.001 * (s / 4.0).sin(),
+        )
+    });
+    let (oa, ob) = (
+        run(&mut with_track(&a), 3.0, 1e-3, 20.0),
+        run(&mut with_track(&b), 3.0, 1e-3, 20.0),
+    );
+    let scale = rms(oa.iter().map(|o| o.ws_y));
+    assert!(scale > 1e-4);
+    for (x, y) in oa.iter().zip(&ob) {
+        for (p, q) in [
+            (x.ws_y, -y.ws_y),
+            (x.ws_yaw, -y.ws_yaw),
+            (x.body_roll, -y.body_roll),
+            (x.ws_acc_y, -y.ws_acc_y),
+            (x.body_z, y.body_z),
+        ] {
+            assert!((p - q).abs() <= 1e-9 * scale.max(p.abs()), "{p} vs {q}");
+        }
+    }
+}
+
+/// The free wheelsets' lateral-yaw frequency closest to `target` at speed `v`.
+fn free_wheelset_frequency(options: ContactOptions, v: f64, target: f64) -> f64 {
+    // No primary lateral or longitudinal suspension: each wheelset is free laterally.
+    let mut p = VehicleParams::ml95();
+    p.primary.kx = 0.0;
+    p.primary.ky = 0.0;
+    p.primary.cx = 0.0;
+    p.primary.cy = 0.0;
+    let vehicle = Vehicle::new(p, 0.1, options);
+    let modes = modal::modes(&vehicle, v);
+    modes
+        .lateral
+        .iter()
+        .map(|m| m.frequency)
+        .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
+        .unwrap()
+}
+
+#[test]
+fn klingel_frequency_of_free_wheelsets() {
+    // Without gravitational stiffness and cone roll, a free wheelset oscillates at Klingel's
+    // kinematic frequency V / (2 pi sqrt(r0 l / alpha)).
+    let p = VehicleParams::ml95();
+    let (r0, l, alpha, v) = (p.wheelset.rolling_radius, p.wheelset.half_gauge, 0.1, 10.0);
+    let klingel = v / (2.0 * std::f64::consts::PI * (r0 * l / alpha).sqrt());
+    let bare = ContactOptions {
+        normal_force_lateral: false,
+        cone_roll: false,
+        ..ContactOptions::default()
+    };
+    let f = free_wheelset_frequency(bare, v, klingel);
+    assert!(
+        (f / klingel - 1.0).abs() < 1e-3,
+        "free wheelset {f} Hz, Klingel {klingel} Hz"
+    );
+    // With the cone roll, the contact point's roll-rate motion lengthens the wavelength by
+    // sqrt(1 + r0 alpha / l): the same oracle with that factor.
+    let rolled = ContactOptions {
+        normal_force_lateral: false,
+        ..ContactOptions::default()
+    };
+    let corrected = klingel / (1.0 + r0 * alpha / l).sqrt();
+    let f = free_wheelset_frequency(rolled, v, corrected);
+    assert!(
+        (f / corrected - 1.0).abs() < 2e-3,
+        "free rolled wheelset {f} Hz, corrected Klingel {corrected} Hz"
+    );
+}
+
+#[test]
+fn stable_at_20_m_per_s_with_a_critical_speed_above() {
+    let p = VehicleParams::ml95();
+    let vehicle = Vehicle::new(p.clone(), p.wheelset.conicity, ContactOptions::default());
+    let m = modal::modes(&vehicle, 20.0);
+    assert!(
+        m.lateral_max_real() < 0.0,
+        "unstable at 20 m/s: {}",
+        m.lateral_max_real()
+    );
+    assert!(
+        m.coupling < 1e-9,
+        "lateral and vertical must decouple on straight track: {}",
+        m.coupling
+    );
+    let first = m.first_lateral().unwrap();
+    println!(
+        "ML95 at 20 m/s: first lateral mode {:.3} Hz, damping {:.3}",
+        first.frequency, first.damping
+    );
+    let vc = modal::critical_speed(&vehicle, 20.0, 150.0, 5.0);
+    println!("ML95 critical speed: {vc:?} m/s");
+    assert!(vc.is_some_and(|v| v > 20.0), "{vc:?}");
+}
+
+#[test]
+fn sensor_noise_has_the_configured_sigma() {
+    let mut sim = simulation(|v| {
+        v.boolean[vr::LATERAL_IRREGULARITY as usize] = false;
+        v.boolean[vr::VERTICAL_IRREGULARITY as usize] = false;
+        v.real[vr::SIGMA_ACC as usize] = 0.02;
+    });
+    let out = run(&mut sim, 10.0, 1e-3, 20.0);
+    let acc = rms(out.iter().map(|o| o.ws_acc_y));
+    let gyro = rms(out.iter().map(|o| o.ws_yaw_rate));
+    let frame = rms(out.iter().map(|o| o.frame_acc_y));
+    // 10 000 samples: the rms of N(0, s) is within 2 % of s with overwhelming probability.
+    assert!((acc / 0.02 - 1.0).abs() < 0.02, "{acc}");
+    assert!((frame / 0.02 - 1.0).abs() < 0.02, "{frame}");
+    assert!((gyro / 0.0005 - 1.0).abs() < 0.02, "{gyro}");
+}
+
+#[test]
+fn halving_the_internal_step_changes_the_sensors_by_less_than_0_1_percent() {
+    let signals = |max_step: f64| {
+        let mut sim = simulation(|v| {
+            v.boolean[vr::SENSOR_NOISE as usize] = false;
+            v.real[vr::MAX_INTERNAL_STEP as usize] = max_step;
+        });
+        run(&mut sim, 5.0, 1e-3, 20.0)
+    };
+    let (a, b) = (signals(1e-3), signals(5e-4));
+    for (name, f) in [
+        (
+            "ws_acc_y",
+            (|o: &Outputs| o.ws_acc_y) as fn(&Outputs) -> f64,
+        ),
+        ("ws_yaw_rate", |o: &Outputs| o.ws_yaw_rate),
+        ("frame_acc_y", |o: &Outputs| o.frame_acc_y),
+    ] {
+        let diff = rms(a.iter().zip(&b).map(|(x, y)| f(x) - f(y)));
+        let size = rms(b.iter().map(f));
+        println!(
+            "{name}: rms {size:.4e}, rms change on halving the step {diff:.3e} ({:.2e} relative)",
+            diff / size
+        );
+        assert!(diff < 1e-3 * size, "{name}: {diff} vs {size}");
+    }
+}
+
+#[test]
+fn plausible_signals_in_the_standard_case() {
+    let mut sim = simulation(|_| {});
+    let out = run(&mut sim, 20.0, 1e-3, 20.0);
+    let after = &out[1000..];
+    let rel = rms(after.iter().map(|o| o.ws_y - o.alignment));
+    let acc = rms(after.iter().map(|o| o.ws_acc_y));
+    let gyro = rms(after.iter().map(|o| o.ws_yaw_rate));
+    let frame = rms(after.iter().map(|o| o.frame_acc_y));
+    let align = rms(after.iter().map(|o| o.alignment));
+    println!(
+        "standard case: alignment rms {align:.3e} m, ws_y - alignment rms {rel:.3e} m, ws_acc_y {acc:.3e} m/s2, ws_yaw_rate {gyro:.3e} rad/s, frame_acc_y {frame:.3e} m/s2"
+    );
+    assert!(
+        out.iter()
+            .all(|o| o.ws_acc_y.is_finite() && o.ws_y.is_finite())
+    );
+    // The wheelset does not follow the track rigidly: near the lightly damped modes around
+    // 1-1.3 Hz (15-20 m at 20 m/s) it amplifies, at short wavelengths it cannot follow.
+    assert!(
+        rel < align,
+        "relative motion {rel} larger than the alignment {align}"
+    );
+    assert!(acc > 0.01 && acc < 5.0, "{acc}");
+    assert!(gyro > 5e-4 && gyro < 0.5, "{gyro}");
+    assert!(frame > 0.01 && frame < 5.0, "{frame}");
+}
+
+/// Tracking of a harmonic alignment: quasi-static at long wavelengths (the whole vehicle follows
+/// the rails), amplified near the first lateral mode, attenuated at short wavelengths.
+#[test]
+fn the_wheelset_follows_long_waves_and_resonates_near_its_first_mode() {
+    let ratio = |wavelength: f64| {
+        let mut sim = simulation(|v| {
+            v.boolean[vr::LATERAL_IRREGULARITY as usize] = false;
+            v.boolean[vr::VERTICAL_IRREGULARITY as usize] = false;
+            v.boolean[vr::SENSOR_NOISE as usize] = false;
+            v.real[vr::HARMONIC_AMPLITUDE as usize] = 1e-3;
+            v.real[vr::HARMONIC_WAVELENGTH as usize] = wavelength;
+        });
+        let out = run(&mut sim, 20.0, 1e-3, 20.0);
+        let settled = &out[10_000..];
+        let y = rms(settled.iter().map(|o| o.ws_y));
+        let rel = rms(settled.iter().map(|o| o.ws_y - o.alignment));
+        let a = rms(settled.iter().map(|o| o.alignment));
+        (y / a, rel / a)
+    };
+    let (_, rel_long) = ratio(100.0);
+    assert!(
+        rel_long < 0.05,
+        "at 100 m the wheelset follows the rails: relative {rel_long}"
+    );
+    let vehicle = Vehicle::new(VehicleParams::ml95(), 0.1, ContactOptions::default());
+    let first = modal::modes(&vehicle, 20.0).first_lateral().unwrap();
+    let (amplified, _) = ratio(20.0 / first.frequency);
+    println!(
+        "first lateral mode {:.3} Hz: amplitude ratio y / xi {amplified:.2} at {:.2} m",
+        first.frequency,
+        20.0 / first.frequency
+    );
+    assert!(amplified > 1.2, "{amplified}");
+    let (short, _) = ratio(4.0);
+    assert!(short < 0.5, "{short}");
+}
