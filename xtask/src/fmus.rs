@@ -1,4 +1,4 @@
-//! The FMUs this workspace ships. Adding one (the coming `fmu-vehicle`) is one more entry in
+//! The FMUs this workspace ships. Adding one is one more entry in
 //! [`FMUS`] plus the crate in xtask's dependencies (for its model description and documentation).
 
 use model_description::ModelDescription;
@@ -21,12 +21,23 @@ pub struct FmuSpec {
     pub resources: Option<&'static str>,
 }
 
-pub const FMUS: &[FmuSpec] = &[FmuSpec {
-    package: "fmu-estimator",
-    lib_name: "fmu_estimator",
-    model_identifier: "AlignmentEstimator",
-    model_description: fmu_estimator::model_description,
-    documentation: fmi_abi::description::documentation_html::<fmu_estimator::Estimator>,
-    method_html: fmu_estimator::METHOD_HTML,
-    resources: Some("fmu-estimator/resources"),
-}];
+pub const FMUS: &[FmuSpec] = &[
+    FmuSpec {
+        package: "fmu-estimator",
+        lib_name: "fmu_estimator",
+        model_identifier: "AlignmentEstimator",
+        model_description: fmu_estimator::model_description,
+        documentation: fmi_abi::description::documentation_html::<fmu_estimator::Estimator>,
+        method_html: fmu_estimator::METHOD_HTML,
+        resources: Some("fmu-estimator/resources"),
+    },
+    FmuSpec {
+        package: "fmu-vehicle",
+        lib_name: "fmu_vehicle",
+        model_identifier: "RailVehicle",
+        model_description: fmu_vehicle::model_description,
+        documentation: fmi_abi::description::documentation_html::<fmu_vehicle::RailVehicle>,
+        method_html: fmu_vehicle::METHOD_HTML,
+        resources: Some("fmu-vehicle/resources"),
+    },
+];

@@ -1,0 +1,232 @@
+"""The RailVehicle FMU through fmpy: it validates, runs the standard case with signals of
+plausible size, replays bit for bit from saved and serialized states (noise generator and
+track included), resets to a fresh instance, runs in parallel threads, follows a speed input,
+reads a measured track, and refuses impossible parameters with a message naming them."""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+from pathlib import Path
+
+import fmpy
+import numpy as np
+import pytest
+from fmpy.validation import validate_fmu
+
+from fmi_harness import ERROR, OK, Slave
+from project import REPO, fmu_dir
+
+H = 1e-3
+SENSORS = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y"]
+TRUTH = ["distance", "alignment", "vertical_profile", "cross_level", "ws_y", "ws_yaw", "ws_vy", "ws_yaw_rate_true", "frame_y", "frame_vy"]
+
+
+@pytest.fixture(scope="module")
+def vehicle_path() -> Path:
+    path = fmu_dir() / "RailVehicle.fmu"
+    if not path.exists():
+        subprocess.run(["cargo", "xtask", "fmu"], cwd=REPO, check=True)
+    return path
+
+
+@pytest.fixture(scope="module")
+def vehicle_md(vehicle_path):
+    return fmpy.read_model_description(str(vehicle_path))
+
+
+@pytest.fixture(scope="module")
+def vehicle_dir(vehicle_path, tmp_path_factory) -> Path:
+    return Path(fmpy.extract(str(vehicle_path), unzipdir=str(tmp_path_factory.mktemp("vehicle"))))
+
+
+@pytest.fixture
+def make_vehicle(vehicle_md, vehicle_dir):
+    made: list[Slave] = []
+
+    def make(name: str = "vehicle") -> Slave:
+        s = Slave(vehicle_md, vehicle_dir, name=name)
+        made.append(s)
+        return s
+
+    yield make
+    for s in made:
+        s.free()
+
+
+def initialize(s: Slave, reals=None, integers=None, booleans=None, strings=None) -> int:
+    s.fmu.setupExperiment(startTime=0.0)
+    for name, value in (reals or {}).items():
+        s.fmu.setReal([s.vr[name]], [value])
+    for name, value in (integers or {}).items():
+        s.fmu.setInteger([s.vr[name]], [value])
+    for name, value in (booleans or {}).items():
+        s.fmu.setBoolean([s.vr[name]], [value])
+    for name, value in (strings or {}).items():
+        s.fmu.setString([s.vr[name]], [value])
+    s.fmu.enterInitializationMode()
+    return s.call("fmi2ExitInitializationMode")
+
+
+def run(s: Slave, steps: int, t0: float = 0.0, speed=20.0, names=SENSORS + TRUTH) -> np.ndarray:
+    vrs = [s.vr[n] for n in names]
+    out = np.empty((steps, len(names)))
+    for k in range(steps):
+        v = speed(t0 + k * H) if callable(speed) else speed
+        s.fmu.setReal([s.vr["speed"]], [v])
+        s.fmu.doStep(t0 + k * H, H)
+        out[k] = s.fmu.getReal(vrs)
+    return out
+
+
+def rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
+def test_fmpy_validation_finds_no_problems(vehicle_path):
+    assert validate_fmu(str(vehicle_path)) == []
+
+
+def test_declares_the_names_the_other_parts_rely_on(vehicle_md):
+    by_name = {v.name: v for v in vehicle_md.modelVariables}
+    assert by_name["speed"].causality == "input" and by_name["speed"].unit == "m/s" and float(by_name["speed"].start) == 20.0
+    for name in SENSORS + TRUTH:
+        assert by_name[name].causality == "output", name
+    assert by_name["track_seed"].type == "Integer" and by_name["track_seed"].causality == "parameter"
+    for name in ["conicity", "kalker_scale", "spectrum", "lateral_irregularity", "vertical_irregularity", "sensor_noise", "sigma_acc", "sigma_gyro", "harmonic_amplitude", "harmonic_wavelength"]:
+        assert by_name[name].causality == "parameter", name
+    assert vehicle_md.guid != fmpy.read_model_description(str(fmu_dir() / "AlignmentEstimator.fmu")).guid
+
+
+def test_standard_run_through_simulate_fmu_has_plausible_signals(vehicle_path):
+    r = fmpy.simulate_fmu(str(vehicle_path), stop_time=20.0, output_interval=H, output=SENSORS + TRUTH)
+    assert r.shape[0] == 20001
+    assert abs(r["distance"][-1] - 400.0) < 1e-6
+    for name in SENSORS + TRUTH:
+        assert np.all(np.isfinite(r[name])), name
+    settled = r[r["time"] > 1.0]
+    # Sizes measured on this model (20 m/s, German low disturbance, seed 1): ws_acc_y 0.23 m/s2,
+    # ws_yaw_rate 5.5e-3 rad/s, frame_acc_y 0.28 m/s2, alignment 2.8 mm; wide plausibility bounds.
+    assert 0.02 < rms(settled["ws_acc_y"]) < 2.0
+    assert 5e-4 < rms(settled["ws_yaw_rate"]) < 0.05
+    assert 0.02 < rms(settled["frame_acc_y"]) < 2.0
+    assert 1e-3 < rms(settled["alignment"]) < 1e-2
+    assert rms(settled["ws_y"] - settled["alignment"]) < rms(settled["alignment"])
+
+
+def test_noise_is_exactly_the_difference_to_the_clean_signal_and_has_its_sigma(make_vehicle):
+    s = make_vehicle()
+    assert initialize(s, reals={"sigma_acc": 0.02}) == OK
+    out = run(s, 5000, names=["ws_acc_y", "ws_acc_y_clean", "ws_yaw_rate", "ws_yaw_rate_true"])
+    noise_acc, noise_gyro = out[:, 0] - out[:, 1], out[:, 2] - out[:, 3]
+    assert abs(np.std(noise_acc) / 0.02 - 1) < 0.05
+    assert abs(np.std(noise_gyro) / 0.0005 - 1) < 0.05
+    quiet = make_vehicle("quiet")
+    assert initialize(quiet, booleans={"sensor_noise": False}) == OK
+    out = run(quiet, 500, names=["ws_acc_y", "ws_acc_y_clean"])
+    assert np.array_equal(out[:, 0], out[:, 1])
+
+
+def test_restored_and_deserialized_states_replay_bit_identically(make_vehicle):
+    s = make_vehicle()
+    assert initialize(s) == OK
+    run(s, 1000)
+    state = s.fmu.getFMUstate()
+    blob = s.fmu.serializeFMUstate(state)
+    first = run(s, 500, t0=1.0)
+    s.fmu.setFMUstate(state)
+    s.fmu.freeFMUstate(state)
+    assert np.array_equal(run(s, 500, t0=1.0), first)
+    other = make_vehicle("other")
+    assert initialize(other, integers={"track_seed": 9}) == OK
+    restored = other.fmu.deSerializeFMUstate(blob)
+    other.fmu.setFMUstate(restored)
+    other.fmu.freeFMUstate(restored)
+    assert np.array_equal(run(other, 500, t0=1.0), first)
+
+
+def test_reset_gives_a_fresh_instance(make_vehicle):
+    fresh = make_vehicle("fresh")
+    assert initialize(fresh, integers={"track_seed": 3}) == OK
+    expected = run(fresh, 300)
+    used = make_vehicle("used")
+    assert initialize(used, integers={"track_seed": 4}, reals={"kalker_scale": 0.5}) == OK
+    run(used, 700)
+    used.fmu.reset()
+    assert initialize(used, integers={"track_seed": 3}) == OK
+    assert np.array_equal(run(used, 300), expected)
+
+
+def test_seeds_select_the_track(make_vehicle):
+    a, b, c = make_vehicle("a"), make_vehicle("b"), make_vehicle("c")
+    for s, seed in ((a, 5), (b, 5), (c, 6)):
+        assert initialize(s, integers={"track_seed": seed}) == OK
+    ra, rb, rc = (run(s, 1000, names=["alignment"]) for s in (a, b, c))
+    assert np.array_equal(ra, rb)
+    assert not np.array_equal(ra, rc)
+
+
+def test_parallel_instances_match_sequential_runs(make_vehicle):
+    seeds = [11, 12]
+
+    def fresh(name: str, seed: int) -> Slave:
+        s = make_vehicle(name)
+        assert initialize(s, integers={"track_seed": seed, "noise_seed": seed}) == OK
+        return s
+
+    sequential = [run(fresh(f"seq{i}", seed), 1500) for i, seed in enumerate(seeds)]
+    slaves = [fresh(f"thr{i}", seed) for i, seed in enumerate(seeds)]
+    results: list = [None, None]
+    barrier = threading.Barrier(2)
+
+    def work(i: int) -> None:
+        barrier.wait()
+        results[i] = run(slaves[i], 1500)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(timeout=120)
+    for i in range(2):
+        assert np.array_equal(results[i], sequential[i])
+
+
+def test_speed_input_drives_the_distance(make_vehicle):
+    s = make_vehicle()
+    assert initialize(s) == OK
+
+    def profile(t: float) -> float:  # accelerate from rest, then brake to 10 m/s
+        return min(2.0 * t, 20.0) if t < 15.0 else max(20.0 - 2.0 * (t - 15.0), 10.0)
+
+    out = run(s, 20000, speed=profile, names=["distance", "ws_acc_y"])
+    expected = sum(profile(k * H) * H if profile(k * H) >= 0.5 else 0.0 for k in range(20000))
+    assert abs(out[-1, 0] - expected) < 1e-6
+    assert np.all(np.isfinite(out))
+
+
+def test_a_measured_track_is_followed(make_vehicle, tmp_path):
+    d = np.arange(-30.0, 300.0, 0.1)
+    alignment = 1e-3 * np.sin(2 * np.pi * d / 40.0)
+    csv = tmp_path / "track.csv"
+    csv.write_text("distance,alignment,vertical,cross_level\n" + "\n".join(f"{x},{a:.12e},0,0" for x, a in zip(d, alignment)))
+    s = make_vehicle()
+    assert initialize(s, reals={"ramp_length": 0.0}, strings={"track_file": str(csv)}) == OK
+    out = run(s, 5000, names=["distance", "alignment"])
+    assert np.allclose(out[:, 1], 1e-3 * np.sin(2 * np.pi * out[:, 0] / 40.0), atol=1e-8)
+
+
+@pytest.mark.parametrize(
+    "setting, word",
+    [
+        ({"integers": {"spectrum": 7}}, "spectrum"),
+        ({"strings": {"vehicle": "no_such_vehicle.toml"}}, "vehicle"),
+        ({"reals": {"min_wavelength": 300.0}}, "wavelength"),
+        ({"strings": {"track_file": "/nonexistent/track.csv"}}, "/nonexistent/track.csv"),
+    ],
+)
+def test_impossible_parameters_are_refused_naming_them(make_vehicle, setting, word):
+    s = make_vehicle()
+    assert initialize(s, **setting) == ERROR
+    errors = [r.message for r in s.log.records if r.status == ERROR]
+    assert any(word in m for m in errors), s.log.records
