@@ -411,3 +411,17 @@ impl Model for Estimator {
         Ok(outcome)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_variable_table_is_dense_and_the_model_description_valid() {
+        fmi_abi::variables::VarIndex::new(super::VARIABLES).unwrap();
+        let md = crate::model_description();
+        assert_eq!(md.validate(), vec![]);
+        assert_eq!(
+            model_description::ModelDescription::from_xml(&md.to_xml()).unwrap(),
+            md
+        );
+    }
+}

@@ -56,6 +56,7 @@ pub mod vr {
     pub const FLANGE_STIFFNESS: u32 = 37;
     pub const MAX_INTERNAL_STEP: u32 = 38;
     pub const MIN_SPEED: u32 = 39;
+    pub const FORWARD_SPEED: u32 = 40;
     // Integer
     pub const TRACK_SEED: u32 = 0;
     pub const SPECTRUM: u32 = 1;
@@ -234,6 +235,13 @@ pub static VARIABLES: &[VarSpec] = &[
         "N",
         0.0,
         "Normal load on the leading wheelset's left wheel",
+    ),
+    VarSpec::real_output(
+        vr::FORWARD_SPEED,
+        "forward_speed",
+        "m/s",
+        0.0,
+        "The speed the vehicle ran at over the last step (0 when standing): connect it to the estimator's speed",
     ),
     VarSpec::real_output(
         vr::WHEEL_LOAD_RIGHT,
@@ -473,6 +481,7 @@ impl RailVehicle {
             (vr::BODY_Z, o.body_z),
             (vr::WHEEL_LOAD_LEFT, o.wheel_load_left),
             (vr::WHEEL_LOAD_RIGHT, o.wheel_load_right),
+            (vr::FORWARD_SPEED, o.forward_speed),
         ] {
             r[i as usize] = x;
         }
@@ -633,5 +642,19 @@ impl Model for RailVehicle {
         }
         self.write_outputs(v);
         Ok(outcome)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_variable_table_is_dense_and_the_model_description_valid() {
+        fmi_abi::variables::VarIndex::new(super::VARIABLES).unwrap();
+        let md = crate::model_description();
+        assert_eq!(md.validate(), vec![]);
+        assert_eq!(
+            model_description::ModelDescription::from_xml(&md.to_xml()).unwrap(),
+            md
+        );
     }
 }

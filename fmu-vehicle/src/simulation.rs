@@ -146,6 +146,7 @@ pub struct Outputs {
     pub body_z: f64,
     pub wheel_load_left: f64,
     pub wheel_load_right: f64,
+    pub forward_speed: f64,
 }
 
 /// The running simulation: everything here is part of an FMU state.
@@ -334,6 +335,7 @@ impl Simulation {
             body_z: q[dof::CAR + dof::Z],
             wheel_load_left: diag.wheel_loads[0][0],
             wheel_load_right: diag.wheel_loads[0][1],
+            forward_speed: v,
         }
     }
 }

@@ -1,0 +1,1 @@
+//! Import of FMI 2.0 co-simulation FMUs (in progress).
