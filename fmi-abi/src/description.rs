@@ -46,9 +46,10 @@ fn scalar_variable(v: &VarSpec) -> ScalarVariable {
     }
 }
 
-/// The model description of `M`. Outputs are declared without direct feedthrough
-/// (`dependencies=""`): every output is computed inside fmi2DoStep, so setting an input never
-/// changes an output before the next step, and masters need not look for algebraic loops.
+/// The model description of `M`. Output dependencies come from
+/// [`Model::output_dependencies`]; by default none (`dependencies=""`): every output is computed
+/// inside fmi2DoStep, so setting an input never changes an output before the next step, and
+/// masters need not look for algebraic loops.
 pub fn model_description<M: Model>() -> ModelDescription {
     let info = M::INFO;
     let variables: Vec<ScalarVariable> = M::variables().iter().map(scalar_variable).collect();
@@ -61,7 +62,7 @@ pub fn model_description<M: Model>() -> ModelDescription {
             unit(u).unwrap_or_else(|| panic!("unit '{u}' is not in fmi_abi::units; add it there"))
         })
         .collect();
-    let model_structure = ModelStructure::derive(&variables, |_| Some(vec![]));
+    let model_structure = ModelStructure::derive(&variables, |v| M::output_dependencies(&v.name));
     ModelDescription {
         fmi_version: "2.0".into(),
         model_name: info.model_name.into(),

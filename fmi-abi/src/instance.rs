@@ -53,6 +53,8 @@ pub struct Snapshot<M: Model> {
     pub stop_time: Option<f64>,
     pub parameters_dirty: bool,
     pub initial_dirty: bool,
+    /// Inputs were set since the outputs were last computed (direct feedthrough).
+    pub inputs_dirty: bool,
 }
 
 /// An instance as fmi2Instantiate returns it (wrapped in a tagged handle by `export`).
@@ -88,6 +90,7 @@ impl<M: Model> Instance<M> {
             stop_time: None,
             parameters_dirty: false,
             initial_dirty: true,
+            inputs_dirty: false,
         };
         Ok(Instance {
             log,
@@ -300,6 +303,10 @@ impl<M: Model> Instance<M> {
             self.sim.model.calculate_initial(&mut self.sim.values);
             self.sim.initial_dirty = false;
         }
+        if self.sim.inputs_dirty {
+            self.sim.model.update_outputs(&mut self.sim.values);
+            self.sim.inputs_dirty = false;
+        }
         Ok(())
     }
 
@@ -339,6 +346,9 @@ impl<M: Model> Instance<M> {
     }
 
     fn after_set(&mut self, v: &VarSpec) {
+        if v.causality == Causality::Input {
+            self.sim.inputs_dirty = true;
+        }
         if v.causality == Causality::Parameter {
             match self.sim.state {
                 State::StepComplete => self.sim.parameters_dirty = true,

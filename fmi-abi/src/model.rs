@@ -54,6 +54,17 @@ pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
     /// they can be read in initialization mode.
     fn calculate_initial(&mut self, _values: &mut Values) {}
 
+    /// Direct feedthrough: the 1-based ModelVariables indices of the inputs that `output`
+    /// depends on without a step (written as the `dependencies` attribute). The default, no
+    /// dependency, is right for models that compute their outputs only inside fmi2DoStep.
+    fn output_dependencies(_output: &str) -> Option<Vec<u32>> {
+        Some(vec![])
+    }
+
+    /// Recomputes outputs that depend directly on inputs; the layer calls it before a get when
+    /// inputs were set since the last step (only models with direct feedthrough need it).
+    fn update_outputs(&mut self, _values: &mut Values) {}
+
     /// Checks parameters and builds whatever the steps need. Parameters already passed the
     /// table's min/max checks.
     fn exit_initialization(&mut self, values: &mut Values, log: &Logger) -> Result<(), String>;

@@ -150,6 +150,30 @@ impl VarSpec {
         v
     }
 
+    pub const fn boolean_input(
+        vr: u32,
+        name: &'static str,
+        start: bool,
+        description: &'static str,
+    ) -> Self {
+        let mut v = Self::new(vr, name, Start::Boolean(start), description);
+        v.causality = Causality::Input;
+        v.variability = Variability::Discrete;
+        v
+    }
+
+    pub const fn integer_input(
+        vr: u32,
+        name: &'static str,
+        start: i32,
+        description: &'static str,
+    ) -> Self {
+        let mut v = Self::new(vr, name, Start::Integer(start), description);
+        v.causality = Causality::Input;
+        v.variability = Variability::Discrete;
+        v
+    }
+
     pub const fn integer_output(
         vr: u32,
         name: &'static str,

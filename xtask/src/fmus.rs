@@ -40,4 +40,23 @@ pub const FMUS: &[FmuSpec] = &[
         method_html: fmu_vehicle::METHOD_HTML,
         resources: Some("fmu-vehicle/resources"),
     },
+    // Trivial FMUs for testing and benchmarking the orchestrator.
+    FmuSpec {
+        package: "fmu-dahlquist",
+        lib_name: "fmu_dahlquist",
+        model_identifier: "Dahlquist",
+        model_description: fmu_dahlquist::model_description,
+        documentation: fmi_abi::description::documentation_html::<fmu_dahlquist::Dahlquist>,
+        method_html: fmu_dahlquist::METHOD_HTML,
+        resources: None,
+    },
+    FmuSpec {
+        package: "fmu-feedthrough",
+        lib_name: "fmu_feedthrough",
+        model_identifier: "Feedthrough",
+        model_description: fmu_feedthrough::model_description,
+        documentation: fmi_abi::description::documentation_html::<fmu_feedthrough::Feedthrough>,
+        method_html: fmu_feedthrough::METHOD_HTML,
+        resources: None,
+    },
 ];

@@ -1,0 +1,84 @@
+//! Dahlquist's test equation `x' = -k x`, integrated exactly over each step
+//! (`x(t + h) = x(t) exp(-k h)`), with an input `u` added to the derivative
+//! (`x' = -k x + u`, held over the step). Output `x` has no direct feedthrough. Used to test and
+//! benchmark masters, like the Modelica Reference-FMUs' Dahlquist.
+
+use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
+use serde::{Deserialize, Serialize};
+
+const X: u32 = 0;
+const K: u32 = 1;
+const U: u32 = 2;
+const X0: u32 = 3;
+
+static VARIABLES: &[VarSpec] = &[
+    VarSpec::real_output(X, "x", "1", 1.0, "the state"),
+    VarSpec::real_parameter(K, "k", "1", 1.0, "decay rate").min(0.0),
+    VarSpec::real_input(
+        U,
+        "u",
+        "1",
+        0.0,
+        "added to the derivative, held over the step",
+    ),
+    VarSpec::real_parameter(X0, "x0", "1", 1.0, "initial state"),
+];
+
+#[derive(Clone, Serialize, Deserialize)]
+pub struct Dahlquist;
+
+impl Model for Dahlquist {
+    const INFO: ModelInfo = ModelInfo {
+        model_name: "Dahlquist",
+        model_identifier: "Dahlquist",
+        guid: "0b7e1c52-3f2d-4a61-9e58-d1a4c2f7b903",
+        description: "x' = -k x + u, exact per step",
+        author: "railway track-geometry toolkit (test FMU)",
+        version: env!("CARGO_PKG_VERSION"),
+        default_start: 0.0,
+        default_stop: 10.0,
+        default_step: 0.1,
+    };
+    fn variables() -> &'static [VarSpec] {
+        VARIABLES
+    }
+    fn instantiate(_: &InstantiateContext, _: &Logger) -> Result<Self, String> {
+        Ok(Dahlquist)
+    }
+    fn exit_initialization(&mut self, v: &mut Values, _: &Logger) -> Result<(), String> {
+        v.real[X as usize] = v.real[X0 as usize];
+        Ok(())
+    }
+    fn do_step(
+        &mut self,
+        v: &mut Values,
+        _t: f64,
+        h: f64,
+        _: &Logger,
+    ) -> Result<StepOutcome, String> {
+        let (x, k, u) = (v.real[X as usize], v.real[K as usize], v.real[U as usize]);
+        v.real[X as usize] = if k > 0.0 {
+            let e = (-k * h).exp();
+            x * e + u / k * (1.0 - e)
+        } else {
+            x + u * h
+        };
+        Ok(StepOutcome::Ok)
+    }
+}
+
+fmi_abi::export_fmu!(crate::Dahlquist);
+
+pub const METHOD_HTML: &str = "<h2>Method</h2><p>x' = -k x + u, integrated exactly over each communication step with u held.</p>";
+
+pub fn model_description() -> model_description::ModelDescription {
+    fmi_abi::description::model_description::<Dahlquist>()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn model_description_is_valid() {
+        assert_eq!(super::model_description().validate(), vec![]);
+    }
+}
