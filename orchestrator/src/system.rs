@@ -19,8 +19,14 @@ impl Value {
         use model_description::BaseType as B;
         let t = text.trim();
         match base {
-            B::Real => t.parse().map(Value::Real).map_err(|_| format!("'{text}' is not a real number")),
-            B::Integer | B::Enumeration => t.parse().map(Value::Integer).map_err(|_| format!("'{text}' is not an integer")),
+            B::Real => t
+                .parse()
+                .map(Value::Real)
+                .map_err(|_| format!("'{text}' is not a real number")),
+            B::Integer | B::Enumeration => t
+                .parse()
+                .map(Value::Integer)
+                .map_err(|_| format!("'{text}' is not an integer")),
             B::Boolean => match t {
                 "true" | "1" => Ok(Value::Boolean(true)),
                 "false" | "0" => Ok(Value::Boolean(false)),
@@ -51,7 +57,10 @@ pub struct Endpoint {
 
 impl Endpoint {
     pub fn new(component: &str, variable: &str) -> Endpoint {
-        Endpoint { component: component.into(), variable: variable.into() }
+        Endpoint {
+            component: component.into(),
+            variable: variable.into(),
+        }
     }
 
     /// Parses `component.variable` (the variable name may itself contain dots).
@@ -93,7 +102,11 @@ pub struct Experiment {
 
 impl Default for Experiment {
     fn default() -> Self {
-        Experiment { start: 0.0, stop: None, step: None }
+        Experiment {
+            start: 0.0,
+            stop: None,
+            step: None,
+        }
     }
 }
 
@@ -110,12 +123,24 @@ impl System {
     /// The paper's standard case: the vehicle's three sensor signals and its speed feed the
     /// estimator, connected by variable name; 20 s at 1 ms.
     pub fn standard_case(vehicle_fmu: &Path, estimator_fmu: &Path) -> System {
-        let link = |from: &str, to: &str| Connection { from: Endpoint::new("vehicle", from), to: Endpoint::new("estimator", to), transform: None };
+        let link = |from: &str, to: &str| Connection {
+            from: Endpoint::new("vehicle", from),
+            to: Endpoint::new("estimator", to),
+            transform: None,
+        };
         System {
             name: "standard_case".into(),
             components: vec![
-                Component { name: "vehicle".into(), source: vehicle_fmu.to_path_buf(), parameters: vec![] },
-                Component { name: "estimator".into(), source: estimator_fmu.to_path_buf(), parameters: vec![] },
+                Component {
+                    name: "vehicle".into(),
+                    source: vehicle_fmu.to_path_buf(),
+                    parameters: vec![],
+                },
+                Component {
+                    name: "estimator".into(),
+                    source: estimator_fmu.to_path_buf(),
+                    parameters: vec![],
+                },
             ],
             connections: vec![
                 link("ws_acc_y", "ws_acc_y"),
@@ -123,7 +148,11 @@ impl System {
                 link("frame_acc_y", "frame_acc_y"),
                 link("forward_speed", "speed"),
             ],
-            experiment: Experiment { start: 0.0, stop: Some(20.0), step: Some(1e-3) },
+            experiment: Experiment {
+                start: 0.0,
+                stop: Some(20.0),
+                step: Some(1e-3),
+            },
         }
     }
 

@@ -1,0 +1,625 @@
+//! The master algorithm: instantiate, initialize with values propagated through the
+//! connections, then step every component with a fixed communication step.
+//!
+//! Time is kept as an integer tick count: the communication points are `start + k * step`, each
+//! computed from `k`, so they never drift however long the run (Reference-FMUs #507). The
+//! default algorithm is Gauss-Seidel: within a step, components run producers first (the order
+//! of [`crate::resolve::Plan::order`]) and a consumer sees its producers' outputs at the end of
+//! the step; with the vehicle stepped first the estimator receives the sensor samples at
+//! `t + h`, as it expects. Jacobi (on request) sets every input from the outputs at `t`, then
+//! steps every component.
+//!
+//! Values move through flat buffers: each component's connected outputs of one type occupy a
+//! contiguous range, read with one fmi2GetXxx call per component and type; each component's
+//! inputs are gathered (with their linear transformation) and written with one fmi2SetXxx call.
+//! Nothing is allocated inside the stepping loop.
+
+use crate::record::Recorder;
+use crate::resolve::{Link, Plan, resolve};
+use crate::system::{Endpoint, Linear, System, Value};
+use fmi_import::{FmiError, Fmu, ImportError, Instance, LogConfig};
+use model_description::{BaseType, Causality, ModelDescription, VariableKind};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Algorithm {
+    GaussSeidel,
+    Jacobi,
+}
+
+#[derive(Clone)]
+pub struct RunOptions {
+    pub start: f64,
+    pub stop: f64,
+    pub step: f64,
+    pub algorithm: Algorithm,
+    /// Where results.csv goes; `None` records nothing.
+    pub out_dir: Option<PathBuf>,
+    /// Variables to record; `None`: every output of every component.
+    pub record: Option<Vec<Endpoint>>,
+    /// Recording interval [s], a whole number of steps; `None`: every step.
+    pub interval: Option<f64>,
+    pub progress: bool,
+    pub log: LogConfig,
+}
+
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub steps: u64,
+    pub rows: u64,
+    pub results: Option<PathBuf>,
+    pub wall: Duration,
+    pub final_time: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    #[error(transparent)]
+    Resolve(#[from] crate::resolve::ResolveError),
+    #[error("{0}")]
+    Config(String),
+    #[error("{error}{}", .results.as_ref().map(|p| format!("\nthe results recorded until then are in {}", p.display())).unwrap_or_default())]
+    Fmi {
+        error: FmiError,
+        results: Option<PathBuf>,
+    },
+    #[error("{0}")]
+    Io(String),
+}
+
+impl RunError {
+    /// The process exit code: 2 for a problem with the input (files, system, parameters),
+    /// 3 for an FMU that failed during the run, 1 for an I/O failure.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Import(_) | RunError::Resolve(_) | RunError::Config(_) => 2,
+            RunError::Fmi { .. } => 3,
+            RunError::Io(_) => 1,
+        }
+    }
+}
+
+/// A value type that can cross a connection.
+trait Port: Copy + Default {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [Self]) -> Result<(), FmiError>;
+    fn set(inst: &mut Instance, vr: &[u32], values: &[Self]) -> Result<(), FmiError>;
+    fn apply(self, t: Option<Linear>) -> Self;
+}
+
+impl Port for f64 {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [f64]) -> Result<(), FmiError> {
+        inst.get_real(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[f64]) -> Result<(), FmiError> {
+        inst.set_real(vr, values)
+    }
+    fn apply(self, t: Option<Linear>) -> f64 {
+        match t {
+            Some(l) => l.factor * self + l.offset,
+            None => self,
+        }
+    }
+}
+
+impl Port for i32 {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [i32]) -> Result<(), FmiError> {
+        inst.get_integer(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[i32]) -> Result<(), FmiError> {
+        inst.set_integer(vr, values)
+    }
+    fn apply(self, _: Option<Linear>) -> i32 {
+        self
+    }
+}
+
+impl Port for bool {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [bool]) -> Result<(), FmiError> {
+        inst.get_boolean(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[bool]) -> Result<(), FmiError> {
+        inst.set_boolean(vr, values)
+    }
+    fn apply(self, _: Option<Linear>) -> bool {
+        self
+    }
+}
+
+/// The links of one value type, laid out for one-call-per-component transfers.
+struct Transfer<T: Port> {
+    /// Per component: the output value references it feeds, and where they start in `slots`.
+    out_vr: Vec<Vec<u32>>,
+    out_start: Vec<usize>,
+    /// Per component: its connected input value references, the slot feeding each, and the
+    /// transformation.
+    in_vr: Vec<Vec<u32>>,
+    in_slot: Vec<Vec<usize>>,
+    in_transform: Vec<Vec<Option<Linear>>>,
+    slots: Vec<T>,
+    scratch: Vec<T>,
+}
+
+impl<T: Port> Transfer<T> {
+    fn new(n: usize, links: &[&Link]) -> Transfer<T> {
+        let mut out_vr: Vec<Vec<u32>> = vec![vec![]; n];
+        // Each distinct (component, output) gets one slot; links sharing an output share it.
+        for l in links {
+            if !out_vr[l.from].contains(&l.from_vr) {
+                out_vr[l.from].push(l.from_vr);
+            }
+        }
+        let mut out_start = vec![0; n];
+        let mut total = 0;
+        for c in 0..n {
+            out_start[c] = total;
+            total += out_vr[c].len();
+        }
+        let mut in_vr = vec![vec![]; n];
+        let mut in_slot = vec![vec![]; n];
+        let mut in_transform = vec![vec![]; n];
+        for l in links {
+            let slot = out_start[l.from]
+                + out_vr[l.from]
+                    .iter()
+                    .position(|&v| v == l.from_vr)
+                    .expect("registered above");
+            in_vr[l.to].push(l.to_vr);
+            in_slot[l.to].push(slot);
+            in_transform[l.to].push(l.transform);
+        }
+        let widest = in_vr.iter().map(Vec::len).max().unwrap_or(0);
+        Transfer {
+            out_vr,
+            out_start,
+            in_vr,
+            in_slot,
+            in_transform,
+            slots: vec![T::default(); total],
+            scratch: vec![T::default(); widest],
+        }
+    }
+
+    fn read_outputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        let n = self.out_vr[c].len();
+        if n == 0 {
+            return Ok(());
+        }
+        let s = self.out_start[c];
+        T::get(inst, &self.out_vr[c], &mut self.slots[s..s + n])
+    }
+
+    fn write_inputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        let n = self.in_vr[c].len();
+        if n == 0 {
+            return Ok(());
+        }
+        for i in 0..n {
+            self.scratch[i] = self.slots[self.in_slot[c][i]].apply(self.in_transform[c][i]);
+        }
+        T::set(inst, &self.in_vr[c], &self.scratch[..n])
+    }
+}
+
+/// What is recorded: per component and type, the value references, and their column index.
+struct Recording {
+    columns: Vec<String>,
+    units: Vec<String>,
+    real: Vec<(Vec<u32>, Vec<usize>)>,
+    integer: Vec<(Vec<u32>, Vec<usize>)>,
+    boolean: Vec<(Vec<u32>, Vec<usize>)>,
+    row: Vec<f64>,
+    buf_r: Vec<f64>,
+    buf_i: Vec<i32>,
+    buf_b: Vec<bool>,
+}
+
+impl Recording {
+    fn new(
+        system: &System,
+        mds: &[&ModelDescription],
+        selection: Option<&[Endpoint]>,
+    ) -> Result<Recording, RunError> {
+        let n = system.components.len();
+        let mut chosen: Vec<(usize, &model_description::ScalarVariable)> = vec![];
+        match selection {
+            None => {
+                for (c, md) in mds.iter().enumerate() {
+                    for v in md
+                        .model_variables
+                        .iter()
+                        .filter(|v| v.causality == Causality::Output)
+                    {
+                        if v.kind.base_type() != BaseType::String {
+                            chosen.push((c, v));
+                        }
+                    }
+                }
+            }
+            Some(list) => {
+                for e in list {
+                    let c = system
+                        .components
+                        .iter()
+                        .position(|x| x.name == e.component)
+                        .ok_or_else(|| {
+                            RunError::Config(format!(
+                                "recorded variable {e}: no component '{}'",
+                                e.component
+                            ))
+                        })?;
+                    let v = mds[c].variable(&e.variable).ok_or_else(|| {
+                        RunError::Config(format!(
+                            "recorded variable {e}: component '{}' ({}) has no variable '{}'",
+                            e.component,
+                            system.components[c].source.display(),
+                            e.variable
+                        ))
+                    })?;
+                    if v.kind.base_type() == BaseType::String {
+                        return Err(RunError::Config(format!(
+                            "recorded variable {e}: String variables cannot be recorded"
+                        )));
+                    }
+                    chosen.push((c, v));
+                }
+            }
+        }
+        let mut rec = Recording {
+            columns: vec![],
+            units: vec![],
+            real: vec![(vec![], vec![]); n],
+            integer: vec![(vec![], vec![]); n],
+            boolean: vec![(vec![], vec![]); n],
+            row: vec![],
+            buf_r: vec![],
+            buf_i: vec![],
+            buf_b: vec![],
+        };
+        for (col, (c, v)) in chosen.iter().enumerate() {
+            rec.columns
+                .push(format!("{}.{}", system.components[*c].name, v.name));
+            rec.units.push(match &v.kind {
+                VariableKind::Real(r) => r.unit.clone().unwrap_or_default(),
+                _ => String::new(),
+            });
+            let target = match v.kind.base_type() {
+                BaseType::Real => &mut rec.real[*c],
+                BaseType::Integer | BaseType::Enumeration => &mut rec.integer[*c],
+                _ => &mut rec.boolean[*c],
+            };
+            target.0.push(v.value_reference);
+            target.1.push(col);
+        }
+        let widest =
+            |l: &Vec<(Vec<u32>, Vec<usize>)>| l.iter().map(|x| x.0.len()).max().unwrap_or(0);
+        rec.buf_r = vec![0.0; widest(&rec.real)];
+        rec.buf_i = vec![0; widest(&rec.integer)];
+        rec.buf_b = vec![false; widest(&rec.boolean)];
+        rec.row = vec![0.0; rec.columns.len()];
+        Ok(rec)
+    }
+
+    fn sample(&mut self, instances: &mut [Instance]) -> Result<(), FmiError> {
+        for (c, inst) in instances.iter_mut().enumerate() {
+            let (vr, cols) = &self.real[c];
+            if !vr.is_empty() {
+                inst.get_real(vr, &mut self.buf_r[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = self.buf_r[i];
+                }
+            }
+            let (vr, cols) = &self.integer[c];
+            if !vr.is_empty() {
+                inst.get_integer(vr, &mut self.buf_i[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = self.buf_i[i] as f64;
+                }
+            }
+            let (vr, cols) = &self.boolean[c];
+            if !vr.is_empty() {
+                inst.get_boolean(vr, &mut self.buf_b[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = if self.buf_b[i] { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A loaded system: its FMUs, the resolved plan, and the instances once instantiated.
+pub struct Cosimulation {
+    pub system: System,
+    fmus: Vec<Fmu>,
+    pub plan: Plan,
+}
+
+impl Cosimulation {
+    /// Opens every FMU and resolves the system against their model descriptions.
+    pub fn load(system: System) -> Result<Cosimulation, RunError> {
+        if system.components.is_empty() {
+            return Err(RunError::Config(format!(
+                "system '{}' has no components",
+                system.name
+            )));
+        }
+        let mut fmus = vec![];
+        for c in &system.components {
+            fmus.push(Fmu::open(&c.source)?);
+        }
+        let mds: Vec<&ModelDescription> = fmus.iter().map(|f| f.model_description()).collect();
+        let plan = resolve(&system, &mds)?;
+        Ok(Cosimulation { system, fmus, plan })
+    }
+
+    pub fn model_descriptions(&self) -> Vec<&ModelDescription> {
+        self.fmus.iter().map(|f| f.model_description()).collect()
+    }
+
+    /// Adds `component.variable=value` settings (command-line `--set`), checked like the
+    /// system's own parameters; they are applied after those, so they win.
+    pub fn set(&mut self, name: &Endpoint, text: &str) -> Result<(), RunError> {
+        let c = self
+            .system
+            .components
+            .iter()
+            .position(|x| x.name == name.component)
+            .ok_or_else(|| {
+                RunError::Config(format!(
+                    "--set {name}={text}: no component '{}'",
+                    name.component
+                ))
+            })?;
+        let md = self.fmus[c].model_description();
+        let v = md.variable(&name.variable).ok_or_else(|| {
+            RunError::Config(format!(
+                "--set {name}={text}: component '{}' ({}) has no variable '{}'",
+                name.component,
+                self.fmus[c].path().display(),
+                name.variable
+            ))
+        })?;
+        let s = crate::resolve::setting(c, v, &Value::String(text.to_string()), name.clone())?;
+        self.plan.settings.push(s);
+        Ok(())
+    }
+
+    /// Runs the system; see the module docs.
+    pub fn run(&self, opts: &RunOptions) -> Result<RunSummary, RunError> {
+        self.run_with_inputs(opts, &|_, out: &mut Vec<(u32, f64)>| out.clear())
+    }
+
+    /// Runs the system with external Real inputs of the first component: before the step from
+    /// `t`, `external(t, buffer)` fills the buffer with (value reference, value) pairs, which are
+    /// set before the component steps (and once at the start, in initialization mode).
+    pub fn run_with_inputs(
+        &self,
+        opts: &RunOptions,
+        external: &dyn Fn(f64, &mut Vec<(u32, f64)>),
+    ) -> Result<RunSummary, RunError> {
+        let started = Instant::now();
+        let n = self.system.components.len();
+        if !(opts.step > 0.0 && opts.step.is_finite()) {
+            return Err(RunError::Config(format!(
+                "step {} must be a positive number",
+                opts.step
+            )));
+        }
+        let span = opts.stop - opts.start;
+        let steps = (span / opts.step).round();
+        if !(span >= 0.0) || (steps * opts.step - span).abs() > 1e-9 * span.abs().max(1.0) {
+            return Err(RunError::Config(format!(
+                "the run from {} s to {} s is not a whole number of {} s steps",
+                opts.start, opts.stop, opts.step
+            )));
+        }
+        let steps = steps as u64;
+        let every = match opts.interval {
+            None => 1,
+            Some(i) => {
+                let m = (i / opts.step).round();
+                if m < 1.0 || (m * opts.step - i).abs() > 1e-9 * i.max(1.0) {
+                    return Err(RunError::Config(format!(
+                        "recording interval {i} s is not a whole number of {} s steps",
+                        opts.step
+                    )));
+                }
+                m as u64
+            }
+        };
+
+        let mut instances = Vec::with_capacity(n);
+        for (c, fmu) in self.system.components.iter().zip(&self.fmus) {
+            instances.push(fmu.instantiate(&c.name, opts.log.clone())?);
+        }
+        let fmi = |error: FmiError| RunError::Fmi {
+            error,
+            results: None,
+        };
+        for inst in instances.iter_mut() {
+            inst.setup_experiment(opts.start, Some(opts.stop), None)
+                .map_err(fmi)?;
+        }
+        for s in &self.plan.settings {
+            let inst = &mut instances[s.component];
+            match &s.value {
+                Value::Real(x) => inst.set_real(&[s.vr], &[*x]),
+                Value::Integer(x) => inst.set_integer(&[s.vr], &[*x]),
+                Value::Boolean(x) => inst.set_boolean(&[s.vr], &[*x]),
+                Value::String(x) => inst.set_string(&[s.vr], &[x.as_str()]),
+            }
+            .map_err(fmi)?;
+        }
+        for inst in instances.iter_mut() {
+            inst.enter_initialization_mode().map_err(fmi)?;
+        }
+        let mut ext: Vec<(u32, f64)> = Vec::new();
+        let set_external =
+            |inst: &mut Instance, ext: &mut Vec<(u32, f64)>, t: f64| -> Result<(), FmiError> {
+                external(t, ext);
+                for &(vr, x) in ext.iter() {
+                    inst.set_real(&[vr], &[x])?;
+                }
+                Ok(())
+            };
+        if n > 0 {
+            set_external(&mut instances[0], &mut ext, opts.start).map_err(fmi)?;
+        }
+
+        let by_type = |b: BaseType| {
+            self.plan
+                .links
+                .iter()
+                .filter(|l| l.base == b)
+                .collect::<Vec<_>>()
+        };
+        let mut real: Transfer<f64> = Transfer::new(n, &by_type(BaseType::Real));
+        let mut integer: Transfer<i32> = Transfer::new(n, &by_type(BaseType::Integer));
+        let mut boolean: Transfer<bool> = Transfer::new(n, &by_type(BaseType::Boolean));
+
+        // Initial values through the connections: producers first, repeated once per component
+        // so that values reach the end of any chain.
+        for _ in 0..n {
+            for &c in &self.plan.order {
+                let inst = &mut instances[c];
+                real.write_inputs(c, inst).map_err(fmi)?;
+                integer.write_inputs(c, inst).map_err(fmi)?;
+                boolean.write_inputs(c, inst).map_err(fmi)?;
+                real.read_outputs(c, inst).map_err(fmi)?;
+                integer.read_outputs(c, inst).map_err(fmi)?;
+                boolean.read_outputs(c, inst).map_err(fmi)?;
+            }
+        }
+        for &c in &self.plan.order {
+            instances[c].exit_initialization_mode().map_err(fmi)?;
+        }
+        for c in 0..n {
+            let inst = &mut instances[c];
+            real.read_outputs(c, inst).map_err(fmi)?;
+            integer.read_outputs(c, inst).map_err(fmi)?;
+            boolean.read_outputs(c, inst).map_err(fmi)?;
+        }
+
+        let mds = self.model_descriptions();
+        let mut recording = match &opts.out_dir {
+            Some(dir) => {
+                let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
+                let recorder = Recorder::create(dir, &rec.columns, &rec.units).map_err(|e| {
+                    RunError::Io(format!("cannot write results in {}: {e}", dir.display()))
+                })?;
+                Some((rec, recorder))
+            }
+            None => None,
+        };
+        let io = |e: std::io::Error| RunError::Io(format!("writing results: {e}"));
+        if let Some((rec, recorder)) = recording.as_mut() {
+            rec.sample(&mut instances).map_err(fmi)?;
+            recorder.row(opts.start, &rec.row).map_err(io)?;
+        }
+
+        let bar = if opts.progress && steps >= 10_000 {
+            let bar = indicatif::ProgressBar::new(steps);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {percent:>3}% {msg}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            Some(bar)
+        } else {
+            None
+        };
+
+        let order = &self.plan.order;
+        let mut failure: Option<FmiError> = None;
+        let mut k: u64 = 0;
+        'steps: while k < steps {
+            let t = opts.start + k as f64 * opts.step;
+            let result: Result<(), FmiError> = (|| {
+                set_external(&mut instances[0], &mut ext, t)?;
+                match opts.algorithm {
+                    Algorithm::GaussSeidel => {
+                        for &c in order {
+                            let inst = &mut instances[c];
+                            real.write_inputs(c, inst)?;
+                            integer.write_inputs(c, inst)?;
+                            boolean.write_inputs(c, inst)?;
+                            inst.do_step(t, opts.step)?;
+                            real.read_outputs(c, inst)?;
+                            integer.read_outputs(c, inst)?;
+                            boolean.read_outputs(c, inst)?;
+                        }
+                    }
+                    Algorithm::Jacobi => {
+                        for &c in order {
+                            let inst = &mut instances[c];
+                            real.write_inputs(c, inst)?;
+                            integer.write_inputs(c, inst)?;
+                            boolean.write_inputs(c, inst)?;
+                        }
+                        for &c in order {
+                            instances[c].do_step(t, opts.step)?;
+                        }
+                        for &c in order {
+                            let inst = &mut instances[c];
+                            real.read_outputs(c, inst)?;
+                            integer.read_outputs(c, inst)?;
+                            boolean.read_outputs(c, inst)?;
+                        }
+                    }
+                }
+                Ok(())
+            })();
+            if let Err(e) = result {
+                failure = Some(e);
+                break 'steps;
+            }
+            k += 1;
+            if let Some((rec, recorder)) = recording.as_mut()
+                && k % every == 0
+            {
+                if let Err(e) = rec.sample(&mut instances) {
+                    failure = Some(e);
+                    break 'steps;
+                }
+                recorder
+                    .row(opts.start + k as f64 * opts.step, &rec.row)
+                    .map_err(io)?;
+            }
+            if let Some(bar) = &bar
+                && k % 1000 == 0
+            {
+                bar.set_position(k);
+            }
+        }
+        if let Some(bar) = bar {
+            bar.finish_and_clear();
+        }
+        let (rows, results) = match recording {
+            Some((_, recorder)) => {
+                let rows = recorder.rows;
+                (rows, Some(recorder.finish().map_err(io)?))
+            }
+            None => (0, None),
+        };
+        if let Some(error) = failure {
+            return Err(RunError::Fmi { error, results });
+        }
+        for inst in instances.iter_mut() {
+            inst.terminate().map_err(|error| RunError::Fmi {
+                error,
+                results: results.clone(),
+            })?;
+        }
+        Ok(RunSummary {
+            steps,
+            rows,
+            results,
+            wall: started.elapsed(),
+            final_time: opts.start + steps as f64 * opts.step,
+        })
+    }
+}
