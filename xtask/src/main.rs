@@ -3,7 +3,8 @@
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
 //! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo test, packaging, the Python
 //!   harness (tests/, run with pytest in `.venv`, created on demand), and a summary;
-//! - `demo [-- <demo.py args>]`: package the estimator and run tests/demo.py on synthetic data.
+//! - `demo [-- <demo.py args>]`: package the FMUs, run the standard case through the orchestrator
+//!   and score it with tests/demo.py.
 
 mod fmus;
 mod package;
@@ -22,8 +23,11 @@ commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
                                cargo test --workspace, packaging, pytest tests/ in .venv
-  demo [-- <demo.py args>]     package the estimator and run tests/demo.py
+  demo [-- <demo.py args>]     package the FMUs, run the standard case through the orchestrator, score it
   help                         this text";
+
+/// Where the orchestrator binary is, for the tests that run it.
+const ORCHESTRATOR_ENV: &str = "ORCHESTRATOR";
 
 /// The environment variable telling the Python harness where the packaged FMUs are (the target
 /// directory may be moved by CARGO_TARGET_DIR or cargo config).
@@ -139,11 +143,8 @@ fn timed(name: &'static str, f: impl FnOnce() -> Result<()>) -> Stage {
 /// returns whether everything passed.
 fn test(o: TestOptions) -> Result<bool> {
     let mut stages = Vec::new();
-    if o.rust {
-        stages.push(timed("cargo test --workspace", || {
-            workspace::run(workspace::cargo().args(["test", "--workspace"]))
-        }));
-    }
+    // The FMUs and the orchestrator first: Rust integration tests and the Python harness both
+    // load them (found through XTASK_FMU_DIR and ORCHESTRATOR).
     let mut fmu_dir: Option<PathBuf> = None;
     stages.push(timed("package FMUs (release build)", || {
         let packaged = package::build_and_package()?;
@@ -153,6 +154,27 @@ fn test(o: TestOptions) -> Result<bool> {
             .map(PathBuf::from);
         Ok(())
     }));
+    let mut orchestrator: Option<PathBuf> = None;
+    stages.push(timed("build the orchestrator (release)", || {
+        orchestrator = Some(build_orchestrator()?);
+        Ok(())
+    }));
+    let env = |cmd: &mut Command| {
+        if let Some(dir) = &fmu_dir {
+            cmd.env(FMU_DIR_ENV, dir);
+        }
+        if let Some(bin) = &orchestrator {
+            cmd.env(ORCHESTRATOR_ENV, bin);
+        }
+    };
+    if o.rust {
+        stages.push(timed("cargo test --workspace", || {
+            let mut cmd = workspace::cargo();
+            cmd.args(["test", "--workspace"]);
+            env(&mut cmd);
+            workspace::run(&mut cmd)
+        }));
+    }
     if o.python {
         let mut venv_ok = false;
         stages.push(timed("python venv (.venv, tests/requirements.txt)", || {
@@ -162,7 +184,9 @@ fn test(o: TestOptions) -> Result<bool> {
         }));
         let pytest = "pytest tests";
         match (&fmu_dir, venv_ok) {
-            (Some(dir), true) => stages.push(timed(pytest, || run_pytest(dir, &o.pytest_args))),
+            (Some(dir), true) => stages.push(timed(pytest, || {
+                run_pytest(dir, orchestrator.as_deref(), &o.pytest_args)
+            })),
             (None, _) => stages.push(Stage {
                 name: pytest,
                 outcome: Outcome::Skipped("no FMU was packaged".into()),
@@ -196,11 +220,32 @@ fn test(o: TestOptions) -> Result<bool> {
     Ok(all_passed)
 }
 
-fn run_pytest(fmu_dir: &std::path::Path, extra: &[String]) -> Result<()> {
+/// Builds the orchestrator in release and returns the binary's path.
+fn build_orchestrator() -> Result<PathBuf> {
+    workspace::run(workspace::cargo().args(["build", "--release", "-p", "orchestrator"]))?;
+    let bin = workspace::target_dir()?
+        .join("release")
+        .join("orchestrator");
+    anyhow::ensure!(
+        bin.exists(),
+        "the orchestrator binary is not at {}",
+        bin.display()
+    );
+    Ok(bin)
+}
+
+fn run_pytest(
+    fmu_dir: &std::path::Path,
+    orchestrator: Option<&std::path::Path>,
+    extra: &[String],
+) -> Result<()> {
     let mut cmd = Command::new(python::python());
     cmd.current_dir(workspace::root())
         .env(FMU_DIR_ENV, fmu_dir)
         .args(["-m", "pytest", "-q"]);
+    if let Some(bin) = orchestrator {
+        cmd.env(ORCHESTRATOR_ENV, bin);
+    }
     // `tests` unless the extra arguments name test files themselves (pytest would run both).
     if !extra
         .iter()
@@ -220,20 +265,42 @@ fn run_pytest(fmu_dir: &std::path::Path, extra: &[String]) -> Result<()> {
     }
 }
 
-/// Packages the FMUs, makes sure of the venv and runs tests/demo.py on the estimator.
+/// The main job: packages the FMUs, builds the orchestrator, runs the standard case through it
+/// (loading the .fmu files), then scores the estimate with tests/demo.py.
 fn demo(extra: Vec<String>) -> Result<()> {
     let packaged = package::build_and_package()?;
-    let estimator = packaged
-        .iter()
-        .find(|p| p.model_identifier == "AlignmentEstimator")
-        .context("the estimator FMU was not packaged")?;
+    let find = |id: &str| {
+        packaged
+            .iter()
+            .find(|p| p.model_identifier == id)
+            .map(|p| p.path.clone())
+            .with_context(|| format!("{id}.fmu was not packaged"))
+    };
+    let (vehicle, estimator) = (find("RailVehicle")?, find("AlignmentEstimator")?);
+    let orchestrator = build_orchestrator()?;
+    let out = workspace::target_dir()?.join("demo");
+    println!(
+        "\n==> orchestrator run (standard case: RailVehicle.fmu -> AlignmentEstimator.fmu, 20 s at 1 ms)"
+    );
+    let mut run = Command::new(&orchestrator);
+    run.arg("run")
+        .arg("--vehicle")
+        .arg(&vehicle)
+        .arg("--estimator")
+        .arg(&estimator)
+        .arg("--out")
+        .arg(&out)
+        .arg("--quiet");
+    workspace::run(&mut run)?;
     let python = python::ensure_venv()?;
     println!();
     let mut cmd = Command::new(python);
     cmd.current_dir(workspace::root())
         .arg("tests/demo.py")
         .arg("--fmu")
-        .arg(&estimator.path)
+        .arg(&estimator)
+        .arg("--results")
+        .arg(out.join("results.csv"))
         .args(extra);
     workspace::run(&mut cmd)
 }
