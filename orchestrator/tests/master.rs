@@ -1,0 +1,262 @@
+//! The master against analytic results, with the trivial test FMUs: Dahlquist (x' = -k x,
+//! exact per step, no feedthrough) feeding Feedthrough (y = gain * u, direct feedthrough).
+
+mod common;
+
+use fmi_import::LogConfig;
+use orchestrator::master::{Algorithm, Cosimulation, RunError, RunOptions};
+use orchestrator::system::{Component, Connection, Endpoint, Experiment, System, Value};
+
+fn chain(gain: f64, fail_at: Option<f64>) -> System {
+    let mut feed = vec![("gain".to_string(), Value::Real(gain))];
+    if let Some(t) = fail_at {
+        feed.push(("fail_at".into(), Value::Real(t)));
+    }
+    System {
+        name: "chain".into(),
+        components: vec![
+            // Listed consumer first: the master must still step the producer first.
+            Component {
+                name: "feed".into(),
+                source: common::fmu("Feedthrough"),
+                parameters: feed,
+            },
+            Component {
+                name: "dq".into(),
+                source: common::fmu("Dahlquist"),
+                parameters: vec![("k".into(), Value::Real(1.0))],
+            },
+        ],
+        connections: vec![Connection {
+            from: Endpoint::new("dq", "x"),
+            to: Endpoint::new("feed", "u"),
+            transform: None,
+        }],
+        experiment: Experiment::default(),
+    }
+}
+
+fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) -> RunOptions {
+    RunOptions {
+        start: 0.0,
+        stop,
+        step,
+        algorithm,
+        out_dir: Some(dir.to_path_buf()),
+        record: Some(vec![
+            Endpoint::new("dq", "x"),
+            Endpoint::new("feed", "y"),
+            Endpoint::new("feed", "steps"),
+        ]),
+        interval: None,
+        progress: false,
+        log: LogConfig::default(),
+    }
+}
+
+fn rows(path: &std::path::Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn gauss_seidel_passes_the_end_of_step_value_and_jacobi_the_start_of_step_value() {
+    let cosim = Cosimulation::load(chain(2.0, None)).unwrap();
+    assert_eq!(cosim.plan.order, vec![1, 0], "producer first");
+    let h = 0.01;
+    for (algorithm, lag) in [(Algorithm::GaussSeidel, 0.0), (Algorithm::Jacobi, h)] {
+        let dir = tempfile::tempdir().unwrap();
+        let summary = cosim.run(&options(dir.path(), 1.0, h, algorithm)).unwrap();
+        assert_eq!(summary.steps, 100);
+        let r = rows(&dir.path().join("results.csv"));
+        assert_eq!(r.len(), 101);
+        for (k, row) in r.iter().enumerate().skip(1) {
+            let t = k as f64 * h;
+            assert_eq!(row[0], t, "time column from integer ticks");
+            assert!((row[1] - (-t).exp()).abs() < 1e-14, "x({t})");
+            // y = 2 u, u = x at the end of the step (GS) or at its start (Jacobi).
+            assert!(
+                (row[2] - 2.0 * (-(t - lag)).exp()).abs() < 1e-14,
+                "{algorithm:?}: y({t}) = {}",
+                row[2]
+            );
+            assert_eq!(row[3], k as f64, "integer output recorded");
+        }
+    }
+}
+
+#[test]
+fn initial_values_propagate_through_connections() {
+    // Feedthrough's y is "calculated" in initialization mode from u, which the master sets
+    // from Dahlquist's initial x = 1 (x0) before exiting initialization: y(0) = gain * 1.
+    let cosim = Cosimulation::load(chain(3.0, None)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    cosim
+        .run(&options(dir.path(), 0.1, 0.1, Algorithm::GaussSeidel))
+        .unwrap();
+    let r = rows(&dir.path().join("results.csv"));
+    assert_eq!(r[0][0], 0.0);
+    assert_eq!(r[0][2], 3.0);
+}
+
+#[test]
+fn communication_points_do_not_drift_over_a_long_run() {
+    let cosim = Cosimulation::load(chain(1.0, None)).unwrap();
+    let mut opts = options(
+        std::path::Path::new("/nonexistent"),
+        1000.0,
+        0.1,
+        Algorithm::GaussSeidel,
+    );
+    opts.out_dir = None;
+    let summary = cosim.run(&opts).unwrap();
+    assert_eq!(summary.steps, 10_000);
+    assert_eq!(summary.final_time, 1000.0);
+}
+
+#[test]
+fn an_fmu_error_stops_the_run_and_keeps_the_results() {
+    let cosim = Cosimulation::load(chain(1.0, Some(0.5))).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let err = cosim
+        .run(&options(dir.path(), 1.0, 0.1, Algorithm::GaussSeidel))
+        .unwrap_err();
+    assert_eq!(err.exit_code(), 3);
+    let text = err.to_string();
+    assert!(
+        text.contains("fmi2DoStep")
+            && text.contains("'feed'")
+            && text.contains("0.5")
+            && text.contains("failing on purpose"),
+        "{text}"
+    );
+    assert!(text.contains("results recorded until then"), "{text}");
+    let r = rows(&dir.path().join("results.csv"));
+    assert_eq!(r.last().unwrap()[0], 0.5, "rows up to the failure are kept");
+}
+
+#[test]
+fn bad_systems_are_refused_before_running() {
+    let loops = System {
+        name: "ring".into(),
+        components: vec![
+            Component {
+                name: "a".into(),
+                source: common::fmu("Feedthrough"),
+                parameters: vec![],
+            },
+            Component {
+                name: "b".into(),
+                source: common::fmu("Feedthrough"),
+                parameters: vec![],
+            },
+        ],
+        connections: vec![
+            Connection {
+                from: Endpoint::new("a", "y"),
+                to: Endpoint::new("b", "u"),
+                transform: None,
+            },
+            Connection {
+                from: Endpoint::new("b", "y"),
+                to: Endpoint::new("a", "u"),
+                transform: None,
+            },
+        ],
+        experiment: Experiment::default(),
+    };
+    let err = Cosimulation::load(loops).err().unwrap();
+    assert_eq!(err.exit_code(), 2);
+    let text = err.to_string();
+    assert!(
+        text.contains("algebraic loop") && text.contains("a.y") && text.contains("b.u"),
+        "{text}"
+    );
+
+    let mut bad = chain(1.0, None);
+    bad.connections[0].from = Endpoint::new("dq", "nope");
+    let text = Cosimulation::load(bad).err().unwrap().to_string();
+    assert!(
+        text.contains("'dq'") && text.contains("'nope'") && text.contains("Dahlquist.fmu"),
+        "{text}"
+    );
+
+    let mut cosim = Cosimulation::load(chain(1.0, None)).unwrap();
+    assert!(matches!(
+        cosim.set(&Endpoint::new("feed", "gain"), "abc"),
+        Err(RunError::Resolve(_))
+    ));
+    assert!(
+        cosim
+            .set(&Endpoint::new("feed", "nothing"), "1")
+            .unwrap_err()
+            .to_string()
+            .contains("'nothing'")
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let corrupt = dir.path().join("corrupt.fmu");
+    std::fs::write(&corrupt, b"this is not a zip file").unwrap();
+    let mut sys = chain(1.0, None);
+    sys.components[0].source = corrupt.clone();
+    let err = Cosimulation::load(sys).err().unwrap();
+    assert_eq!(err.exit_code(), 2);
+    assert!(err.to_string().contains("corrupt.fmu"), "{err}");
+
+    let cosim = Cosimulation::load(chain(1.0, None)).unwrap();
+    let err = cosim
+        .run(&options(dir.path(), 1.0, 0.3, Algorithm::GaussSeidel))
+        .unwrap_err();
+    assert!(err.to_string().contains("whole number"), "{err}");
+}
+
+#[test]
+fn the_standard_case_runs_through_the_master() {
+    let cosim = Cosimulation::load(System::standard_case(
+        &common::fmu("RailVehicle"),
+        &common::fmu("AlignmentEstimator"),
+    ))
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = options(dir.path(), 1.0, 1e-3, Algorithm::GaussSeidel);
+    opts.record = None;
+    let summary = cosim.run(&opts).unwrap();
+    assert_eq!(summary.rows, 1001);
+    let text = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    assert_eq!(header[0], "time");
+    for col in [
+        "vehicle.ws_acc_y",
+        "vehicle.alignment",
+        "estimator.alignment",
+        "estimator.alignment_std",
+    ] {
+        assert!(header.contains(&col), "{col} missing from {header:?}");
+    }
+    // The estimator received the vehicle's speed through the forward_speed connection.
+    let speed_col = header
+        .iter()
+        .position(|c| *c == "vehicle.forward_speed")
+        .unwrap();
+    let last: Vec<f64> = text
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|f| f.parse().unwrap())
+        .collect();
+    assert_eq!(last[speed_col], 20.0);
+    let dist = header
+        .iter()
+        .position(|c| *c == "estimator.distance")
+        .unwrap();
+    assert!(
+        (last[dist] - 20.0).abs() < 1e-9,
+        "estimator distance {}",
+        last[dist]
+    );
+}
