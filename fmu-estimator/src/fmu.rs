@@ -68,24 +68,7 @@ pub mod vr {
     pub const CALIBRATION_FILE: u32 = 0;
 }
 
-const P: Params = Params {
-    m: 1109.0,
-    i: 606.0,
-    l: 0.75,
-    l_s: 0.85,
-    alpha: 0.1,
-    r_0: 0.425,
-    m_f: 3781.0,
-    f11: 5.5e6,
-    f22: 5.0e6,
-    f23: 9.3e3,
-    f33: 15.0,
-    kx: 7.95e5,
-    cx: 1.47e4,
-    ky: 4.12e6,
-    cy: 1.41e5,
-    g: 9.81,
-};
+const P: Params = Params::TABLE_2;
 
 /// The variable table: the single source of the FMU's interface (see `fmi_abi::variables`).
 pub static VARIABLES: &[VarSpec] = &[

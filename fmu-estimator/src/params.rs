@@ -52,28 +52,32 @@ pub struct Params {
 
 impl Default for Params {
     fn default() -> Self {
-        Params {
-            m: 1109.0,
-            i: 606.0,
-            l: 0.75,
-            l_s: 0.85,
-            alpha: 0.1,
-            r_0: 0.425,
-            m_f: 3781.0,
-            f11: 5.5e6,
-            f22: 5.0e6,
-            f23: 9.3e3,
-            f33: 15.0,
-            kx: 7.95e5,
-            cx: 1.47e4,
-            ky: 4.12e6,
-            cy: 1.41e5,
-            g: 9.81,
-        }
+        Params::TABLE_2
     }
 }
 
 impl Params {
+    /// The paper's Table 2 (with the rolling radius and gravity noted in the module docs): the
+    /// defaults of the FMU's parameters.
+    pub const TABLE_2: Params = Params {
+        m: 1109.0,
+        i: 606.0,
+        l: 0.75,
+        l_s: 0.85,
+        alpha: 0.1,
+        r_0: 0.425,
+        m_f: 3781.0,
+        f11: 5.5e6,
+        f22: 5.0e6,
+        f23: 9.3e3,
+        f33: 15.0,
+        kx: 7.95e5,
+        cx: 1.47e4,
+        ky: 4.12e6,
+        cy: 1.41e5,
+        g: 9.81,
+    };
+
     /// Refuses values for which the model has no meaning, naming the parameter (FMI name).
     pub fn check(&self) -> Result<(), String> {
         let positive = [
