@@ -109,34 +109,19 @@ impl ParseError {
     }
 }
 
-/// Converts a byte offset into a 1-based line and a 1-based column counted in characters.
-pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
-    let mut offset = offset.min(text.len());
-    while !text.is_char_boundary(offset) {
-        offset -= 1;
+impl From<crate::xml::XmlError> for ParseError {
+    fn from(e: crate::xml::XmlError) -> ParseError {
+        ParseError::Xml {
+            line: e.line,
+            column: e.column,
+            message: e.message,
+        }
     }
-    let before = &text[..offset];
-    let line = before.bytes().filter(|&b| b == b'\n').count() + 1;
-    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-    let column = before[line_start..].chars().count() + 1;
-    (line, column)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn line_column_counts_from_one_in_characters() {
-        let text = "ab\ncdé\nf";
-        assert_eq!(line_column(text, 0), (1, 1));
-        assert_eq!(line_column(text, 2), (1, 3));
-        assert_eq!(line_column(text, 3), (2, 1));
-        // 'é' is two bytes: the offset after it is column 4, not 5.
-        assert_eq!(line_column(text, 8), (3, 1));
-        assert_eq!(line_column(text, 7), (2, 4));
-        assert_eq!(line_column(text, 100), (3, 2));
-    }
 
     #[test]
     fn messages_name_the_variable() {

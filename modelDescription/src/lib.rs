@@ -13,6 +13,8 @@
 //!   types, and the exact Outputs and InitialUnknowns sets of ModelStructure.
 //! - [`ModelStructure::derive`] builds the ModelStructure those rules require, and
 //!   [`ScalarVariable::effective_initial`] gives `initial` with the spec's default applied.
+//! - [`xml`] is the element tree (local names, byte offsets), offset-to-line/column conversion
+//!   and attribute escaping underneath; the orchestrator's SSP reader and writer use it too.
 //!
 //! Exact floats: every f64 written parses back to the same bits ([`format_f64`]: shortest
 //! round-trip digits, exponent form outside 1e-5 <= |x| < 1e15), so a start value or a
@@ -25,10 +27,10 @@ mod error;
 mod names;
 mod read;
 mod structure;
-mod tree;
 mod types;
 mod validate;
 mod write;
+pub mod xml;
 
 pub use error::ParseError;
 pub use types::*;

@@ -1,4 +1,4 @@
-//! Reading: the element tree (`tree.rs`) to [`ModelDescription`].
+//! Reading: the element tree ([`crate::xml`]) to [`ModelDescription`].
 //!
 //! Only the elements and attributes the types hold are read; anything else is skipped so that
 //! files from other tools load. Attributes with a default in the standard get that default
@@ -10,15 +10,15 @@
 use std::path::Path;
 use std::str::FromStr;
 
-use crate::error::{ParseError, line_column};
-use crate::tree::{self, Element};
+use crate::error::ParseError;
 use crate::types::*;
+use crate::xml::{self, Element, line_column};
 
 impl ModelDescription {
     /// Parses the text of a `modelDescription.xml`.
     pub fn from_xml(xml: &str) -> Result<ModelDescription, ParseError> {
         let xml = xml.strip_prefix('\u{feff}').unwrap_or(xml);
-        let root = tree::parse(xml)?;
+        let root = xml::parse(xml)?;
         Reader { text: xml }.model_description(&root)
     }
 

@@ -16,6 +16,7 @@
 use std::fmt::Write as _;
 
 use crate::types::*;
+use crate::xml::escape_attribute_and_apos;
 
 impl ModelDescription {
     /// The `modelDescription.xml` text (UTF-8, 2-space indentation, one element per line, and an
@@ -306,25 +307,6 @@ pub fn format_f64(x: f64) -> String {
     }
 }
 
-/// Escapes an attribute value: markup characters and quotes as entities, and tab, newline and
-/// carriage return as character references (a literal one would be normalized to a space by
-/// any conforming reader).
-fn escape_attribute(value: &str, out: &mut String) {
-    for c in value.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&apos;"),
-            '\t' => out.push_str("&#9;"),
-            '\n' => out.push_str("&#10;"),
-            '\r' => out.push_str("&#13;"),
-            c => out.push(c),
-        }
-    }
-}
-
 fn open_list(out: &mut String, depth: usize, name: &str) {
     indent(out, depth);
     let _ = writeln!(out, "<{name}>");
@@ -358,7 +340,7 @@ impl<'o> Tag<'o> {
         self.out.push(' ');
         self.out.push_str(name);
         self.out.push_str("=\"");
-        escape_attribute(value, self.out);
+        escape_attribute_and_apos(value, self.out);
         self.out.push('"');
         self
     }
@@ -462,12 +444,5 @@ mod tests {
         assert_eq!(format_f64(1e15), "1e15");
         assert_eq!(format_f64(1e-5), "0.00001");
         assert_eq!(format_f64(f64::INFINITY), "INF");
-    }
-
-    #[test]
-    fn attributes_are_escaped() {
-        let mut s = String::new();
-        escape_attribute("a<b>&\"c'\n\td\r", &mut s);
-        assert_eq!(s, "a&lt;b&gt;&amp;&quot;c&apos;&#10;&#9;d&#13;");
     }
 }

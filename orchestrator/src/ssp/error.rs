@@ -204,3 +204,13 @@ impl SspError {
         }
     }
 }
+
+impl From<model_description::xml::XmlError> for SspError {
+    fn from(e: model_description::xml::XmlError) -> SspError {
+        SspError::Xml {
+            line: e.line,
+            column: e.column,
+            message: e.message,
+        }
+    }
+}

@@ -54,7 +54,6 @@
 mod error;
 mod read;
 mod write;
-mod xml;
 
 use std::path::Path;
 

@@ -5,8 +5,9 @@ use std::fs;
 use std::io;
 use std::path::{Component as PathPart, Path, PathBuf};
 
+use model_description::xml::{self, Element, line_column};
+
 use super::error::SspError;
-use super::xml::{self, Element, line_column};
 use super::{FMU_MIME_TYPE, LoadedSystem, PARAMETER_SET_MIME_TYPE, SSD_NAME};
 use crate::system::{Component, Connection, Endpoint, Experiment, Linear, System, Value};
 

@@ -6,10 +6,10 @@ use std::fs;
 use std::io::{self, Read, Write};
 use std::path::Path;
 
+use model_description::xml::escape_attribute;
 use model_description::{BaseType, Causality, ModelDescription, ScalarVariable, format_f64};
 
 use super::error::SspError;
-use super::xml::escape_attribute;
 use super::{FMU_MIME_TYPE, SSD_NAME};
 use crate::system::{Component, System, Value};
 
