@@ -16,4 +16,5 @@ pub mod record;
 pub mod resolve;
 pub mod simulate;
 pub mod ssp;
+pub mod study;
 pub mod system;

@@ -244,6 +244,31 @@ fn run(args: RunArgs) -> Result<(), RunError> {
     }
     let summary = cosim.run(&opts)?;
     report(&summary);
+    if is_standard && let Some(results) = &summary.results {
+        standard_case_metrics(results)?;
+    }
+    Ok(())
+}
+
+/// The standard case's accuracy: `metrics.json` beside results.csv, and the table on stdout.
+fn standard_case_metrics(results: &Path) -> Result<(), RunError> {
+    use orchestrator::study::standard;
+    let cols = standard::Columns::read(results).map_err(RunError::Io)?;
+    let m = match standard::evaluate_results(&cols) {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("no accuracy metrics: {e}");
+            return Ok(());
+        }
+    };
+    let path = results.with_file_name("metrics.json");
+    std::fs::write(&path, standard::metrics_json(&m))
+        .map_err(|e| RunError::Io(format!("cannot write {}: {e}", path.display())))?;
+    println!(
+        "Alignment estimate against the truth (EN 13848 bands; {}):",
+        path.display()
+    );
+    print!("{}", standard::table(&m));
     Ok(())
 }
 

@@ -1,0 +1,98 @@
+//! The standard case's evaluation: from the results of a run of the standard system
+//! (vehicle -> estimator), the accuracy in each band, written as `metrics.json` and printed
+//! beside the paper's Table (railway.md section 1).
+
+use super::metrics::{BANDS, BandMetrics, evaluate};
+use std::path::Path;
+
+/// The paper's standard case, J [mm] / Jrel per band (its Tables 3 and 4).
+pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [
+    ("whole", 0.36, 0.25),
+    ("D1", 0.21, 0.48),
+    ("D2", 0.22, 0.26),
+    ("D3", 0.18, 0.15),
+];
+
+/// Grid step and trim of the evaluation (see `metrics`).
+pub const DS: f64 = 0.05;
+pub const TRIM: f64 = 10.0;
+
+/// Named columns of a results.csv.
+pub struct Columns {
+    pub names: Vec<String>,
+    pub data: Vec<Vec<f64>>,
+}
+
+impl Columns {
+    pub fn read(path: &Path) -> Result<Columns, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+        let mut lines = text.lines();
+        let names: Vec<String> = lines
+            .next()
+            .ok_or_else(|| format!("{} is empty", path.display()))?
+            .split(',')
+            .map(str::to_string)
+            .collect();
+        let mut data = vec![Vec::new(); names.len()];
+        for (i, line) in lines.enumerate() {
+            for (j, f) in line.split(',').enumerate() {
+                let v = f.parse::<f64>().map_err(|_| {
+                    format!("{} line {}: '{f}' is not a number", path.display(), i + 2)
+                })?;
+                data.get_mut(j)
+                    .ok_or_else(|| format!("{} line {}: too many fields", path.display(), i + 2))?
+                    .push(v);
+            }
+        }
+        Ok(Columns { names, data })
+    }
+
+    pub fn column(&self, name: &str) -> Result<&[f64], String> {
+        self.names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| self.data[i].as_slice())
+            .ok_or_else(|| format!("results have no column '{name}'"))
+    }
+}
+
+/// The band metrics of a standard-case run: the estimator's alignment (against its own
+/// distance) and the vehicle's true alignment (against the vehicle's distance). The first row
+/// (t = start, before any step) is left out.
+pub fn evaluate_results(cols: &Columns) -> Result<BandMetrics, String> {
+    let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
+    evaluate(
+        &skip(cols.column("estimator.distance")?),
+        &skip(cols.column("estimator.alignment")?),
+        &skip(cols.column("vehicle.distance")?),
+        &skip(cols.column("vehicle.alignment")?),
+        DS,
+        TRIM,
+    )
+}
+
+/// `{"bands": {"whole": {"J_mm": .., "Jrel": .., "truth_rms_mm": ..}, "D1": .., ...}}`.
+pub fn metrics_json(m: &BandMetrics) -> String {
+    let value = serde_json::json!({ "bands": m, "method": {
+        "grid_step_m": DS, "trim_m": TRIM, "filter": "Butterworth band-pass, order 4 per edge, zero phase (sosfiltfilt)",
+    }});
+    serde_json::to_string_pretty(&value).unwrap_or_default()
+}
+
+/// Our figures beside the paper's, one band per line.
+pub fn table(m: &BandMetrics) -> String {
+    let mut s = format!(
+        "  {:<7} {:>22}   {:>16}\n",
+        "band", "ours J [mm] / Jrel", "paper J / Jrel"
+    );
+    for (b, (name, pj, pr)) in BANDS.iter().zip(PAPER_STANDARD) {
+        debug_assert_eq!(b.name, name);
+        let a = m.get(name).expect("all four bands");
+        s.push_str(&format!(
+            "  {:<7} {:>12.3} / {:>6.3}   {:>9.2} / {:>4.2}\n",
+            name, a.j_mm, a.jrel, pj, pr
+        ));
+    }
+    s
+}
