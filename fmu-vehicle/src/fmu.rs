@@ -229,12 +229,11 @@ pub static VARIABLES: &[VarSpec] = &[
         0.0,
         "Car body bounce (from static equilibrium)",
     ),
-    VarSpec::real_output(
+    VarSpec::real_output_calculated(
         vr::WHEEL_LOAD_LEFT,
         "wheel_load_left",
         "N",
-        0.0,
-        "Normal load on the leading wheelset's left wheel",
+        "Normal load on the leading wheelset's left wheel (static load at the start)",
     ),
     VarSpec::real_output(
         vr::FORWARD_SPEED,
@@ -243,12 +242,11 @@ pub static VARIABLES: &[VarSpec] = &[
         0.0,
         "The speed the vehicle ran at over the last step (0 when standing): connect it to the estimator's speed",
     ),
-    VarSpec::real_output(
+    VarSpec::real_output_calculated(
         vr::WHEEL_LOAD_RIGHT,
         "wheel_load_right",
         "N",
-        0.0,
-        "Normal load on the leading wheelset's right wheel",
+        "Normal load on the leading wheelset's right wheel (static load at the start)",
     ),
     VarSpec::real_parameter(
         vr::CONICITY,
@@ -604,6 +602,15 @@ impl Model for RailVehicle {
             resources: ctx.resources.clone(),
             sim: None,
         })
+    }
+
+    /// The wheel loads start at the static load of the chosen vehicle.
+    fn calculate_initial(&mut self, v: &mut Values) {
+        if let Ok(p) = self.load_params(&v.string[vr::VEHICLE as usize]) {
+            let load = Vehicle::new(p, 0.1, ContactOptions::default()).static_wheel_load[0];
+            v.real[vr::WHEEL_LOAD_LEFT as usize] = load;
+            v.real[vr::WHEEL_LOAD_RIGHT as usize] = load;
+        }
     }
 
     fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {

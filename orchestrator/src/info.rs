@@ -3,7 +3,67 @@
 
 use model_description::{ModelDescription, VariableKind};
 use std::fmt::Write;
+use std::io::Read;
 use std::path::Path;
+
+/// What `info` reads: the model description and the archive's entry names. Only the XML is
+/// read, nothing is unpacked or loaded, so an FMU without a binary for this platform (or one
+/// that cannot load here) can still be described.
+pub struct Archive {
+    pub model_description: ModelDescription,
+    pub entries: Vec<String>,
+}
+
+pub fn read_archive(path: &Path) -> Result<Archive, String> {
+    let file =
+        std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let mut zip = zip::ZipArchive::new(file)
+        .map_err(|e| format!("{} is not a valid FMU (zip) archive: {e}", path.display()))?;
+    let entries: Vec<String> = (0..zip.len())
+        .filter_map(|i| {
+            zip.by_index(i)
+                .ok()
+                .and_then(|f| f.name().ok().map(|n| n.to_string()))
+        })
+        .collect();
+    let mut xml = String::new();
+    zip.by_name("modelDescription.xml")
+        .map_err(|_| format!("{} has no modelDescription.xml", path.display()))?
+        .read_to_string(&mut xml)
+        .map_err(|e| format!("{}: cannot read modelDescription.xml: {e}", path.display()))?;
+    let model_description = ModelDescription::from_xml(&xml)
+        .map_err(|e| format!("{}: modelDescription.xml: {e}", path.display()))?;
+    Ok(Archive {
+        model_description,
+        entries,
+    })
+}
+
+/// The binary this platform would load, relative to the archive root.
+pub fn platform_binary(identifier: &str) -> String {
+    let (folder, ext) = if cfg!(target_os = "windows") {
+        (
+            if cfg!(target_pointer_width = "64") {
+                "win64"
+            } else {
+                "win32"
+            },
+            "dll",
+        )
+    } else if cfg!(target_os = "macos") {
+        ("darwin64", "dylib")
+    } else {
+        (
+            if cfg!(target_pointer_width = "64") {
+                "linux64"
+            } else {
+                "linux32"
+            },
+            "so",
+        )
+    };
+    format!("binaries/{folder}/{identifier}.{ext}")
+}
 
 fn start(kind: &VariableKind) -> String {
     match kind {
@@ -19,7 +79,8 @@ fn start(kind: &VariableKind) -> String {
     }
 }
 
-pub fn describe(path: &Path, md: &ModelDescription) -> String {
+pub fn describe(path: &Path, archive: &Archive) -> String {
+    let md = &archive.model_description;
     let mut s = String::new();
     let _ = writeln!(s, "{}", path.display());
     let _ = writeln!(s, "  model name      {}", md.model_name);
@@ -60,6 +121,30 @@ pub fn describe(path: &Path, md: &ModelDescription) -> String {
                 "none".to_string()
             } else {
                 caps.join(", ")
+            }
+        );
+        let binary = platform_binary(&cs.model_identifier);
+        let present = archive.entries.iter().any(|e| *e == binary);
+        let mut platforms: Vec<&str> = archive
+            .entries
+            .iter()
+            .filter_map(|e| e.strip_prefix("binaries/")?.split('/').next())
+            .filter(|x| !x.is_empty())
+            .collect();
+        platforms.sort_unstable();
+        platforms.dedup();
+        let _ = writeln!(
+            s,
+            "  binary          {binary} {} (platforms in the archive: {})",
+            if present {
+                "present"
+            } else {
+                "MISSING: this FMU cannot run here"
+            },
+            if platforms.is_empty() {
+                "none".to_string()
+            } else {
+                platforms.join(", ")
             }
         );
     } else {

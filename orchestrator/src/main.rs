@@ -1,3 +1,4 @@
+#![allow(clippy::result_large_err)]
 //! The `orchestrator` command line. See `orchestrator --help` and the README.
 //!
 //! Exit codes: 0 success; 1 an I/O failure (results cannot be written); 2 bad input (a file,
@@ -334,11 +335,8 @@ fn simulate(args: SimulateArgs) -> Result<(), RunError> {
 }
 
 fn info(path: &Path) -> Result<(), RunError> {
-    let fmu = fmi_import::Fmu::open(path)?;
-    print!(
-        "{}",
-        orchestrator::info::describe(path, fmu.model_description())
-    );
+    let archive = orchestrator::info::read_archive(path).map_err(RunError::Config)?;
+    print!("{}", orchestrator::info::describe(path, &archive));
     Ok(())
 }
 

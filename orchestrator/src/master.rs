@@ -22,6 +22,9 @@ use model_description::{BaseType, Causality, ModelDescription, VariableKind};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+/// Fills the buffer with (value reference, value) pairs for the first component at time `t`.
+pub type ExternalInputs<'a> = dyn Fn(f64, &mut Vec<(u32, f64)>) + 'a;
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Algorithm {
     GaussSeidel,
@@ -398,7 +401,7 @@ impl Cosimulation {
     pub fn run_with_inputs(
         &self,
         opts: &RunOptions,
-        external: &dyn Fn(f64, &mut Vec<(u32, f64)>),
+        external: &ExternalInputs<'_>,
     ) -> Result<RunSummary, RunError> {
         let started = Instant::now();
         let n = self.system.components.len();
@@ -409,6 +412,12 @@ impl Cosimulation {
             )));
         }
         let span = opts.stop - opts.start;
+        if !(span >= 0.0) {
+            return Err(RunError::Config(format!(
+                "the stop time {} s is before the start time {} s",
+                opts.stop, opts.start
+            )));
+        }
         let steps = (span / opts.step).round();
         if !(span >= 0.0) || (steps * opts.step - span).abs() > 1e-9 * span.abs().max(1.0) {
             return Err(RunError::Config(format!(
@@ -496,8 +505,7 @@ impl Cosimulation {
         for &c in &self.plan.order {
             instances[c].exit_initialization_mode().map_err(fmi)?;
         }
-        for c in 0..n {
-            let inst = &mut instances[c];
+        for (c, inst) in instances.iter_mut().enumerate() {
             real.read_outputs(c, inst).map_err(fmi)?;
             integer.read_outputs(c, inst).map_err(fmi)?;
             boolean.read_outputs(c, inst).map_err(fmi)?;
@@ -579,7 +587,7 @@ impl Cosimulation {
             }
             k += 1;
             if let Some((rec, recorder)) = recording.as_mut()
-                && k % every == 0
+                && k.is_multiple_of(every)
             {
                 if let Err(e) = rec.sample(&mut instances) {
                     failure = Some(e);
@@ -590,7 +598,7 @@ impl Cosimulation {
                     .map_err(io)?;
             }
             if let Some(bar) = &bar
-                && k % 1000 == 0
+                && k.is_multiple_of(1000)
             {
                 bar.set_position(k);
             }

@@ -363,10 +363,7 @@ fn gauss_seidel_order(n: usize, links: &[Link]) -> Vec<usize> {
     }
     let mut order = vec![];
     let mut done = vec![false; n];
-    loop {
-        let Some(next) = (0..n).find(|&i| !done[i] && indegree[i] == 0) else {
-            break;
-        };
+    while let Some(next) = (0..n).find(|&i| !done[i] && indegree[i] == 0) {
         done[next] = true;
         order.push(next);
         for &t in &edges[next] {

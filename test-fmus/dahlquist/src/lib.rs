@@ -12,7 +12,7 @@ const U: u32 = 2;
 const X0: u32 = 3;
 
 static VARIABLES: &[VarSpec] = &[
-    VarSpec::real_output(X, "x", "1", 1.0, "the state"),
+    VarSpec::real_output_calculated(X, "x", "1", "the state (x0 at the start)"),
     VarSpec::real_parameter(K, "k", "1", 1.0, "decay rate").min(0.0),
     VarSpec::real_input(
         U,
@@ -45,8 +45,10 @@ impl Model for Dahlquist {
     fn instantiate(_: &InstantiateContext, _: &Logger) -> Result<Self, String> {
         Ok(Dahlquist)
     }
-    fn exit_initialization(&mut self, v: &mut Values, _: &Logger) -> Result<(), String> {
+    fn calculate_initial(&mut self, v: &mut Values) {
         v.real[X as usize] = v.real[X0 as usize];
+    }
+    fn exit_initialization(&mut self, _: &mut Values, _: &Logger) -> Result<(), String> {
         Ok(())
     }
     fn do_step(

@@ -1,0 +1,321 @@
+"""The orchestrator's command line as a user meets it (subprocess): help, exit codes (0 success,
+2 bad input, 3 an FMU failed during the run, 1 I/O), error messages that name the file, component
+and variable, `info`, and `export-ssp` round trips (through the orchestrator and through fmpy).
+Systems with Dahlquist/Feedthrough are .ssd files written into each test's tmp dir.
+"""
+
+from __future__ import annotations
+
+import zipfile
+
+import numpy as np
+import pytest
+
+import orchestrator_cli as oc
+import orchestrator_pymaster as pm
+from orchestrator_cli import SsdComponent as C, SsdConnection as K
+
+
+@pytest.mark.parametrize("sub", [None, "run", "simulate", "info", "export-ssp"])
+def test_help_for_every_subcommand(sub):
+    """`orchestrator [SUB] --help`, `-h` and `orchestrator help [SUB]` print the same usage."""
+    args = [sub] if sub else []
+    p = oc.run(*args, "--help")
+    usage = f"Usage: orchestrator {sub}" if sub else "Usage: orchestrator <COMMAND>"
+    assert usage in p.stdout, p.stdout
+    assert p.stderr == ""
+    assert oc.run(*args, "-h").stdout.startswith(p.stdout.split("\n")[0])
+    assert usage in oc.run("help", *args).stdout
+    if sub is None:
+        for s in ("run", "simulate", "info", "export-ssp"):
+            assert f"  {s} " in p.stdout
+    if sub == "run":
+        for option in ("--vehicle", "--estimator", "--stop", "--step", "--out", "--record", "--set", "--jacobi"):
+            assert option in p.stdout
+
+
+def test_no_subcommand_or_unknown_option_is_a_usage_error():
+    assert oc.run(check=None).returncode == 2
+    p = oc.run("run", "--no-such-option", check=2)
+    assert "--no-such-option" in p.stderr
+
+
+def test_version():
+    assert oc.run("--version").stdout.startswith("orchestrator ")
+
+
+@pytest.fixture
+def corrupt_fmu(tmp_path):
+    path = tmp_path / "Corrupt.fmu"
+    path.write_bytes(np.random.default_rng(3).bytes(4096))
+    return path
+
+
+def test_corrupt_fmu_exit_2_names_the_file(corrupt_fmu, tmp_path):
+    f = oc.fmus()
+    for args in (["info", corrupt_fmu],
+                 ["simulate", corrupt_fmu, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o1"],
+                 ["run", "--vehicle", corrupt_fmu, "--estimator", f["AlignmentEstimator"], "--stop", "0.01", "--out", tmp_path / "o2"],
+                 ["run", "--vehicle", f["RailVehicle"], "--estimator", corrupt_fmu, "--stop", "0.01", "--out", tmp_path / "o3"]):
+        p = oc.run(*args, check=2)
+        assert "Corrupt.fmu" in p.stderr, p.stderr
+        assert "Traceback" not in p.stderr and "panicked" not in p.stderr, p.stderr
+    assert not (tmp_path / "o2").exists() and not (tmp_path / "o3").exists()
+
+
+def test_missing_fmu_file_exit_2(tmp_path):
+    p = oc.run("info", tmp_path / "Nowhere.fmu", check=2)
+    assert "Nowhere.fmu" in p.stderr
+
+
+def _two(tmp_path, connection: K, name="sys.ssd", **kw):
+    f = oc.fmus()
+    return oc.write_ssd(tmp_path / name, [C("feed", f["Feedthrough"]), C("plant", f["Dahlquist"])], [connection], **kw)
+
+
+def test_unknown_variable_in_connection_exit_2(tmp_path):
+    ssd = _two(tmp_path, K("plant.xx", "feed.u"))
+    p = oc.run("run", ssd, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "'plant'" in p.stderr and "'xx'" in p.stderr and "Dahlquist.fmu" in p.stderr, p.stderr
+    assert not (tmp_path / "o" / "results.csv").exists()
+
+
+def test_unknown_component_in_connection_exit_2(tmp_path):
+    ssd = _two(tmp_path, K("plant.x", "nobody.u"))
+    p = oc.run("run", ssd, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "nobody" in p.stderr, p.stderr
+
+
+def test_input_to_input_connection_exit_2(tmp_path):
+    ssd = _two(tmp_path, K("plant.u", "feed.u"))
+    p = oc.run("run", ssd, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "plant.u" in p.stderr and "not an output" in p.stderr, p.stderr
+
+
+def test_type_mismatch_exit_2(tmp_path):
+    """Feedthrough.steps (Integer) -> Dahlquist.u (Real)."""
+    ssd = _two(tmp_path, K("feed.steps", "plant.u"))
+    p = oc.run("run", ssd, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "feed.steps" in p.stderr and "plant.u" in p.stderr and "Integer" in p.stderr and "Real" in p.stderr, p.stderr
+
+
+def test_algebraic_loop_exit_2_names_the_loop(tmp_path):
+    """Two Feedthrough FMUs in a ring; y depends directly on u (dependencies="1")."""
+    f = oc.fmus()
+    ssd = oc.write_ssd(tmp_path / "ring.ssd", [C("a", f["Feedthrough"]), C("b", f["Feedthrough"])],
+                       [K("a.y", "b.u"), K("b.y", "a.u")], stop=1.0)
+    p = oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "algebraic loop" in p.stderr, p.stderr
+    for v in ("a.y", "b.u", "b.y", "a.u"):
+        assert v in p.stderr, p.stderr
+
+
+def test_feedback_through_a_state_is_not_a_loop(tmp_path):
+    """Dahlquist's x has no direct feedthrough (dependencies=""): a ring through it is legal."""
+    f = oc.fmus()
+    ssd = oc.write_ssd(tmp_path / "ring.ssd", [C("plant", f["Dahlquist"]), C("feed", f["Feedthrough"], {"gain": -0.5})],
+                       [K("plant.x", "feed.u"), K("feed.y", "plant.u")], stop=1.0)
+    oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "o")
+    r = oc.read_results(tmp_path / "o")
+    np.testing.assert_array_equal(r["feed.y"], -0.5 * r["plant.x"])
+    # a feedback cycle keeps the description order; Jacobi too must match the Python master
+    oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "j", "--jacobi")
+    j = oc.read_results(tmp_path / "j")
+    for algorithm, res in (("gauss-seidel", r), ("jacobi", j)):
+        py = pm.run_system([pm.Comp("plant", f["Dahlquist"]), pm.Comp("feed", f["Feedthrough"], {"gain": -0.5})],
+                           [pm.Connection("plant.x", "feed.u"), pm.Connection("feed.y", "plant.u")],
+                           stop=1.0, step=0.1, algorithm=algorithm, record=res.columns[1:])
+        for c in res.columns:
+            np.testing.assert_array_equal(res[c], py[c], err_msg=f"{algorithm}: {c}")
+    assert np.any(r["plant.x"] != j["plant.x"])
+
+
+@pytest.fixture
+def chain(tmp_path):
+    """plant (Dahlquist) -> feed (Feedthrough); feed listed first (the master orders producers first)."""
+    return _two(tmp_path, K("plant.x", "feed.u"), name="chain.ssd", stop=1.0)
+
+
+def test_fmu_failure_mid_run_exit_3_keeps_results(chain, tmp_path):
+    out = tmp_path / "o"
+    p = oc.run("run", chain, "--step", "0.1", "--out", out, "--set", "feed.fail_at=0.5", check=3)
+    err = p.stderr
+    assert "Feedthrough.fmu" in err and "'feed'" in err, err
+    assert "fmi2DoStep" in err and "t = 0.5" in err, err
+    assert "results.csv" in err, "the message says where the partial results are"
+    r = oc.read_results(out)
+    np.testing.assert_array_equal(r.time, np.arange(6) * 0.1)  # rows up to t = 0.5, the failing step's start
+    assert r.time[-1] == 0.5
+    np.testing.assert_array_equal(r["feed.steps"], np.arange(6))
+    assert not (out / "results.csv.partial").exists()
+    assert (out / "results.units.csv").exists()
+
+
+def test_set_unknown_variable_exit_2(chain, tmp_path):
+    p = oc.run("run", chain, "--step", "0.1", "--out", tmp_path / "o", "--set", "feed.nope=1", check=2)
+    assert "nope" in p.stderr and "feed" in p.stderr, p.stderr
+    p = oc.run("run", chain, "--step", "0.1", "--out", tmp_path / "o", "--set", "ghost.gain=1", check=2)
+    assert "ghost" in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("setting, words", [
+    ("feed.steps=3", ["feed.steps", "causality"]),  # an output
+    ("feed.gain=abc", ["feed.gain", "abc"]),  # not a number
+    ("feed.gain", ["feed.gain"]),  # no '='
+])
+def test_bad_set_exit_2(chain, tmp_path, setting, words):
+    p = oc.run("run", chain, "--step", "0.1", "--out", tmp_path / "o", "--set", setting, check=2)
+    for w in words:
+        assert w in p.stderr, p.stderr
+
+
+def test_step_not_dividing_the_run_exit_2(chain, tmp_path):
+    p = oc.run("run", chain, "--step", "0.3", "--out", tmp_path / "o", check=2)
+    assert "0.3" in p.stderr, p.stderr
+
+
+def test_info_on_the_estimator():
+    p = oc.run("info", oc.fmus()["AlignmentEstimator"])
+    out = p.stdout
+    assert "7d0c3f4e-5b1a-4c8e-9a52-3e6f1d2b8a41" in out
+    assert "model identifier AlignmentEstimator" in out
+    rows = {line.split()[0]: line.split() for line in out.splitlines() if line.startswith("  ") and line.split()}
+    for name, causality in (("ws_acc_y", "input"), ("ws_yaw_rate", "input"), ("frame_acc_y", "input"), ("speed", "input"),
+                            ("alignment", "output"), ("alignment_std", "output"), ("nis", "output"),
+                            ("sigma_acc_ws", "parameter"), ("discretization", "parameter")):
+        assert name in rows and rows[name][1] == causality, f"{name}: {rows.get(name)}"
+    assert rows["alignment"][3] == "Real" and "m" in rows["alignment"]
+    assert rows["skipped_updates"][3] == "Integer" and rows["updated"][3] == "Boolean"
+    assert "problem(s)" not in out, out
+
+
+def test_info_does_not_need_a_loadable_binary(tmp_path):
+    """`info` is "like fmpy info": it describes an FMU from its modelDescription.xml, which is how
+    a user finds out, among other things, that the FMU has no binary for this platform. A
+    Windows-only FMU (binaries/win64 only) must still be described (exit 0), not refused."""
+    stripped = tmp_path / "WindowsOnly.fmu"
+    with zipfile.ZipFile(oc.fmus()["Dahlquist"]) as src, zipfile.ZipFile(stripped, "w") as dst:
+        for item in src.infolist():
+            if not item.filename.startswith("binaries/linux64/"):
+                dst.writestr(item, src.read(item.filename))
+        dst.writestr("binaries/win64/Dahlquist.dll", b"MZ placeholder")
+    p = oc.run("info", stripped, check=None)
+    assert p.returncode == 0, f"exit code {p.returncode}; stderr: {p.stderr}"
+    assert "0b7e1c52-3f2d-4a61-9e58-d1a4c2f7b903" in p.stdout
+    for name in ("x", "k", "u", "x0"):
+        assert any(line.split()[:1] == [name] for line in p.stdout.splitlines()), p.stdout
+
+
+def test_export_ssp_round_trip(tmp_path):
+    """export-ssp of the standard case, run back by the orchestrator: identical to the built-in
+    case; and fmpy's SSP reader and master (fmpy.ssp.simulation.simulate_ssp) run it too."""
+    ssp = tmp_path / "standard.ssp"
+    oc.run("export-ssp", ssp, *oc.standard_fmu_args())
+    with zipfile.ZipFile(ssp) as z:
+        names = set(z.namelist())
+    assert {"SystemStructure.ssd", "resources/vehicle.fmu", "resources/estimator.fmu"} <= names
+
+    oc.run("run", ssp, "--stop", "0.5", "--out", tmp_path / "from_ssp", "--quiet")
+    oc.run("run", "--stop", "0.5", "--out", tmp_path / "builtin", "--quiet", *oc.standard_fmu_args())
+    a = (tmp_path / "from_ssp" / "results.csv").read_text()
+    b = (tmp_path / "builtin" / "results.csv").read_text()
+    assert a == b, "the exported system runs to the same results file, byte for byte"
+    assert (tmp_path / "from_ssp" / "results.units.csv").read_text() == (tmp_path / "builtin" / "results.units.csv").read_text()
+    # SSP 1.0 has no step size: the export's run took the vehicle FMU's default step; it must be
+    # the built-in 1 ms for the comparison above to mean something.
+    assert len(a.splitlines()) == 502
+
+    from fmpy.ssp.ssd import read_ssd
+    from fmpy.ssp.simulation import simulate_ssp
+
+    ssd = read_ssd(str(ssp))  # fmpy validates the .ssd against the SSP 1.0 schema
+    assert sorted(c.name for c in ssd.system.elements) == ["estimator", "vehicle"]
+    assert len(ssd.system.connections) == 4
+
+    res = simulate_ssp(str(ssp), stop_time=0.5, step_size=1e-3)
+    orch = oc.read_results(tmp_path / "builtin")
+    # fmpy's master is Jacobi with connector values starting at 0.0; its row i holds the values
+    # after the step from t_i (labelled t_i), and it accumulates time with +=. The vehicle has no
+    # connected input: its outputs must be those of the orchestrator's row i + 1.
+    n = len(res)
+    assert n in (500, 501)
+    for name in ("vehicle.ws_acc_y", "vehicle.ws_yaw_rate", "vehicle.frame_acc_y", "vehicle.forward_speed"):
+        np.testing.assert_array_equal(res[name][:500], orch[name][1:501], err_msg=name)
+    # and what fmpy delivered to the estimator is what the vehicle produced
+    np.testing.assert_array_equal(res["estimator.speed"], res["vehicle.forward_speed"])
+
+
+def test_export_ssp_of_a_system_file(tmp_path):
+    """export-ssp --system re-exports an .ssd with parameters and a linear transformation; the
+    .ssp runs to the same results as the .ssd."""
+    f = oc.fmus()
+    ssd = oc.write_ssd(tmp_path / "sys.ssd",
+                       [C("plant", f["Dahlquist"], {"k": 2.0, "x0": 1.5}), C("feed", f["Feedthrough"], {"gain": 3.0, "offset": -1.0})],
+                       [K("plant.x", "feed.u", 0.5, 0.25)], stop=1.0)
+    ssp = tmp_path / "sys.ssp"
+    oc.run("export-ssp", ssp, "--system", ssd)
+    oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "a")
+    oc.run("run", ssp, "--step", "0.1", "--out", tmp_path / "b")
+    a = oc.read_results(tmp_path / "a")
+    assert (tmp_path / "a" / "results.csv").read_text() == (tmp_path / "b" / "results.csv").read_text()
+    # after the first step (row 0 is the subject of test_orchestrator_results.py's initial-value tests)
+    np.testing.assert_array_equal(a["feed.y"][1:], 3.0 * (0.5 * a["plant.x"][1:] + 0.25) - 1.0)
+    assert a["plant.x"][0] == 1.5
+
+
+def test_failure_in_the_first_step_keeps_row_0(chain, tmp_path):
+    p = oc.run("run", chain, "--step", "0.1", "--out", tmp_path / "o", "--set", "feed.fail_at=0", check=3)
+    assert "t = 0 s" in p.stderr, p.stderr
+    r = oc.read_results(tmp_path / "o")
+    np.testing.assert_array_equal(r.time, [0.0])
+
+
+def test_unwritable_output_is_an_io_error_exit_1(chain, tmp_path):
+    (tmp_path / "a_file").write_text("")
+    p = oc.run("run", chain, "--step", "0.1", "--out", tmp_path / "a_file" / "sub", check=1)
+    assert "a_file" in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--step", "0"], ["step"]),
+    (["--step=-0.1"], ["step"]),
+    (["--start", "2", "--stop", "1", "--step", "0.1"], ["2", "1"]),
+])
+def test_bad_experiment_exit_2(chain, tmp_path, args, words):
+    p = oc.run("run", chain, *args, "--out", tmp_path / "o", check=2)
+    for w in words:
+        assert w in p.stderr, p.stderr
+    assert not (tmp_path / "o" / "results.csv").exists()
+
+
+def test_malformed_or_missing_system_file_exit_2(tmp_path):
+    bad = tmp_path / "broken.ssd"
+    bad.write_text("<ssd:SystemStructureDescription>\n<oops")
+    p = oc.run("run", bad, "--out", tmp_path / "o", check=2)
+    assert "broken.ssd" in p.stderr and "line 2" in p.stderr, p.stderr
+    p = oc.run("run", tmp_path / "nowhere.ssd", "--out", tmp_path / "o", check=2)
+    assert "nowhere.ssd" in p.stderr, p.stderr
+
+
+def test_input_fed_twice_and_transformation_on_integer_exit_2(tmp_path):
+    f = oc.fmus()
+    comps = [C("a", f["Feedthrough"]), C("b", f["Feedthrough"]), C("plant", f["Dahlquist"])]
+    ssd = oc.write_ssd(tmp_path / "twice.ssd", comps, [K("a.y", "plant.u"), K("b.y", "plant.u")], stop=1.0)
+    p = oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "plant.u" in p.stderr and "a.y" in p.stderr and "b.y" in p.stderr, p.stderr
+    ssd = oc.write_ssd(tmp_path / "int.ssd", comps[:2], [K("a.steps", "b.steps", 2.0, 0.0)], stop=1.0)
+    p = oc.run("run", ssd, "--step", "0.1", "--out", tmp_path / "o", check=2)
+    assert "a.steps" in p.stderr, p.stderr
+
+
+def test_start_time_other_than_zero(chain, tmp_path):
+    """--start 1: rows from t = 1 on integer ticks, the FMUs told startTime 1 (same as a Python
+    master doing so)."""
+    oc.run("run", chain, "--start", "1", "--stop", "1.5", "--step", "0.1", "--out", tmp_path / "o")
+    r = oc.read_results(tmp_path / "o")
+    np.testing.assert_array_equal(r.time, 1.0 + np.arange(6) * 0.1)
+    f = oc.fmus()
+    py = pm.run_system([pm.Comp("plant", f["Dahlquist"]), pm.Comp("feed", f["Feedthrough"])],
+                       [pm.Connection("plant.x", "feed.u")], start=1.0, stop=1.5, step=0.1, record=r.columns[1:])
+    for c in r.columns:
+        np.testing.assert_array_equal(r[c], py[c], err_msg=c)
