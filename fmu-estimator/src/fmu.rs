@@ -68,7 +68,7 @@ pub mod vr {
     pub const CALIBRATION_FILE: u32 = 0;
 }
 
-const P: Params = Params::TABLE_2;
+const P: Params = Params::DEFAULTS;
 
 /// The variable table: the single source of the FMU's interface (see `fmi_abi::variables`).
 pub static VARIABLES: &[VarSpec] = &[
@@ -86,21 +86,21 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_output(vr::EST_PSI_RATE, "est_psi_rate", "rad/s", 0.0, "Estimated wheelset yaw rate"),
     VarSpec::real_output(vr::EST_VY_F, "est_vy_f", "m/s", 0.0, "Estimated suspended frame lateral velocity"),
     VarSpec::real_output(vr::NIS, "nis", "1", 0.0, "Normalized innovation squared of the last update (chi-square with 4 degrees of freedom when the filter is consistent)"),
-    VarSpec::real_parameter(vr::M, "m", "kg", P.m, "Wheelset mass (paper Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::I, "I", "kg.m2", P.i, "Wheelset yaw moment of inertia (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::L, "l", "m", P.l, "Half the distance between the wheel-rail contact points (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::L_S, "l_s", "m", P.l_s, "Half the distance between the longitudinal primary suspension elements (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::ALPHA, "alpha", "1", P.alpha, "Nominal conicity of the wheel treads (Table 2)").min(0.0),
+    VarSpec::real_parameter(vr::M, "m", "kg", P.m, "Wheelset mass (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::I, "I", "kg.m2", P.i, "Wheelset yaw moment of inertia (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::L, "l", "m", P.l, "Half the distance between the wheel-rail contact points (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::L_S, "l_s", "m", P.l_s, "Half the distance between the longitudinal primary suspension elements (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::ALPHA, "alpha", "1", P.alpha, "Nominal conicity of the wheel treads (Table 2, or the calibration file)").min(0.0),
     VarSpec::real_parameter(vr::R_0, "r_0", "m", P.r_0, "Rolling radius of the centred wheelset; Table 2 prints 0.85 m, the wheel diameter (see docs)").min(0.0),
-    VarSpec::real_parameter(vr::M_F, "m_f", "kg", P.m_f, "Suspended mass carried by the wheelset: quarter car body plus half bogie frame (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::F11, "f11", "N", P.f11, "Kalker longitudinal creep coefficient per wheel (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::F22, "f22", "N", P.f22, "Kalker lateral creep coefficient per wheel (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::F23, "f23", "N.m", P.f23, "Kalker lateral/spin creep coefficient per wheel (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::F33, "f33", "N.m2", P.f33, "Kalker spin creep coefficient per wheel (Table 2)").min(0.0),
-    VarSpec::real_parameter(vr::KX, "kx", "N/m", P.kx, "Longitudinal primary stiffness per side at +/- l_s (Table 2, identified)").min(0.0),
-    VarSpec::real_parameter(vr::CX, "cx", "N.s/m", P.cx, "Longitudinal primary damping per side at +/- l_s (Table 2, identified)").min(0.0),
-    VarSpec::real_parameter(vr::KY, "ky", "N/m", P.ky, "Lateral primary stiffness, wheelset to frame (Table 2, identified)").min(0.0),
-    VarSpec::real_parameter(vr::CY, "cy", "N.s/m", P.cy, "Lateral primary damping, wheelset to frame (Table 2, identified)").min(0.0),
+    VarSpec::real_parameter(vr::M_F, "m_f", "kg", P.m_f, "Suspended mass carried by the wheelset: quarter car body plus half bogie frame (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F11, "f11", "N", P.f11, "Kalker longitudinal creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F22, "f22", "N", P.f22, "Kalker lateral creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F23, "f23", "N.m", P.f23, "Kalker lateral/spin creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F33, "f33", "N.m2", P.f33, "Kalker spin creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::KX, "kx", "N/m", P.kx, "Longitudinal primary stiffness per side at +/- l_s (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::CX, "cx", "N.s/m", P.cx, "Longitudinal primary damping per side at +/- l_s (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::KY, "ky", "N/m", P.ky, "Lateral primary stiffness, wheelset to frame (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::CY, "cy", "N.s/m", P.cy, "Lateral primary damping, wheelset to frame (identified; Table 2 until calibrated)").min(0.0),
     VarSpec::real_parameter(vr::G, "g", "m/s2", P.g, "Gravitational acceleration (gravitational stiffness W alpha / l)").min(0.0),
     VarSpec::real_parameter(vr::SIGMA_ACC_WS, "sigma_acc_ws", "m/s2", 0.01, "Noise sigma of the wheelset accelerometer (R, diagonal model)").min(0.0),
     VarSpec::real_parameter(vr::SIGMA_YAW_RATE, "sigma_yaw_rate", "rad/s", 0.0005, "Noise sigma of the gyroscope (R, diagonal model)").min(0.0),

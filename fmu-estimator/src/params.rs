@@ -122,3 +122,55 @@ impl Params {
         Ok(())
     }
 }
+
+include!(concat!(env!("OUT_DIR"), "/calibrated.rs"));
+
+/// The value `CALIBRATED` gives `name`, if any (a `const fn`, so the variable table can use it).
+const fn calibrated(name: &str, default: f64) -> f64 {
+    let mut i = 0;
+    while i < CALIBRATED.len() {
+        let (n, v) = CALIBRATED[i];
+        if n.len() == name.len() {
+            let (a, b) = (n.as_bytes(), name.as_bytes());
+            let mut j = 0;
+            let mut same = true;
+            while j < a.len() {
+                if a[j] != b[j] {
+                    same = false;
+                }
+                j += 1;
+            }
+            if same {
+                return v;
+            }
+        }
+        i += 1;
+    }
+    default
+}
+
+impl Params {
+    /// The FMU's parameter defaults: Table 2, overridden by the calibration file's
+    /// `[parameters]` (read at build time by build.rs).
+    pub const DEFAULTS: Params = {
+        let t = Params::TABLE_2;
+        Params {
+            m: calibrated("m", t.m),
+            i: calibrated("I", t.i),
+            l: calibrated("l", t.l),
+            l_s: calibrated("l_s", t.l_s),
+            alpha: calibrated("alpha", t.alpha),
+            r_0: calibrated("r_0", t.r_0),
+            m_f: calibrated("m_f", t.m_f),
+            f11: calibrated("f11", t.f11),
+            f22: calibrated("f22", t.f22),
+            f23: calibrated("f23", t.f23),
+            f33: calibrated("f33", t.f33),
+            kx: calibrated("kx", t.kx),
+            cx: calibrated("cx", t.cx),
+            ky: calibrated("ky", t.ky),
+            cy: calibrated("cy", t.cy),
+            g: t.g,
+        }
+    };
+}

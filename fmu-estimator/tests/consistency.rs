@@ -168,7 +168,7 @@ fn the_fmu_runs_the_same_filter() {
     inst.enter_initialization_mode().unwrap();
     inst.exit_initialization_mode().unwrap();
 
-    let p = Params::default();
+    let p = Params::DEFAULTS;
     let h = 1e-3;
     let fc = state_matrix(&p, 20.0);
     let f = transition(&fc, h, Scheme::Exact);

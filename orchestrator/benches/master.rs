@@ -63,6 +63,7 @@ fn master(system: &System, out: Option<&Path>) -> f64 {
         out_dir: out.map(Path::to_path_buf),
         record: Some(vec![Endpoint::new("dq", "x"), Endpoint::new("feed", "u")]),
         interval: None,
+        collect: false,
         progress: false,
         log: LogConfig::default(),
     };

@@ -36,6 +36,12 @@ enum Command {
         /// The .fmu file.
         fmu: PathBuf,
     },
+    /// The estimation studies: calibrate the estimator against the vehicle, evaluate the paper's
+    /// cases on held-out track seeds.
+    Study {
+        #[command(subcommand)]
+        what: StudyCommand,
+    },
     /// Write a system (by default the standard case) as an .ssp archive that other masters
     /// (libcosim, OMSimulator, fmpy) can run.
     ExportSsp {
@@ -47,6 +53,48 @@ enum Command {
         #[command(flatten)]
         fmus: StandardFmus,
     },
+}
+
+#[derive(Subcommand)]
+enum StudyCommand {
+    /// Identify the simplified model's (kx, cx, ky, cy) and calibrate Q and R on one track seed,
+    /// and write the estimator's calibration file (rebuild the FMU afterwards: cargo xtask fmu).
+    Calibrate {
+        #[command(flatten)]
+        fmus: StandardFmus,
+        /// The calibration file to write.
+        #[arg(long, default_value = "fmu-estimator/resources/calibration.toml")]
+        out: PathBuf,
+        /// Track seed of the identification and calibration runs.
+        #[arg(long, default_value_t = 1)]
+        seed: u32,
+    },
+    /// The standard case on held-out seeds.
+    Standard(StudyArgs),
+    /// The robustness cases (noise, vertical irregularity, conicity, Kalker coefficients).
+    Robustness(StudyArgs),
+    /// The resonance cases at the vehicle's first lateral mode.
+    Resonance(StudyArgs),
+    /// Every case, in parallel.
+    All(StudyArgs),
+}
+
+#[derive(Args, Clone)]
+struct StudyArgs {
+    #[command(flatten)]
+    fmus: StandardFmus,
+    /// Held-out track seeds (never the calibration seed).
+    #[arg(long, value_delimiter = ',', default_value = "2,3,4,5,6")]
+    seeds: Vec<u32>,
+    /// The seed the estimator was calibrated on, refused among the evaluation seeds.
+    #[arg(long, default_value_t = 1)]
+    calibration_seed: u32,
+    /// Output directory for the JSON results and report.md.
+    #[arg(long, default_value = "out/study")]
+    out: PathBuf,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Args, Clone)]
@@ -196,6 +244,7 @@ fn options(
         out_dir: (!c.no_record).then(|| c.out.clone()),
         record,
         interval: c.interval,
+        collect: false,
         progress: !c.quiet,
         log: log_config(c),
     })
@@ -326,6 +375,7 @@ fn simulate(args: SimulateArgs) -> Result<(), RunError> {
         out_dir: (!args.common.no_record).then(|| args.common.out.clone()),
         record,
         interval: args.common.interval,
+        collect: false,
         progress: !args.common.quiet,
         log: log_config(&args.common),
     };
@@ -347,6 +397,141 @@ fn export_ssp(out: &Path, system: Option<&Path>, fmus: &StandardFmus) -> Result<
     Ok(())
 }
 
+fn study_fmus(f: &StandardFmus) -> orchestrator::study::runs::Fmus {
+    orchestrator::study::runs::Fmus {
+        vehicle: f.vehicle.clone(),
+        estimator: f.estimator.clone(),
+    }
+}
+
+fn study(what: StudyCommand) -> Result<(), RunError> {
+    use orchestrator::study::{calibrate, cases, identify, runs};
+    let args = match what {
+        StudyCommand::Calibrate { fmus, out, seed } => {
+            let fmus = study_fmus(&fmus);
+            let vehicle = fmu_vehicle::params::VehicleParams::ml95();
+            let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP)
+                .map_err(RunError::Config)?;
+            let p = &id.params;
+            println!(
+                "identified on seed {seed} ({} evaluations): kx {:.4e} N/m, cx {:.4e} N s/m, ky {:.4e} N/m, cy {:.4e} N s/m (Table 2: 7.95e5, 1.47e4, 4.12e6, 1.41e5)",
+                id.evaluations, p.kx, p.cx, p.ky, p.cy
+            );
+            println!(
+                "misfit J_ls {:.4} (with Table 2's values {:.4})",
+                id.cost, id.cost_table_2
+            );
+            let cal = calibrate::calibrate(&fmus, &id.params, seed, runs::STOP, runs::STEP)
+                .map_err(RunError::Config)?;
+            let r = cal.r.diagonal().map(f64::sqrt);
+            println!(
+                "calibrated on seed {seed}: sqrt(diag R) = [{:.3e}, {:.3e}, {:.3e}, {:.3e}]",
+                r[0], r[1], r[2], r[3]
+            );
+            let text = calibrate::to_toml(
+                &cal,
+                seed,
+                "Identification: lateral irregularities only, no noise; calibration: standard conditions.",
+            );
+            std::fs::write(&out, text)
+                .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
+            println!(
+                "wrote {} (rebuild the estimator FMU: cargo xtask fmu)",
+                out.display()
+            );
+            return Ok(());
+        }
+        StudyCommand::Standard(a) => (a, vec!["standard"]),
+        StudyCommand::Robustness(a) => (a, vec!["robustness"]),
+        StudyCommand::Resonance(a) => (a, vec!["resonance"]),
+        StudyCommand::All(a) => (a, vec!["standard", "robustness", "resonance"]),
+    };
+    let (a, groups) = args;
+    if a.seeds.contains(&a.calibration_seed) {
+        return Err(RunError::Config(format!(
+            "seed {} is the calibration seed: accuracy must be measured on other tracks",
+            a.calibration_seed
+        )));
+    }
+    let fmus = study_fmus(&a.fmus);
+    let estimator = fmi_import::Fmu::open(&fmus.estimator)?;
+    let alpha = match estimator
+        .model_description()
+        .variable("alpha")
+        .map(|v| &v.kind)
+    {
+        Some(model_description::VariableKind::Real(r)) => r.start.unwrap_or(0.1),
+        _ => 0.1,
+    };
+    drop(estimator);
+    let vehicle = fmu_vehicle::dynamics::Vehicle::new(
+        fmu_vehicle::params::VehicleParams::ml95(),
+        0.1,
+        fmu_vehicle::dynamics::ContactOptions::default(),
+    );
+    let mut plan: Vec<(&str, Vec<cases::Case>)> = vec![];
+    for g in groups {
+        match g {
+            "standard" => plan.push(("Standard case", vec![cases::standard()])),
+            "robustness" => plan.push(("Robustness", cases::robustness(alpha))),
+            _ => {
+                let mode = fmu_vehicle::modal::modes(&vehicle, 20.0)
+                    .first_lateral()
+                    .ok_or_else(|| {
+                        RunError::Config(
+                            "the vehicle has no lightly damped lateral mode at 20 m/s".into(),
+                        )
+                    })?;
+                println!(
+                    "first lateral mode of the vehicle at 20 m/s: {:.3} Hz (damping {:.3}): wavelength {:.2} m",
+                    mode.frequency,
+                    mode.damping,
+                    20.0 / mode.frequency
+                );
+                plan.push(("Resonance", cases::resonance(mode.frequency, 20.0)));
+            }
+        }
+    }
+    let total: usize = plan.iter().map(|(_, c)| c.len()).sum::<usize>() * a.seeds.len();
+    let bar = if a.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(total as u64)
+    };
+    let started = std::time::Instant::now();
+    let all: Vec<cases::Case> = plan.iter().flat_map(|(_, c)| c.iter().cloned()).collect();
+    let results =
+        cases::run_cases(&fmus, &all, &a.seeds, &|| bar.inc(1)).map_err(RunError::Config)?;
+    bar.finish_and_clear();
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| RunError::Io(format!("cannot create {}: {e}", a.out.display())))?;
+    let mut report = String::from("# Alignment estimation study\n\n");
+    let mut offset = 0;
+    for (title, group) in &plan {
+        let slice = &results[offset..offset + group.len()];
+        offset += group.len();
+        let md = cases::markdown(title, slice);
+        println!("{md}");
+        report.push_str(&md);
+        report.push('\n');
+        let file = a
+            .out
+            .join(format!("{}.json", title.to_lowercase().replace(' ', "_")));
+        let json = serde_json::to_string_pretty(slice).unwrap_or_default();
+        std::fs::write(&file, json)
+            .map_err(|e| RunError::Io(format!("cannot write {}: {e}", file.display())))?;
+    }
+    let report_path = a.out.join("report.md");
+    std::fs::write(&report_path, report)
+        .map_err(|e| RunError::Io(format!("cannot write {}: {e}", report_path.display())))?;
+    eprintln!(
+        "{total} runs in {:.1} s; report in {}",
+        started.elapsed().as_secs_f64(),
+        report_path.display()
+    );
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -354,6 +539,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => simulate(a),
         Command::Info { fmu } => info(&fmu),
         Command::ExportSsp { out, system, fmus } => export_ssp(&out, system.as_deref(), &fmus),
+        Command::Study { what } => study(what),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

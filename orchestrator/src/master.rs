@@ -43,8 +43,26 @@ pub struct RunOptions {
     pub record: Option<Vec<Endpoint>>,
     /// Recording interval [s], a whole number of steps; `None`: every step.
     pub interval: Option<f64>,
+    /// Also keep the recorded rows in memory ([`RunSummary::table`]), for the studies.
+    pub collect: bool,
     pub progress: bool,
     pub log: LogConfig,
+}
+
+/// Recorded columns kept in memory: `time` first, then `component.variable`.
+#[derive(Debug, Clone, Default)]
+pub struct Table {
+    pub columns: Vec<String>,
+    pub data: Vec<Vec<f64>>,
+}
+
+impl Table {
+    pub fn column(&self, name: &str) -> Option<&[f64]> {
+        self.columns
+            .iter()
+            .position(|c| c == name)
+            .map(|i| self.data[i].as_slice())
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -52,6 +70,8 @@ pub struct RunSummary {
     pub steps: u64,
     pub rows: u64,
     pub results: Option<PathBuf>,
+    /// The recorded rows, when [`RunOptions::collect`] asked for them.
+    pub table: Option<Table>,
     pub wall: Duration,
     pub final_time: f64,
 }
@@ -512,20 +532,44 @@ impl Cosimulation {
         }
 
         let mds = self.model_descriptions();
-        let mut recording = match &opts.out_dir {
-            Some(dir) => {
-                let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
-                let recorder = Recorder::create(dir, &rec.columns, &rec.units).map_err(|e| {
-                    RunError::Io(format!("cannot write results in {}: {e}", dir.display()))
-                })?;
-                Some((rec, recorder))
-            }
-            None => None,
+        let mut recording = if opts.out_dir.is_some() || opts.collect {
+            let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
+            let recorder = match &opts.out_dir {
+                Some(dir) => Some(Recorder::create(dir, &rec.columns, &rec.units).map_err(
+                    |e| RunError::Io(format!("cannot write results in {}: {e}", dir.display())),
+                )?),
+                None => None,
+            };
+            let table = opts.collect.then(|| Table {
+                columns: std::iter::once("time".to_string())
+                    .chain(rec.columns.iter().cloned())
+                    .collect(),
+                data: vec![Vec::with_capacity(steps as usize + 1); rec.columns.len() + 1],
+            });
+            Some((rec, recorder, table))
+        } else {
+            None
         };
         let io = |e: std::io::Error| RunError::Io(format!("writing results: {e}"));
-        if let Some((rec, recorder)) = recording.as_mut() {
+        let keep = |t: f64,
+                    row: &[f64],
+                    recorder: &mut Option<Recorder>,
+                    table: &mut Option<Table>|
+         -> Result<(), RunError> {
+            if let Some(r) = recorder.as_mut() {
+                r.row(t, row).map_err(io)?;
+            }
+            if let Some(tb) = table.as_mut() {
+                tb.data[0].push(t);
+                for (col, v) in tb.data[1..].iter_mut().zip(row) {
+                    col.push(*v);
+                }
+            }
+            Ok(())
+        };
+        if let Some((rec, recorder, table)) = recording.as_mut() {
             rec.sample(&mut instances).map_err(fmi)?;
-            recorder.row(opts.start, &rec.row).map_err(io)?;
+            keep(opts.start, &rec.row, recorder, table)?;
         }
 
         let bar = if opts.progress && steps >= 10_000 {
@@ -586,16 +630,14 @@ impl Cosimulation {
                 break 'steps;
             }
             k += 1;
-            if let Some((rec, recorder)) = recording.as_mut()
+            if let Some((rec, recorder, table)) = recording.as_mut()
                 && k.is_multiple_of(every)
             {
                 if let Err(e) = rec.sample(&mut instances) {
                     failure = Some(e);
                     break 'steps;
                 }
-                recorder
-                    .row(opts.start + k as f64 * opts.step, &rec.row)
-                    .map_err(io)?;
+                keep(opts.start + k as f64 * opts.step, &rec.row, recorder, table)?;
             }
             if let Some(bar) = &bar
                 && k.is_multiple_of(1000)
@@ -606,12 +648,18 @@ impl Cosimulation {
         if let Some(bar) = bar {
             bar.finish_and_clear();
         }
-        let (rows, results) = match recording {
-            Some((_, recorder)) => {
-                let rows = recorder.rows;
-                (rows, Some(recorder.finish().map_err(io)?))
+        let (rows, results, table) = match recording {
+            Some((_, recorder, table)) => {
+                let rows = table.as_ref().map_or(0, |t| t.data[0].len() as u64);
+                match recorder {
+                    Some(r) => {
+                        let rows = r.rows;
+                        (rows, Some(r.finish().map_err(io)?), table)
+                    }
+                    None => (rows, None, table),
+                }
             }
-            None => (0, None),
+            None => (0, None, None),
         };
         if let Some(error) = failure {
             return Err(RunError::Fmi { error, results });
@@ -626,6 +674,7 @@ impl Cosimulation {
             steps,
             rows,
             results,
+            table,
             wall: started.elapsed(),
             final_time: opts.start + steps as f64 * opts.step,
         })

@@ -49,6 +49,7 @@ fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) ->
             Endpoint::new("feed", "steps"),
         ]),
         interval: None,
+        collect: false,
         progress: false,
         log: LogConfig::default(),
     }

@@ -3,8 +3,8 @@
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
 //! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo test, packaging, the Python
 //!   harness (tests/, run with pytest in `.venv`, created on demand), and a summary;
-//! - `demo [-- <demo.py args>]`: package the FMUs, run the standard case through the orchestrator
-//!   and score it with tests/demo.py.
+//! - `demo [-- <study args>]`: package the FMUs, run the standard case and the paper's studies
+//!   through the orchestrator.
 
 mod fmus;
 mod package;
@@ -23,7 +23,7 @@ commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
                                cargo test --workspace, packaging, pytest tests/ in .venv
-  demo [-- <demo.py args>]     package the FMUs, run the standard case through the orchestrator, score it
+  demo [-- <study args>]       package the FMUs, run the standard case and the studies through the orchestrator
   help                         this text";
 
 /// Where the orchestrator binary is, for the tests that run it.
@@ -266,7 +266,8 @@ fn run_pytest(
 }
 
 /// The main job: packages the FMUs, builds the orchestrator, runs the standard case through it
-/// (loading the .fmu files), then scores the estimate with tests/demo.py.
+/// (loading the .fmu files; it prints the accuracy table beside the paper's and writes
+/// metrics.json), then the paper's studies on held-out track seeds.
 fn demo(extra: Vec<String>) -> Result<()> {
     let packaged = package::build_and_package()?;
     let find = |id: &str| {
@@ -292,15 +293,17 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg(&out)
         .arg("--quiet");
     workspace::run(&mut run)?;
-    let python = python::ensure_venv()?;
-    println!();
-    let mut cmd = Command::new(python);
-    cmd.current_dir(workspace::root())
-        .arg("tests/demo.py")
-        .arg("--fmu")
+    println!("\n==> orchestrator study all (held-out track seeds 2-6)");
+    let mut study = Command::new(&orchestrator);
+    study
+        .arg("study")
+        .arg("all")
+        .arg("--vehicle")
+        .arg(&vehicle)
+        .arg("--estimator")
         .arg(&estimator)
-        .arg("--results")
-        .arg(out.join("results.csv"))
+        .arg("--out")
+        .arg(out.join("study"))
         .args(extra);
-    workspace::run(&mut cmd)
+    workspace::run(&mut study)
 }

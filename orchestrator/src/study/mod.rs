@@ -1,5 +1,10 @@
-//! The estimation studies of the paper: accuracy metrics in the EN 13848 bands (more to come:
-//! identification, calibration, robustness and resonance cases).
+//! The estimation studies of the paper: accuracy metrics in the EN 13848 bands, identification
+//! of the simplified model, calibration of the filter, and the evaluation cases.
 
+pub mod calibrate;
+pub mod cases;
+pub mod identify;
 pub mod metrics;
+pub mod optimize;
+pub mod runs;
 pub mod standard;

@@ -1,0 +1,264 @@
+//! The paper's evaluation cases, each run on several held-out track seeds (never the
+//! calibration seed) and summarized as the mean and spread of the band metrics.
+//!
+//! - standard: 20 s at 20 m/s, lateral and vertical irregularities, sensor noise;
+//! - robustness: no sensor noise; no vertical irregularity; conicity -10 % in the filter;
+//!   Kalker coefficients -50 % in the vehicle; all of these together;
+//! - resonance: the vehicle's first lateral mode from the modal analysis gives the wavelength
+//!   `V / f`; case 1 the standard track, case 2 a 1 mm harmonic alignment of that wavelength
+//!   alone, case 3 their sum.
+
+use super::metrics::{BANDS, BandMetrics, evaluate};
+use super::runs::{Fmus, STOP, Settings, seeded, standard_run};
+use super::standard::{DS, TRIM};
+use crate::system::Value;
+use rayon::prelude::*;
+use serde::Serialize;
+
+#[derive(Debug, Clone)]
+pub struct Case {
+    pub name: String,
+    pub vehicle: Settings,
+    pub estimator: Settings,
+    /// The paper's figures for this case (J [mm], Jrel per band), when it reports them.
+    pub paper: Option<[(f64, f64); 4]>,
+}
+
+fn set(name: &str, value: Value) -> (String, Value) {
+    (name.to_string(), value)
+}
+
+pub const PAPER_STANDARD: [(f64, f64); 4] =
+    [(0.36, 0.25), (0.21, 0.48), (0.22, 0.26), (0.18, 0.15)];
+
+pub fn standard() -> Case {
+    Case {
+        name: "standard".into(),
+        vehicle: vec![],
+        estimator: vec![],
+        paper: Some(PAPER_STANDARD),
+    }
+}
+
+/// The robustness cases (the paper's Table 5). `alpha` is the filter's nominal conicity.
+pub fn robustness(alpha: f64) -> Vec<Case> {
+    let no_noise = set("sensor_noise", Value::Boolean(false));
+    let no_vertical = set("vertical_irregularity", Value::Boolean(false));
+    let kalker = set("kalker_scale", Value::Real(0.5));
+    let conicity = set("alpha", Value::Real(0.9 * alpha));
+    vec![
+        standard(),
+        Case {
+            name: "no sensor noise".into(),
+            vehicle: vec![no_noise.clone()],
+            estimator: vec![],
+            paper: Some([(0.34, 0.24), (0.21, 0.48), (0.21, 0.26), (0.13, 0.12)]),
+        },
+        Case {
+            name: "no vertical irregularity".into(),
+            vehicle: vec![no_vertical.clone()],
+            estimator: vec![],
+            paper: Some([(0.34, 0.24), (0.17, 0.40), (0.21, 0.26), (0.18, 0.16)]),
+        },
+        Case {
+            name: "conicity -10 % in the filter".into(),
+            vehicle: vec![],
+            estimator: vec![conicity.clone()],
+            paper: Some([(0.38, 0.27), (0.22, 0.51), (0.23, 0.29), (0.18, 0.16)]),
+        },
+        Case {
+            name: "Kalker -50 % in the vehicle".into(),
+            vehicle: vec![kalker.clone()],
+            estimator: vec![],
+            paper: Some([(0.39, 0.27), (0.22, 0.51), (0.23, 0.29), (0.18, 0.16)]),
+        },
+        Case {
+            name: "all together".into(),
+            // The paper's worst case keeps noise and vertical irregularities and combines the two
+            // parameter errors.
+            vehicle: vec![kalker],
+            estimator: vec![conicity],
+            paper: Some([(0.47, 0.32), (0.30, 0.68), (0.27, 0.32), (0.21, 0.18)]),
+        },
+    ]
+}
+
+/// The resonance cases (the paper's Table 6) for a first lateral mode at `frequency` [Hz].
+pub fn resonance(frequency: f64, speed: f64) -> Vec<Case> {
+    let wavelength = speed / frequency;
+    let harmonic = vec![
+        set("harmonic_amplitude", Value::Real(1e-3)),
+        set("harmonic_wavelength", Value::Real(wavelength)),
+    ];
+    let mut alone = harmonic.clone();
+    alone.push(set("lateral_irregularity", Value::Boolean(false)));
+    vec![
+        Case {
+            name: "resonance case 1: standard track".into(),
+            vehicle: vec![],
+            estimator: vec![],
+            paper: Some(PAPER_STANDARD),
+        },
+        Case {
+            name: format!("resonance case 2: harmonic {wavelength:.2} m only"),
+            vehicle: alone,
+            estimator: vec![],
+            paper: Some([(0.21, 0.29), (0.17, 0.27), (0.04, 0.99), (0.08, 5.9)]),
+        },
+        Case {
+            name: format!("resonance case 3: standard + harmonic {wavelength:.2} m"),
+            vehicle: harmonic,
+            estimator: vec![],
+            paper: Some([(0.38, 0.24), (0.24, 0.32), (0.21, 0.27), (0.17, 0.15)]),
+        },
+    ]
+}
+
+/// Mean and sample standard deviation over the seeds, per band.
+#[derive(Debug, Clone, Serialize)]
+pub struct Spread {
+    #[serde(rename = "J_mm_mean")]
+    pub j_mean: f64,
+    #[serde(rename = "J_mm_std")]
+    pub j_std: f64,
+    #[serde(rename = "Jrel_mean")]
+    pub jrel_mean: f64,
+    #[serde(rename = "Jrel_std")]
+    pub jrel_std: f64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseResult {
+    pub name: String,
+    pub seeds: Vec<u32>,
+    pub per_seed: Vec<BandMetrics>,
+    /// whole, D1, D2, D3
+    pub bands: Vec<(String, Spread)>,
+    pub paper: Option<Vec<(String, f64, f64)>>,
+}
+
+fn spread(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / n;
+    let var = if values.len() > 1 {
+        values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
+}
+
+/// Runs one seed of a case and evaluates it.
+pub fn run_seed(fmus: &Fmus, case: &Case, seed: u32) -> Result<BandMetrics, String> {
+    let mut vehicle = seeded(seed);
+    vehicle.extend(case.vehicle.iter().cloned());
+    let table = standard_run(fmus, vehicle, case.estimator.clone(), STOP)?;
+    let c = |n: &str| {
+        table
+            .column(n)
+            .map(|x| x[1..].to_vec())
+            .ok_or_else(|| format!("no column {n}"))
+    };
+    evaluate(
+        &c("estimator.distance")?,
+        &c("estimator.alignment")?,
+        &c("vehicle.distance")?,
+        &c("vehicle.alignment")?,
+        DS,
+        TRIM,
+    )
+    .map_err(|e| format!("{}, seed {seed}: {e}", case.name))
+}
+
+/// Runs every (case, seed) pair in parallel; `progress` is called after each.
+pub fn run_cases(
+    fmus: &Fmus,
+    cases: &[Case],
+    seeds: &[u32],
+    progress: &(dyn Fn() + Sync),
+) -> Result<Vec<CaseResult>, String> {
+    let jobs: Vec<(usize, u32)> = (0..cases.len())
+        .flat_map(|c| seeds.iter().map(move |&s| (c, s)))
+        .collect();
+    let results: Vec<Result<BandMetrics, String>> = jobs
+        .par_iter()
+        .map(|&(c, s)| {
+            let r = run_seed(fmus, &cases[c], s);
+            progress();
+            r
+        })
+        .collect();
+    let mut out = vec![];
+    for (ci, case) in cases.iter().enumerate() {
+        let per_seed: Vec<BandMetrics> = jobs
+            .iter()
+            .zip(&results)
+            .filter(|((c, _), _)| *c == ci)
+            .map(|(_, r)| r.clone())
+            .collect::<Result<_, _>>()?;
+        let bands = BANDS
+            .iter()
+            .map(|b| {
+                let j: Vec<f64> = per_seed
+                    .iter()
+                    .map(|m| m.get(b.name).expect("band").j_mm)
+                    .collect();
+                let r: Vec<f64> = per_seed
+                    .iter()
+                    .map(|m| m.get(b.name).expect("band").jrel)
+                    .collect();
+                let ((jm, js), (rm, rs)) = (spread(&j), spread(&r));
+                (
+                    b.name.to_string(),
+                    Spread {
+                        j_mean: jm,
+                        j_std: js,
+                        jrel_mean: rm,
+                        jrel_std: rs,
+                    },
+                )
+            })
+            .collect();
+        out.push(CaseResult {
+            name: case.name.clone(),
+            seeds: seeds.to_vec(),
+            per_seed,
+            bands,
+            paper: case.paper.map(|p| {
+                BANDS
+                    .iter()
+                    .zip(p)
+                    .map(|(b, (j, r))| (b.name.to_string(), j, r))
+                    .collect()
+            }),
+        });
+    }
+    Ok(out)
+}
+
+/// A Markdown table of the results beside the paper's.
+pub fn markdown(title: &str, results: &[CaseResult]) -> String {
+    let mut s = format!(
+        "### {title}\n\nJ [mm] / Jrel, mean ± standard deviation over seeds {:?}; the paper's figures in brackets.\n\n",
+        results.first().map(|r| r.seeds.clone()).unwrap_or_default()
+    );
+    s.push_str(
+        "| case | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n|---|---|---|---|---|\n",
+    );
+    for r in results {
+        s.push_str(&format!("| {} |", r.name));
+        for (i, (_, b)) in r.bands.iter().enumerate() {
+            let paper = r
+                .paper
+                .as_ref()
+                .map(|p| format!(" [{:.2} / {:.2}]", p[i].1, p[i].2))
+                .unwrap_or_default();
+            s.push_str(&format!(
+                " {:.2}±{:.2} / {:.2}±{:.2}{} |",
+                b.j_mean, b.j_std, b.jrel_mean, b.jrel_std, paper
+            ));
+        }
+        s.push('\n');
+    }
+    s
+}
