@@ -124,7 +124,7 @@ pub fn describe(path: &Path, archive: &Archive) -> String {
             }
         );
         let binary = platform_binary(&cs.model_identifier);
-        let present = archive.entries.iter().any(|e| *e == binary);
+        let present = archive.entries.contains(&binary);
         let mut platforms: Vec<&str> = archive
             .entries
             .iter()

@@ -40,6 +40,7 @@ pub struct Calibration {
 }
 
 /// Q and R from a standard-conditions vehicle run on track `seed`.
+#[allow(clippy::needless_range_loop)] // k indexes the truth and sensor columns together
 pub fn calibrate(
     fmus: &Fmus,
     params: &Params,

@@ -69,9 +69,10 @@ pub fn nelder_mead(
                 simplex[n] = xc;
                 values[n] = fc;
             } else {
+                let best = simplex[0].clone();
                 for i in 1..=n {
-                    for j in 0..n {
-                        simplex[i][j] = simplex[0][j] + 0.5 * (simplex[i][j] - simplex[0][j]);
+                    for (x, b) in simplex[i].iter_mut().zip(&best) {
+                        *x = b + 0.5 * (*x - b);
                     }
                     values[i] = f(&simplex[i]);
                 }
