@@ -14,9 +14,9 @@
 //! Degrees of freedom (23): car body `y, z, phi, theta, psi`; each bogie frame `y, z, phi,
 //! theta, psi`; each wheelset `y, psi`. A wheelset's vertical position and roll are prescribed
 //! by the track at its own position `s_j` along the track (trailing wheelsets see the same track
-//! later): `z_w = xi_vp(s_j)`, `phi_w = xi_cl(s_j) / (2 l) + alpha (y - xi_a(s_j)) / l`, the
-//! second term being the roll of a coned wheelset displaced by `u = y - xi_a` on knife-edge rails
-//! (its left end rides `alpha u` higher, its right end `alpha u` lower). Longitudinal motions
+//! later): `z_w = xi_vp(s_j)`, `phi_w = xi_cl(s_j) / (2 l) + alpha u_c / l`, the second term
+//! being the roll of a coned wheelset displaced by `u_c` (below) on knife-edge rails (its left end
+//! rides `alpha u_c` higher, its right end `alpha u_c` lower). Longitudinal motions
 //! are not modelled (constant speed; traction and braking are outside the model).
 //!
 //! # Suspension (Lagrange equations, linear elements with real geometry)
@@ -42,9 +42,23 @@
 //! Rotational elements: an anti-roll bar between car body and each bogie (roll) and a yaw
 //! stiffness per side (yaw).
 //!
+//! # Contact-level displacement
+//! The rolling radii depend on where the knife-edge rail touches the wheel, measured along the
+//! axle. A rail at lateral position `xi +/- l`, about `r_0` below the axle of a wheelset at `y`
+//! rolled by `phi_w`, touches it at `+/- l - (y - xi + r_0 phi_w)` from the wheelset's centre:
+//! the roll moves the contact point along the wheel by `r_0 phi_w`. So the displacement that
+//! sets the rolling radii is `u_c = y - xi + r_0 phi_w`. The roll is the track's,
+//! `phi_t = xi_cl / (2 l)`, plus the cone's, `alpha u_c / l`, hence
+//! `u_c (1 - r_0 alpha / l) = y - xi + r_0 phi_t` (the familiar `l - r_0 delta` denominators of
+//! linear wheelset models). A wheelset that rolls with a canted track about its contact points
+//! has its centre at `y = xi - r_0 phi_t` and `u_c = 0`: nothing in the contact changes, as it
+//! must. The lateral creepage below is consistent with this: its `r_0 phi_w'` term vanishes on
+//! the same motion, and with cone roll included the free wheelset's kinematic wavelength is
+//! still exactly Klingel's.
+//!
 //! # Wheel-rail contact, at each wheel
-//! Coned treads (conicity `alpha`) on knife-edge rails, rolling radii `r_0 +/- alpha u`, upper
-//! sign left. The material point of the wheel at the contact moves, relative to the fixed rail,
+//! Coned treads (conicity `alpha`) on knife-edge rails, rolling radii `r_0 +/- alpha u_c`, upper
+//! sign left; `u` below stands for `u_c`. The material point of the wheel at the contact moves, relative to the fixed rail,
 //! with creepages (as in the estimator's model, `fmu-estimator/src/model.rs`):
 //! - longitudinal `nu_x = -/+ (alpha u / r_0 + l psi' / V)`,
 //! - lateral `nu_y = (y' + r_0 phi_w') / V - psi` (the roll rate moves the contact point, which
@@ -142,10 +156,9 @@ pub struct ContactOptions {
     /// The lateral components of the normal forces (gravitational stiffness and cross-level
     /// gravity). Off only in the Klingel test of a free wheelset.
     pub normal_force_lateral: bool,
-    /// The roll `alpha u / l` of a displaced coned wheelset (in its kinematics, the roll-rate
-    /// term of the lateral creepage, the gyroscopic moment and the sensor). Off only in the
-    /// Klingel test: Klingel's kinematic oscillation ignores it, and with it the wavelength grows
-    /// by the factor `sqrt(1 + r_0 alpha / l)`.
+    /// The roll `alpha u_c / l` of a displaced coned wheelset (in its kinematics, the contact
+    /// position, the roll-rate term of the lateral creepage, the gyroscopic moment and the
+    /// sensor). Off only in tests, to compare with models that ignore it.
     pub cone_roll: bool,
 }
 
@@ -389,17 +402,25 @@ impl Vehicle {
         // Prescribed wheelset vertical motion and roll.
         let mut presc = [(0.0, 0.0, 0.0, 0.0); 4];
         let mut zdd = [0.0; 4];
+        let mut contact_u = [0.0; 4];
         let cone = if self.options.cone_roll {
             alpha / l
         } else {
             0.0
         };
+        // u_c (1 - r0 alpha / l) = y - xi + r0 phi_t: see "Contact-level displacement" above.
+        let scale = 1.0 / (1.0 - r0 * cone);
         for j in 0..4 {
             let irr = &track[j].irr;
-            let u = q[dof::wheelset(j)] - irr.alignment;
-            let ud = qd[dof::wheelset(j)] - v * irr.alignment_ds;
-            let roll = irr.cross_level / (2.0 * l) + cone * u;
-            let roll_rate = v * irr.cross_level_ds / (2.0 * l) + cone * ud;
+            let (track_roll, track_roll_rate) = (
+                irr.cross_level / (2.0 * l),
+                v * irr.cross_level_ds / (2.0 * l),
+            );
+            let u = (q[dof::wheelset(j)] - irr.alignment + r0 * track_roll) * scale;
+            let ud = (qd[dof::wheelset(j)] - v * irr.alignment_ds + r0 * track_roll_rate) * scale;
+            let roll = track_roll + cone * u;
+            let roll_rate = track_roll_rate + cone * ud;
+            contact_u[j] = u;
             presc[j] = (irr.vertical, v * irr.vertical_ds, roll, roll_rate);
             zdd[j] = v * v * irr.vertical_ds2;
             diag.wheelset_roll[j] = roll;
@@ -452,7 +473,7 @@ impl Vehicle {
             let irr = &track[j].irr;
             let (y, psi) = (q[dof::wheelset(j)], q[dof::wheelset(j) + 1]);
             let (yd, psid) = (qd[dof::wheelset(j)], qd[dof::wheelset(j) + 1]);
-            let rel = y - irr.alignment;
+            let rel = contact_u[j];
             let (roll, roll_rate) = (presc[j].2, presc[j].3);
             let total = mw * (GRAVITY + zdd[j]) + down[j][0] + down[j][1];
             let transfer = (bp * (down[j][0] - down[j][1]) + h_axle * lateral_primary[j]) / l;
