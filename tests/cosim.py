@@ -1,6 +1,6 @@
 """A plain Python co-simulation master over fmpy's FMU2Slave: the vehicle FMU feeds the
 estimator FMU, Gauss-Seidel (vehicle first), fixed step. It is the reference the orchestrator will
-be checked against, and what the demo runs until the orchestrator exists.
+be checked against (the orchestrator reproduces it bit for bit, tests/test_orchestrator_standard.py).
 
 Order within one communication step from t to t + h: vehicle.doStep(t, h); read its sensors
 (samples at t + h); set them and the speed on the estimator; estimator.doStep(t, h); read the

@@ -16,17 +16,9 @@ use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// Where the instance is in the FMI 2.0 co-simulation state machine, as far as the importer
-/// knows from the calls it made and their results. Only used to decide what `Drop` may call.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Lifecycle {
-    Instantiated,
-    InitializationMode,
-    StepComplete,
-    StepFailed,
-    Terminated,
-    Error,
-    Fatal,
-}
+/// knows from the calls it made and their results (the states the export layer enforces). Only
+/// used to decide what `Drop` may call.
+use fmi_abi::instance::State as Lifecycle;
 
 /// The FMU states an instance handed out, shared with them so that dropping a state never
 /// calls the FMU (see [`FmuState`]).
