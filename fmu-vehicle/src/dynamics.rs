@@ -470,8 +470,7 @@ impl Vehicle {
         let omega_spin = v / r0;
         for j in 0..4 {
             let b = 3 + j;
-            let irr = &track[j].irr;
-            let (y, psi) = (q[dof::wheelset(j)], q[dof::wheelset(j) + 1]);
+            let psi = q[dof::wheelset(j) + 1];
             let (yd, psid) = (qd[dof::wheelset(j)], qd[dof::wheelset(j) + 1]);
             let rel = contact_u[j];
             let (roll, roll_rate) = (presc[j].2, presc[j].3);
