@@ -21,10 +21,19 @@ def klingel_frequency(speed: float, p: dict[str, float]) -> float:
 
 
 def test_parameter_defaults_match_the_fmu(model_description):
-    """The reference must simulate the vehicle the FMU assumes by default."""
+    """The FMU's parameter defaults are the reference's (the paper's Table 2 values), except
+    those the shipped calibration file sets: the FMU is built with those (fmu-estimator/build.rs).
+    Tests that feed simplified-model data to the FMU pass the reference's parameters explicitly
+    (evaluation.simulate)."""
+    import tomllib
+
+    from project import REPO
+
+    calibration = tomllib.loads((REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text())
+    calibrated = calibration.get("parameters", {})
     starts = {v.name: v.start for v in model_description.modelVariables}
     for name, value in sm.PARAMS.items():
-        assert float(starts[name]) == value, name
+        assert float(starts[name]) == calibrated.get(name, value), name
     fmu_sigmas = {"ws_acc_y": "sigma_acc_ws", "ws_yaw_rate": "sigma_yaw_rate", "frame_acc_y": "sigma_acc_frame"}
     for sensor, parameter in fmu_sigmas.items():
         assert float(starts[parameter]) == sm.SENSOR_SIGMAS[sensor], parameter

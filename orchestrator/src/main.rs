@@ -428,11 +428,14 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
                 "calibrated on seed {seed}: sqrt(diag R) = [{:.3e}, {:.3e}, {:.3e}, {:.3e}]",
                 r[0], r[1], r[2], r[3]
             );
-            let text = calibrate::to_toml(
-                &cal,
-                seed,
-                "Identification: lateral irregularities only, no noise; calibration: standard conditions.",
+            let cal = calibrate::tune(&fmus, &cal, runs::STOP).map_err(RunError::Config)?;
+            println!(
+                "tuned on seed {seed}: virtual measurement variance x {:e}, alignment process noise x {:e}: whole-band Jrel there {:.4}",
+                cal.virtual_scale,
+                cal.xi_scale,
+                cal.tuned_jrel.unwrap_or(f64::NAN)
             );
+            let text = calibrate::to_toml(&cal, seed, calibrate::PROVENANCE);
             std::fs::write(&out, text)
                 .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
             println!(

@@ -150,9 +150,19 @@ fn spread(values: &[f64]) -> (f64, f64) {
 
 /// Runs one seed of a case and evaluates it.
 pub fn run_seed(fmus: &Fmus, case: &Case, seed: u32) -> Result<BandMetrics, String> {
+    run_seed_until(fmus, case, seed, STOP)
+}
+
+/// [`run_seed`] with another run length.
+pub fn run_seed_until(
+    fmus: &Fmus,
+    case: &Case,
+    seed: u32,
+    stop: f64,
+) -> Result<BandMetrics, String> {
     let mut vehicle = seeded(seed);
     vehicle.extend(case.vehicle.iter().cloned());
-    let table = standard_run(fmus, vehicle, case.estimator.clone(), STOP)?;
+    let table = standard_run(fmus, vehicle, case.estimator.clone(), stop)?;
     let c = |n: &str| {
         table
             .column(n)
