@@ -17,8 +17,6 @@ A connection's LinearTransformation is applied as factor * x + offset. The modul
 single FMU from input signals, both as `orchestrator simulate` and as fmpy.simulate_fmu do, to
 explain the differences between those two exactly.
 
-This is deliberately separate from tests/cosim.py (the demo's master), which sets the vehicle's
-speed input and the estimator's speed from a constant instead of connecting forward_speed.
 """
 
 from __future__ import annotations
