@@ -68,6 +68,9 @@ enum StudyCommand {
         /// Track seed of the identification and calibration runs.
         #[arg(long, default_value_t = 1)]
         seed: u32,
+        /// Directory for the figure of the identification (model_adjustment.svg).
+        #[arg(long, default_value = "out/study")]
+        plots: PathBuf,
     },
     /// The standard case on held-out seeds.
     Standard(StudyArgs),
@@ -404,10 +407,19 @@ fn study_fmus(f: &StandardFmus) -> orchestrator::study::runs::Fmus {
     }
 }
 
+const STANDARD: &str = "Standard case";
+const ROBUSTNESS: &str = "Robustness";
+const RESONANCE: &str = "Resonance";
+
 fn study(what: StudyCommand) -> Result<(), RunError> {
-    use orchestrator::study::{calibrate, cases, identify, runs};
+    use orchestrator::study::{calibrate, cases, identify, plot, runs};
     let args = match what {
-        StudyCommand::Calibrate { fmus, out, seed } => {
+        StudyCommand::Calibrate {
+            fmus,
+            out,
+            seed,
+            plots,
+        } => {
             let fmus = study_fmus(&fmus);
             let vehicle = fmu_vehicle::params::VehicleParams::ml95();
             let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP)
@@ -421,6 +433,11 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
                 "misfit J_ls {:.4} (with Table 2's values {:.4})",
                 id.cost, id.cost_table_2
             );
+            std::fs::create_dir_all(&plots)
+                .map_err(|e| RunError::Io(format!("cannot create {}: {e}", plots.display())))?;
+            let figure = plots.join("model_adjustment.svg");
+            plot::model_adjustment(&figure, &id).map_err(RunError::Io)?;
+            println!("wrote {}", figure.display());
             let cal = calibrate::calibrate(&fmus, &id.params, seed, runs::STOP, runs::STEP)
                 .map_err(RunError::Config)?;
             let r = cal.r.diagonal().map(f64::sqrt);
@@ -475,8 +492,8 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
     let mut plan: Vec<(&str, Vec<cases::Case>)> = vec![];
     for g in groups {
         match g {
-            "standard" => plan.push(("Standard case", vec![cases::standard()])),
-            "robustness" => plan.push(("Robustness", cases::robustness(alpha))),
+            "standard" => plan.push((STANDARD, vec![cases::standard()])),
+            "robustness" => plan.push((ROBUSTNESS, cases::robustness(alpha))),
             _ => {
                 let mode = fmu_vehicle::modal::modes(&vehicle, 20.0)
                     .first_lateral()
@@ -491,7 +508,7 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
                     mode.damping,
                     20.0 / mode.frequency
                 );
-                plan.push(("Resonance", cases::resonance(mode.frequency, 20.0)));
+                plan.push((RESONANCE, cases::resonance(mode.frequency, 20.0)));
             }
         }
     }
@@ -523,6 +540,45 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         let json = serde_json::to_string_pretty(slice).unwrap_or_default();
         std::fs::write(&file, json)
             .map_err(|e| RunError::Io(format!("cannot write {}: {e}", file.display())))?;
+        match *title {
+            STANDARD => {
+                // The time series and figures of the first held-out seed (run once more: the
+                // parallel runs keep only the metrics).
+                let seed = a.seeds[0];
+                let table = cases::run_seed_table(&fmus, &group[0], seed, runs::STOP)
+                    .map_err(RunError::Config)?;
+                let ts = plot::TimeSeries::from_table(&table).map_err(RunError::Config)?;
+                let csv = format!("standard_seed{seed}.csv");
+                ts.write_csv(&a.out.join(&csv)).map_err(RunError::Io)?;
+                let heading = format!("standard case, seed {seed}");
+                plot::estimate_vs_truth(
+                    &a.out.join("standard_alignment.svg"),
+                    &ts.distance,
+                    &ts.estimate,
+                    &ts.truth,
+                    &format!("estimated vs true alignment, {heading}"),
+                )
+                .map_err(RunError::Io)?;
+                plot::spectra(
+                    &a.out.join("standard_spectra.svg"),
+                    &ts.distance,
+                    &ts.estimate,
+                    &ts.truth,
+                    &format!("amplitude spectra, {heading}"),
+                )
+                .map_err(RunError::Io)?;
+                report.push_str(&format!(
+                    "Seed {seed}: time series [{csv}]({csv}).\n\n![estimated vs true alignment](standard_alignment.svg)\n\n![amplitude spectra](standard_spectra.svg)\n\n"
+                ));
+            }
+            ROBUSTNESS | RESONANCE => {
+                let svg = format!("{}.svg", title.to_lowercase());
+                plot::case_bars(&a.out.join(&svg), slice, &format!("{title}: Jrel per band"))
+                    .map_err(RunError::Io)?;
+                report.push_str(&format!("![{title}: Jrel per band]({svg})\n\n"));
+            }
+            _ => {}
+        }
     }
     let report_path = a.out.join("report.md");
     std::fs::write(&report_path, report)

@@ -11,6 +11,7 @@
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use super::runs::{Fmus, STOP, Settings, seeded, standard_run};
 use super::standard::{DS, TRIM};
+use crate::master::Table;
 use crate::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -160,9 +161,7 @@ pub fn run_seed_until(
     seed: u32,
     stop: f64,
 ) -> Result<BandMetrics, String> {
-    let mut vehicle = seeded(seed);
-    vehicle.extend(case.vehicle.iter().cloned());
-    let table = standard_run(fmus, vehicle, case.estimator.clone(), stop)?;
+    let table = run_seed_table(fmus, case, seed, stop)?;
     let c = |n: &str| {
         table
             .column(n)
@@ -178,6 +177,14 @@ pub fn run_seed_until(
         TRIM,
     )
     .map_err(|e| format!("{}, seed {seed}: {e}", case.name))
+}
+
+/// The recorded table of one seed of a case (`time` and the columns
+/// [`EVALUATED`](super::runs::EVALUATED)), as [`run_seed_until`] evaluates it.
+pub fn run_seed_table(fmus: &Fmus, case: &Case, seed: u32, stop: f64) -> Result<Table, String> {
+    let mut vehicle = seeded(seed);
+    vehicle.extend(case.vehicle.iter().cloned());
+    standard_run(fmus, vehicle, case.estimator.clone(), stop)
 }
 
 /// Runs every (case, seed) pair in parallel; `progress` is called after each.

@@ -6,5 +6,6 @@ pub mod cases;
 pub mod identify;
 pub mod metrics;
 pub mod optimize;
+pub mod plot;
 pub mod runs;
 pub mod standard;
