@@ -293,7 +293,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg(&out)
         .arg("--quiet");
     workspace::run(&mut run)?;
-    println!("\n==> orchestrator study all (held-out track seeds 2-6)");
+    println!("\n==> orchestrator study all (held-out track seeds 1-5; calibration on seed 101)");
     let mut study = Command::new(&orchestrator);
     study
         .arg("study")
