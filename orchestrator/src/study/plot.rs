@@ -16,6 +16,7 @@ use super::identify::Identification;
 use super::metrics::{BANDS, bandpass, common_grid, resample};
 use super::standard::{DS, TRIM};
 use crate::master::Table;
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -52,6 +53,55 @@ fn decimate(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 }
 
 /// `[lo, hi]` of the values with a 5 % margin (never empty).
+/// One panel of two lines over the same x values: `a` in black, `b` in red, with a legend.
+#[allow(clippy::too_many_arguments)]
+fn two_lines(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    path: &Path,
+    caption: Option<String>,
+    x: &[f64],
+    (a, a_label): (&[f64], &str),
+    (b, b_label): (&[f64], &str),
+    (x_desc, y_desc): (&str, &str),
+    y_label_size: u32,
+) -> Result<(), String> {
+    let (y0, y1) = range(a.iter().chain(b).copied());
+    let mut builder = ChartBuilder::on(area);
+    if let Some(c) = caption {
+        builder.caption(c, ("sans-serif", 15));
+    }
+    let mut chart = builder
+        .margin(8)
+        .x_label_area_size(30)
+        .y_label_area_size(y_label_size)
+        .build_cartesian_2d(x[0]..x[x.len() - 1], y0..y1)
+        .map_err(err(path))?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .light_line_style(WHITE)
+        .draw()
+        .map_err(err(path))?;
+    chart
+        .draw_series(LineSeries::new(decimate(x, a), TRUTH.stroke_width(1)))
+        .map_err(err(path))?
+        .label(a_label)
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], TRUTH));
+    chart
+        .draw_series(LineSeries::new(decimate(x, b), ESTIMATE.stroke_width(1)))
+        .map_err(err(path))?
+        .label(b_label)
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], ESTIMATE));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err(path))?;
+    Ok(())
+}
+
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
@@ -122,40 +172,16 @@ pub fn estimate_vs_truth(
                 .collect::<Vec<_>>()
         };
         let (e, t) = (mm(&e), mm(&t));
-        let (y0, y1) = range(e.iter().chain(&t).copied());
-        let mut chart = ChartBuilder::on(area)
-            .caption(
-                format!("{} {}-{} m", band.name, band.short, band.long),
-                ("sans-serif", 15),
-            )
-            .margin(8)
-            .x_label_area_size(30)
-            .y_label_area_size(55)
-            .build_cartesian_2d(s[0]..s[s.len() - 1], y0..y1)
-            .map_err(err(path))?;
-        chart
-            .configure_mesh()
-            .x_desc("distance [m]")
-            .y_desc("alignment [mm]")
-            .light_line_style(WHITE)
-            .draw()
-            .map_err(err(path))?;
-        chart
-            .draw_series(LineSeries::new(decimate(s, &t), TRUTH.stroke_width(1)))
-            .map_err(err(path))?
-            .label("truth")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], TRUTH));
-        chart
-            .draw_series(LineSeries::new(decimate(s, &e), ESTIMATE.stroke_width(1)))
-            .map_err(err(path))?
-            .label("estimate")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], ESTIMATE));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err(path))?;
+        two_lines(
+            area,
+            path,
+            Some(format!("{} {}-{} m", band.name, band.short, band.long)),
+            s,
+            (&t, "truth"),
+            (&e, "estimate"),
+            ("distance [m]", "alignment [mm]"),
+            55,
+        )?;
     }
     root.present().map_err(err(path))
 }
@@ -325,36 +351,16 @@ pub fn model_adjustment(path: &Path, id: &Identification) -> Result<(), String> 
     {
         let scale = |x: &[f64]| x.iter().map(|v| v * 1e3).collect::<Vec<_>>();
         let (v, m) = (scale(vehicle), scale(model));
-        let (y0, y1) = range(v.iter().chain(&m).copied());
-        let mut chart = ChartBuilder::on(area)
-            .margin(8)
-            .x_label_area_size(30)
-            .y_label_area_size(60)
-            .build_cartesian_2d(t[0]..t[n - 1], y0..y1)
-            .map_err(err(path))?;
-        chart
-            .configure_mesh()
-            .x_desc("time [s]")
-            .y_desc(label)
-            .light_line_style(WHITE)
-            .draw()
-            .map_err(err(path))?;
-        chart
-            .draw_series(LineSeries::new(decimate(t, &v), TRUTH.stroke_width(1)))
-            .map_err(err(path))?
-            .label("vehicle")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], TRUTH));
-        chart
-            .draw_series(LineSeries::new(decimate(t, &m), ESTIMATE.stroke_width(1)))
-            .map_err(err(path))?
-            .label("simplified model")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], ESTIMATE));
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err(path))?;
+        two_lines(
+            area,
+            path,
+            None,
+            t,
+            (&v, "vehicle"),
+            (&m, "simplified model"),
+            ("time [s]", label),
+            60,
+        )?;
     }
     root.present().map_err(err(path))
 }
