@@ -2,7 +2,7 @@
 
 use crate::error::ImportError;
 use crate::instance::Instance;
-use crate::library::{self, Functions, PLATFORM};
+use crate::library::{self, Functions, platform_binary};
 use crate::logging::LogConfig;
 use crate::unpack::unpack;
 use libloading::Library;
@@ -131,14 +131,13 @@ impl Fmu {
                 identifier: model_identifier,
             });
         }
-        let Some((platform, extension)) = PLATFORM else {
+        let Some(relative) = platform_binary(&model_identifier) else {
             return Err(ImportError::UnsupportedPlatform {
                 path: fmu,
                 os: std::env::consts::OS,
                 arch: std::env::consts::ARCH,
             });
         };
-        let relative = format!("binaries/{platform}/{model_identifier}.{extension}");
         let library_path = dir.path().join(&relative);
         if !library_path.is_file() {
             return Err(ImportError::MissingBinary {

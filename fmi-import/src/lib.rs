@@ -95,5 +95,6 @@ pub use error::{FmiError, ImportError};
 pub use fmi_abi::types::fmi2Status;
 pub use fmu::Fmu;
 pub use instance::{FmuState, Instance};
+pub use library::platform_binary;
 pub use logging::{LogConfig, LogRecord, stderr_sink};
 pub use model_description::ModelDescription;

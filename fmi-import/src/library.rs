@@ -9,7 +9,7 @@ use std::ffi::{c_char, c_int, c_void};
 use std::path::Path;
 
 /// FMI 2.0's name for this platform's binaries folder and the shared-library extension.
-pub(crate) const PLATFORM: Option<(&str, &str)> = platform();
+const PLATFORM: Option<(&str, &str)> = platform();
 
 const fn platform() -> Option<(&'static str, &'static str)> {
     if cfg!(target_os = "linux") {
@@ -29,6 +29,12 @@ const fn platform() -> Option<(&'static str, &'static str)> {
     } else {
         None
     }
+}
+
+/// The binary an FMU with this model identifier must ship for this platform, relative to the
+/// archive root (`binaries/linux64/<id>.so` here); `None` on a platform FMI 2.0 does not name.
+pub fn platform_binary(model_identifier: &str) -> Option<String> {
+    PLATFORM.map(|(folder, ext)| format!("binaries/{folder}/{model_identifier}.{ext}"))
 }
 
 /// Loads the library resolving every symbol now (RTLD_NOW): an undefined symbol is reported

@@ -39,32 +39,6 @@ pub fn read_archive(path: &Path) -> Result<Archive, String> {
     })
 }
 
-/// The binary this platform would load, relative to the archive root.
-pub fn platform_binary(identifier: &str) -> String {
-    let (folder, ext) = if cfg!(target_os = "windows") {
-        (
-            if cfg!(target_pointer_width = "64") {
-                "win64"
-            } else {
-                "win32"
-            },
-            "dll",
-        )
-    } else if cfg!(target_os = "macos") {
-        ("darwin64", "dylib")
-    } else {
-        (
-            if cfg!(target_pointer_width = "64") {
-                "linux64"
-            } else {
-                "linux32"
-            },
-            "so",
-        )
-    };
-    format!("binaries/{folder}/{identifier}.{ext}")
-}
-
 fn start(kind: &VariableKind) -> String {
     match kind {
         VariableKind::Real(r) => r.start.map(|x| x.to_string()).unwrap_or_default(),
@@ -123,7 +97,8 @@ pub fn describe(path: &Path, archive: &Archive) -> String {
                 caps.join(", ")
             }
         );
-        let binary = platform_binary(&cs.model_identifier);
+        let binary = fmi_import::platform_binary(&cs.model_identifier)
+            .unwrap_or_else(|| "(no FMI platform name for this system)".into());
         let present = archive.entries.contains(&binary);
         let mut platforms: Vec<&str> = archive
             .entries
