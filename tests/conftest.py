@@ -7,7 +7,6 @@ built once per session, so `pytest tests` also works by itself.
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import fmpy
@@ -15,18 +14,14 @@ import numpy as np
 import pytest
 
 import sm_reference as sm
-from fmi_harness import Slave
-from project import MODEL_IDENTIFIER, REPO, fmu_dir
+from fmi_harness import slave_factory
+from project import MODEL_IDENTIFIER, packaged_fmus
 
 
 @pytest.fixture(scope="session")
 def fmu_path() -> Path:
     """Path of the packaged AlignmentEstimator.fmu (built with `cargo xtask fmu` if missing)."""
-    path = fmu_dir() / f"{MODEL_IDENTIFIER}.fmu"
-    if not path.exists():
-        subprocess.run(["cargo", "xtask", "fmu"], cwd=REPO, check=True)
-    assert path.exists(), f"`cargo xtask fmu` did not produce {path}"
-    return path
+    return packaged_fmus()[MODEL_IDENTIFIER]
 
 
 @pytest.fixture(scope="session")
@@ -43,16 +38,7 @@ def unzip_dir(fmu_path, tmp_path_factory) -> Path:
 @pytest.fixture
 def make_slave(model_description, unzip_dir):
     """Factory of instances (`make_slave(name)`), all freed when the test ends."""
-    slaves: list[Slave] = []
-
-    def make(name: str = "instance", logging_on: bool = False) -> Slave:
-        s = Slave(model_description, unzip_dir, name=name, logging_on=logging_on)
-        slaves.append(s)
-        return s
-
-    yield make
-    for s in slaves:
-        s.free()
+    yield from slave_factory(model_description, unzip_dir, "instance")
 
 
 @pytest.fixture(scope="session")

@@ -201,3 +201,17 @@ def step_samples(signals: dict[str, np.ndarray]) -> np.ndarray:
     """The n - 1 rows of sensor samples for stepping through a run sampled at n instants: row k
     holds the samples at t_(k+1), the end of step k."""
     return np.column_stack([signals[name][1:] for name in SENSORS])
+
+
+def slave_factory(model_description, unzip_dir, default_name: str):
+    """A fixture body: yields `make(name)` creating instances, and frees them all at the end."""
+    slaves: list[Slave] = []
+
+    def make(name: str = default_name, logging_on: bool = False) -> Slave:
+        s = Slave(model_description, unzip_dir, name=name, logging_on=logging_on)
+        slaves.append(s)
+        return s
+
+    yield make
+    for s in slaves:
+        s.free()

@@ -18,7 +18,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from project import REPO, fmu_dir
+from project import REPO, packaged_fmus
 
 # A run of any test system takes well under a second; a hang must not stall the suite.
 TIMEOUT = 120
@@ -38,16 +38,9 @@ def orchestrator_binary() -> Path:
     return path
 
 
-@functools.lru_cache(maxsize=None)
 def fmus() -> dict[str, Path]:
     """The four packaged FMUs by model name (built with `cargo xtask fmu` once if one is missing)."""
-    names = ("AlignmentEstimator", "RailVehicle", "Dahlquist", "Feedthrough")
-    paths = {n: fmu_dir() / f"{n}.fmu" for n in names}
-    if not all(p.is_file() for p in paths.values()):
-        subprocess.run(["cargo", "xtask", "fmu"], cwd=REPO, check=True)
-    missing = [str(p) for p in paths.values() if not p.is_file()]
-    assert not missing, f"`cargo xtask fmu` did not produce {missing}"
-    return {n: p.resolve() for n, p in paths.items()}
+    return packaged_fmus()
 
 
 def standard_fmu_args() -> list[str]:

@@ -5,7 +5,6 @@ reads a measured track, and refuses impossible parameters with a message naming 
 
 from __future__ import annotations
 
-import subprocess
 import threading
 from pathlib import Path
 
@@ -14,8 +13,8 @@ import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
 
-from fmi_harness import ERROR, OK, Slave
-from project import REPO, fmu_dir
+from fmi_harness import ERROR, OK, Slave, slave_factory
+from project import packaged_fmus
 
 H = 1e-3
 SENSORS = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y"]
@@ -24,10 +23,7 @@ TRUTH = ["distance", "alignment", "vertical_profile", "cross_level", "ws_y", "ws
 
 @pytest.fixture(scope="module")
 def vehicle_path() -> Path:
-    path = fmu_dir() / "RailVehicle.fmu"
-    if not path.exists():
-        subprocess.run(["cargo", "xtask", "fmu"], cwd=REPO, check=True)
-    return path
+    return packaged_fmus()["RailVehicle"]
 
 
 @pytest.fixture(scope="module")
@@ -42,16 +38,7 @@ def vehicle_dir(vehicle_path, tmp_path_factory) -> Path:
 
 @pytest.fixture
 def make_vehicle(vehicle_md, vehicle_dir):
-    made: list[Slave] = []
-
-    def make(name: str = "vehicle") -> Slave:
-        s = Slave(vehicle_md, vehicle_dir, name=name)
-        made.append(s)
-        return s
-
-    yield make
-    for s in made:
-        s.free()
+    yield from slave_factory(vehicle_md, vehicle_dir, "vehicle")
 
 
 def initialize(s: Slave, reals=None, integers=None, booleans=None, strings=None) -> int:
@@ -95,7 +82,7 @@ def test_declares_the_names_the_other_parts_rely_on(vehicle_md):
     assert by_name["track_seed"].type == "Integer" and by_name["track_seed"].causality == "parameter"
     for name in ["conicity", "kalker_scale", "spectrum", "lateral_irregularity", "vertical_irregularity", "sensor_noise", "sigma_acc", "sigma_gyro", "harmonic_amplitude", "harmonic_wavelength"]:
         assert by_name[name].causality == "parameter", name
-    assert vehicle_md.guid != fmpy.read_model_description(str(fmu_dir() / "AlignmentEstimator.fmu")).guid
+    assert vehicle_md.guid != fmpy.read_model_description(str(packaged_fmus()["AlignmentEstimator"])).guid
 
 
 def test_standard_run_through_simulate_fmu_has_plausible_signals(vehicle_path):
