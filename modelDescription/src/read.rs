@@ -183,17 +183,7 @@ impl Reader<'_> {
 
     fn simple_type(&self, t: &Element) -> Result<SimpleType, ParseError> {
         let name = self.required(t, "name", None)?.to_string();
-        let Some(ty) = t
-            .children
-            .iter()
-            .find(|c| BaseType::from_xml_name(&c.name).is_some())
-        else {
-            return Err(self.missing_element(
-                t,
-                "Real, Integer, Boolean, String or Enumeration",
-                None,
-            ));
-        };
+        let ty = self.type_element(t, None)?;
         let items = ty
             .children_named("Item")
             .map(|item| {
@@ -243,17 +233,7 @@ impl Reader<'_> {
             Initial::from_xml_name,
             "one of exact, approx, calculated",
         )?;
-        let Some(ty) = v
-            .children
-            .iter()
-            .find(|c| BaseType::from_xml_name(&c.name).is_some())
-        else {
-            return Err(self.missing_element(
-                v,
-                "Real, Integer, Boolean, String or Enumeration",
-                var,
-            ));
-        };
+        let ty = self.type_element(v, var)?;
         let kind = match BaseType::from_xml_name(&ty.name) {
             Some(BaseType::Real) => VariableKind::Real(RealAttributes {
                 declared_type: string(ty, "declaredType"),
@@ -369,6 +349,16 @@ impl Reader<'_> {
                 })
             }
         }
+    }
+
+    /// The child of a ScalarVariable or SimpleType that gives its type (Real, Integer, ...).
+    fn type_element<'e>(&self, e: &'e Element, var: Var<'_>) -> Result<&'e Element, ParseError> {
+        e.children
+            .iter()
+            .find(|c| BaseType::from_xml_name(&c.name).is_some())
+            .ok_or_else(|| {
+                self.missing_element(e, "Real, Integer, Boolean, String or Enumeration", var)
+            })
     }
 
     fn missing_element(&self, e: &Element, expected: &'static str, var: Var<'_>) -> ParseError {

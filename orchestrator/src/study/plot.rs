@@ -53,6 +53,13 @@ fn decimate(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 }
 
 /// `[lo, hi]` of the values with a 5 % margin (never empty).
+/// An SVG drawing area of `size` pixels on a white background.
+fn white_svg(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
+    let root = SVGBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(err(path))?;
+    Ok(root)
+}
+
 /// One panel of two lines over the same x values: `a` in black, `b` in red, with a legend.
 #[allow(clippy::too_many_arguments)]
 fn two_lines(
@@ -151,8 +158,7 @@ pub fn estimate_vs_truth(
 ) -> Result<(), String> {
     let g = on_grid(distance, estimate, truth)?;
     let n = (TRIM / DS).round() as usize;
-    let root = SVGBackend::new(path, (1000, 1100)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
+    let root = white_svg(path, (1000, 1100))?;
     let root = root.titled(title, ("sans-serif", 20)).map_err(err(path))?;
     let panels = root.split_evenly((BANDS.len(), 1));
     for (band, area) in BANDS.iter().zip(&panels) {
@@ -275,8 +281,7 @@ pub fn spectra(
     }
     let top = e.iter().chain(&t).map(|p| p.1).fold(1e-9, f64::max) * 2.0;
     let bottom = (top * 1e-5).max(1e-9);
-    let root = SVGBackend::new(path, (1000, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
+    let root = white_svg(path, (1000, 600))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(10)
@@ -329,8 +334,7 @@ pub fn model_adjustment(path: &Path, id: &Identification) -> Result<(), String> 
     {
         return Err("the identification's signals need equal lengths of at least 2".into());
     }
-    let root = SVGBackend::new(path, (1000, 700)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
+    let root = white_svg(path, (1000, 700))?;
     let root = root
         .titled(
             &format!(
@@ -393,8 +397,7 @@ pub fn case_bars(path: &Path, results: &[CaseResult], title: &str) -> Result<(),
     } else {
         1.0
     };
-    let root = SVGBackend::new(path, (1300, 600)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
+    let root = white_svg(path, (1300, 600))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(10)
