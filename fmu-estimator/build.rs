@@ -6,8 +6,23 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-const NAMES: [&str; 15] = [
-    "m", "I", "l", "l_s", "alpha", "r_0", "m_f", "f11", "f22", "f23", "f33", "kx", "cx", "ky", "cy",
+const NAMES: [&str; 16] = [
+    "m",
+    "I",
+    "l",
+    "l_s",
+    "alpha",
+    "r_0",
+    "m_f",
+    "f11",
+    "f22",
+    "f23",
+    "f33",
+    "kx",
+    "cx",
+    "ky",
+    "cy",
+    "prior_sigma_xi",
 ];
 
 fn main() {

@@ -3,8 +3,12 @@
 //! `K = P H^T (H P H^T + R)` without it), and the covariance update is in Joseph form,
 //! `P = (I - K H) P (I - K H)^T + K R K^T`, then symmetrized, so `P` stays symmetric and
 //! positive semi-definite in floating point.
+//!
+//! The filter is generic in the state dimension `N`: 7 for the paper's model (alignment as a
+//! random walk), 8 when the alignment's rate is in the state too (see [`crate::prior`]). The
+//! four measurements (two accelerometers, the gyroscope, the virtual alignment measurement) are
+//! the same for every model.
 
-use crate::model::{Mat4x7, Mat7};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -12,35 +16,36 @@ pub type Vec7 = SVector<f64, 7>;
 pub type Vec4 = SVector<f64, 4>;
 pub type Mat4 = SMatrix<f64, 4, 4>;
 
+/// The filter's estimate: mean `x` and covariance `p`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Kalman {
-    pub x: Vec7,
-    pub p: Mat7,
+pub struct Kalman<const N: usize> {
+    pub x: SVector<f64, N>,
+    pub p: SMatrix<f64, N, N>,
 }
 
-impl Kalman {
-    pub fn new(x: Vec7, p: Mat7) -> Kalman {
+impl<const N: usize> Kalman<N> {
+    pub fn new(x: SVector<f64, N>, p: SMatrix<f64, N, N>) -> Kalman<N> {
         Kalman { x, p }
     }
 
     /// `x = F x`, `P = F P F^T + Q`.
-    pub fn predict(&mut self, f: &Mat7, q: &Mat7) {
+    pub fn predict(&mut self, f: &SMatrix<f64, N, N>, q: &SMatrix<f64, N, N>) {
         self.x = f * self.x;
         self.p = f * self.p * f.transpose() + q;
     }
 
     /// The measurement update. Returns the normalized innovation squared
     /// `nu^T S^-1 nu`, or `None` (state untouched) if `S` is not positive definite.
-    pub fn update(&mut self, h: &Mat4x7, r: &Mat4, z: &Vec4) -> Option<f64> {
-        let ph_t = self.p * h.transpose(); // 7x4
+    pub fn update(&mut self, h: &SMatrix<f64, 4, N>, r: &Mat4, z: &Vec4) -> Option<f64> {
+        let ph_t = self.p * h.transpose(); // N x 4
         let s = h * ph_t + r;
         let chol = s.cholesky()?;
         let innovation = z - h * self.x;
         // K^T = S^-1 (H P), S and P symmetric.
-        let k = chol.solve(&ph_t.transpose()).transpose(); // 7x4
+        let k = chol.solve(&ph_t.transpose()).transpose(); // N x 4
         let nis = innovation.dot(&chol.solve(&innovation));
         self.x += k * innovation;
-        let i_kh = Mat7::identity() - k * h;
+        let i_kh = SMatrix::<f64, N, N>::identity() - k * h;
         let p = i_kh * self.p * i_kh.transpose() + k * r * k.transpose();
         self.p = (p + p.transpose()) * 0.5;
         Some(nis)
@@ -50,6 +55,8 @@ impl Kalman {
 #[cfg(test)]
 mod tests {
     use super::*;
+    type Mat7 = SMatrix<f64, 7, 7>;
+    type Mat4x7 = SMatrix<f64, 4, 7>;
 
     /// A scalar random-walk special case checked against the closed-form scalar filter.
     #[test]

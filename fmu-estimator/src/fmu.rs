@@ -5,12 +5,12 @@
 //! master with the vehicle stepped first delivers; with a Jacobi master the samples are one
 //! step old, a latency the study accounts for. Outputs are the estimate at `t + h`.
 
-use crate::calibration::{self, Calibration};
-use crate::discretize::{Scheme, transition};
-use crate::filter::{Kalman, Mat4, Vec4, Vec7};
-use crate::model::{Mat4x7, Mat7, measurement_matrix, state_matrix};
-use crate::observability::pbh_rank;
+use crate::config::{Config, Note};
+use crate::core::Core;
+use crate::engine::Skip;
+use crate::filter::Vec4;
 use crate::params::Params;
+use crate::prior::Spectrum;
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -57,10 +57,17 @@ pub mod vr {
     pub const Q_XI: u32 = 37;
     pub const P0_XI: u32 = 38;
     pub const MIN_SPEED: u32 = 39;
+    pub const PRIOR_A: u32 = 40;
+    pub const PRIOR_OMEGA_R: u32 = 41;
+    pub const PRIOR_OMEGA_C: u32 = 42;
+    pub const PRIOR_SIGMA_XI: u32 = 43;
+    pub const EST_XI_RATE: u32 = 44;
     // Integer
     pub const DISCRETIZATION: u32 = 0;
     pub const SKIPPED_UPDATES: u32 = 1;
     pub const REBUILDS: u32 = 2;
+    pub const ALIGNMENT_MODEL: u32 = 3;
+    pub const GAIN: u32 = 4;
     // Boolean
     pub const USE_CALIBRATION_FILE: u32 = 0;
     pub const UPDATED: u32 = 1;
@@ -69,6 +76,7 @@ pub mod vr {
 }
 
 const P: Params = Params::DEFAULTS;
+const P_SIGMA_XI: f64 = crate::params::PRIOR_SIGMA_XI;
 
 /// The variable table: the single source of the FMU's interface (see `fmi_abi::variables`).
 pub static VARIABLES: &[VarSpec] = &[
@@ -112,6 +120,13 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::Q_XI, "q_xi", "1", 1e-5, "Intensity of the alignment random walk [m2/s] (Q, diagonal model)").min(0.0),
     VarSpec::real_parameter(vr::P0_XI, "p0_xi", "m", 0.005, "Initial standard deviation of the alignment estimate").min(0.0),
     VarSpec::real_parameter(vr::MIN_SPEED, "min_speed", "m/s", 0.5, "Below this speed the filter holds its estimate (creep terms divide by the speed)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_A, "prior_a", "m.rad", Spectrum::GERMAN_LOW.a, "Amplitude A of the alignment spectrum the 8-state priors assume (railway.md section 3; German low disturbance)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_OMEGA_R, "prior_omega_r", "rad/m", Spectrum::GERMAN_LOW.omega_r, "Lower corner wavenumber of the alignment spectrum (alignment_model 3)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_OMEGA_C, "prior_omega_c", "rad/m", Spectrum::GERMAN_LOW.omega_c, "Upper corner wavenumber of the alignment spectrum (alignment_models 2 and 3)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_SIGMA_XI, "prior_sigma_xi", "m", P_SIGMA_XI, "Sigma of the virtual measurement alignment = 0 for alignment_models 2 and 3; 0 switches it off (tuned on the calibration seed)").min(0.0),
+    VarSpec::real_output(vr::EST_XI_RATE, "est_xi_rate", "m/s", 0.0, "Estimated rate of change of the alignment seen by the wheelset (alignment_models 2 and 3; 0 otherwise)"),
+    VarSpec::integer_parameter(vr::ALIGNMENT_MODEL, "alignment_model", 1, "Alignment prior: 1 the paper's random walk; 2 integrated random walk; 3 shaping filter of the track spectrum").min(1.0).max(3.0),
+    VarSpec::integer_parameter(vr::GAIN, "gain", 1, "1: time-varying Kalman gain; 2: steady-state gain from the discrete algebraic Riccati equation (constant speed)").min(1.0).max(2.0),
     VarSpec::integer_parameter(vr::DISCRETIZATION, "discretization", 1, "1: the paper's second-order Taylor scheme; 2: exact (matrix exponential)").min(1.0).max(2.0),
     VarSpec::integer_output(vr::SKIPPED_UPDATES, "skipped_updates", 0, "Steps whose measurement update was skipped (non-finite sample or singular innovation covariance)"),
     VarSpec::integer_output(vr::REBUILDS, "rebuilds", 0, "How many times F, H and Q were rebuilt (on a change of speed or step size)"),
@@ -120,107 +135,40 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file, relative to the FMU's resources directory or absolute"),
 ];
 
-/// Matrices valid for one (speed, step) pair.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct Discrete {
-    speed: f64,
-    h: f64,
-    f: Mat7,
-    hm: Mat4x7,
-    q: Mat7,
-}
-
 /// The estimator's FMI model state. Everything here is part of a saved FMU state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Estimator {
     resources: Option<PathBuf>,
-    params: Params,
-    scheme: Scheme,
-    calibration: Option<Calibration>,
-    /// Q per second of the diagonal model (used when there is no calibration).
-    q_rate: Mat7,
-    r: Mat4,
+    /// The filter, built at the end of initialization.
+    core: Option<Core>,
     min_speed: f64,
-    filter: Kalman,
-    discrete: Option<Discrete>,
-    skipped: i32,
-    rebuilds: i32,
     holding: bool,
-}
-
-/// Reads the Params from the FMI values.
-fn params_from(v: &Values) -> Params {
-    let r = |i: u32| v.real[i as usize];
-    Params {
-        m: r(vr::M),
-        i: r(vr::I),
-        l: r(vr::L),
-        l_s: r(vr::L_S),
-        alpha: r(vr::ALPHA),
-        r_0: r(vr::R_0),
-        m_f: r(vr::M_F),
-        f11: r(vr::F11),
-        f22: r(vr::F22),
-        f23: r(vr::F23),
-        f33: r(vr::F33),
-        kx: r(vr::KX),
-        cx: r(vr::CX),
-        ky: r(vr::KY),
-        cy: r(vr::CY),
-        g: r(vr::G),
-    }
-}
-
-/// Initial covariance: the alignment from `p0_xi`, the body states from typical amplitudes
-/// (5 mm, 1 mrad, 5 mm; 0.05 m/s, 0.01 rad/s, 0.05 m/s) of a wheelset running at speed.
-fn initial_covariance(p0_xi: f64) -> Mat7 {
-    let s = [5e-3, 1e-3, 5e-3, 5e-2, 1e-2, 5e-2, p0_xi];
-    Mat7::from_diagonal(&Vec7::from_fn(|i, _| s[i] * s[i]))
 }
 
 impl Estimator {
     fn write_outputs(&self, v: &mut Values) {
-        let x = &self.filter.x;
+        let Some(core) = &self.core else { return };
+        let (xi, std) = core.alignment();
+        let (body, xi_rate) = core.states();
         let o = &mut v.real;
-        o[vr::ALIGNMENT as usize] = x[6];
-        o[vr::ALIGNMENT_STD as usize] = self.filter.p[(6, 6)].max(0.0).sqrt();
-        o[vr::EST_Y as usize] = x[0];
-        o[vr::EST_PSI as usize] = x[1];
-        o[vr::EST_Y_F as usize] = x[2];
-        o[vr::EST_VY as usize] = x[3];
-        o[vr::EST_PSI_RATE as usize] = x[4];
-        o[vr::EST_VY_F as usize] = x[5];
-        v.integer[vr::SKIPPED_UPDATES as usize] = self.skipped;
-        v.integer[vr::REBUILDS as usize] = self.rebuilds;
-    }
-
-    /// Rebuilds F, H and Q when the speed or the step differs from the last ones (exact
-    /// comparison: a constant-speed run builds them once).
-    fn ensure_discrete(&mut self, speed: f64, h: f64, log: &Logger) {
-        if let Some(d) = &self.discrete
-            && d.speed == speed
-            && d.h == h
+        o[vr::ALIGNMENT as usize] = xi;
+        o[vr::ALIGNMENT_STD as usize] = std;
+        for (k, r) in [
+            vr::EST_Y,
+            vr::EST_PSI,
+            vr::EST_Y_F,
+            vr::EST_VY,
+            vr::EST_PSI_RATE,
+            vr::EST_VY_F,
+        ]
+        .into_iter()
+        .enumerate()
         {
-            return;
+            o[r as usize] = body[k];
         }
-        let fc = state_matrix(&self.params, speed);
-        let f = transition(&fc, h, self.scheme);
-        let hm = measurement_matrix(&fc);
-        let q = match &self.calibration {
-            Some(c) => c.q * (h / c.step_size),
-            None => self.q_rate * h,
-        };
-        if self.rebuilds == 0
-            && let Some(c) = &self.calibration
-            && (h - c.step_size).abs() > 1e-12 * h
-        {
-            log.info(&format!(
-                "calibrated Q was computed for a step of {} s; scaled to {h} s",
-                c.step_size
-            ));
-        }
-        self.discrete = Some(Discrete { speed, h, f, hm, q });
-        self.rebuilds += 1;
+        o[vr::EST_XI_RATE as usize] = xi_rate;
+        v.integer[vr::SKIPPED_UPDATES as usize] = core.skipped();
+        v.integer[vr::REBUILDS as usize] = core.rebuilds();
     }
 }
 
@@ -244,16 +192,8 @@ impl Model for Estimator {
     fn instantiate(ctx: &InstantiateContext, _log: &Logger) -> Result<Self, String> {
         Ok(Estimator {
             resources: ctx.resources.clone(),
-            params: Params::default(),
-            scheme: Scheme::Taylor2,
-            calibration: None,
-            q_rate: Mat7::zeros(),
-            r: Mat4::identity(),
+            core: None,
             min_speed: 0.5,
-            filter: Kalman::new(Vec7::zeros(), initial_covariance(0.005)),
-            discrete: None,
-            skipped: 0,
-            rebuilds: 0,
             holding: false,
         })
     }
@@ -263,67 +203,25 @@ impl Model for Estimator {
     }
 
     fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {
-        let params = params_from(v);
-        params.check()?;
-        self.params = params;
-        self.scheme = Scheme::from_fmi(v.integer[vr::DISCRETIZATION as usize])?;
-        let r = |i: u32| v.real[i as usize];
-        let sig = [
-            r(vr::SIGMA_ACC_WS),
-            r(vr::SIGMA_YAW_RATE),
-            r(vr::SIGMA_ACC_FRAME),
-            r(vr::SIGMA_XI),
-        ];
-        self.r = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
-        let q = [
-            0.0,
-            0.0,
-            0.0,
-            r(vr::Q_ACC_WS),
-            r(vr::Q_YAW_ACC),
-            r(vr::Q_ACC_FRAME),
-            r(vr::Q_XI),
-        ];
-        self.q_rate = Mat7::from_diagonal(&Vec7::from_fn(|i, _| q[i]));
-        self.min_speed = r(vr::MIN_SPEED);
-        self.calibration = None;
-        if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
-            let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
-            let path = if name.is_absolute() {
-                Some(name)
-            } else {
-                self.resources.as_ref().map(|d| d.join(&name))
-            };
-            match path {
-                Some(path) if path.exists() => match calibration::load(&path)? {
-                    Some(c) => {
-                        log.info(&format!("Q and R from {} ({})", path.display(), c.status));
-                        self.r = c.r;
-                        self.calibration = Some(c);
-                    }
-                    None => log.info(&format!("{} holds no matrices: using the diagonal noise model", path.display())),
-                },
-                Some(path) => log.warning(&format!(
-                    "calibration file {} not found: using the diagonal noise model from the FMI parameters",
-                    path.display()
-                )),
-                None => log.warning("no resources directory: using the diagonal noise model from the FMI parameters"),
+        let (config, notes) = Config::from_values(v, self.resources.as_deref())?;
+        for note in notes {
+            match note {
+                Note::Info(m) => log.info(&m),
+                Note::Warning(m) => log.warning(&m),
             }
         }
-        if self.calibration.is_none() && sig.iter().any(|s| *s <= 0.0) {
-            return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
-        }
-        self.filter = Kalman::new(Vec7::zeros(), initial_covariance(r(vr::P0_XI)));
-        let speed = r(vr::SPEED);
-        if speed.is_finite() && speed >= self.min_speed {
-            let fc = state_matrix(&self.params, speed);
-            let (rank, lambda) = pbh_rank(&fc, &measurement_matrix(&fc));
-            if rank < 7 {
+        let speed = v.real[vr::SPEED as usize];
+        if speed.is_finite() && speed >= config.min_speed {
+            let (rank, n, lambda) = config.observability(speed);
+            if rank < n {
                 log.warning(&format!(
-                    "the model is not observable at {speed} m/s (PBH rank {rank} < 7 at eigenvalue {lambda}): some states cannot be estimated from the sensors"
+                    "the model is not observable at {speed} m/s (PBH rank {rank} < {n} at eigenvalue {lambda}): some states cannot be estimated from the sensors"
                 ));
             }
         }
+        self.min_speed = config.min_speed;
+        self.core = Some(config.core());
+        self.holding = false;
         self.write_outputs(v);
         Ok(())
     }
@@ -356,39 +254,34 @@ impl Model for Estimator {
             return Ok(outcome);
         }
         self.holding = false;
-        self.ensure_discrete(speed, h, log);
-        let d = self.discrete.as_ref().expect("built above");
-        self.filter.predict(&d.f, &d.q);
         let z = Vec4::new(
             v.real[vr::WS_ACC_Y as usize],
             v.real[vr::WS_YAW_RATE as usize],
             v.real[vr::FRAME_ACC_Y as usize],
             0.0,
         );
-        let mut updated = false;
-        if z.iter().all(|x| x.is_finite()) {
-            match self.filter.update(&d.hm, &self.r, &z) {
-                Some(nis) => {
-                    v.real[vr::NIS as usize] = nis;
-                    updated = true;
-                }
-                None => {
-                    log.warning(
-                        "innovation covariance not positive definite: measurement update skipped",
-                    );
-                    outcome = StepOutcome::Warning;
-                }
+        let core = self.core.as_mut().ok_or("the filter was not initialized")?;
+        let updated = match core.step(speed, h, &z)? {
+            Ok(nis) => {
+                v.real[vr::NIS as usize] = nis;
+                true
             }
-        } else {
-            log.warning(&format!(
-                "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
-                z[0], z[1], z[2]
-            ));
-            outcome = StepOutcome::Warning;
-        }
-        if !updated {
-            self.skipped += 1;
-        }
+            Err(Skip::NonFinite) => {
+                log.warning(&format!(
+                    "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
+                    z[0], z[1], z[2]
+                ));
+                outcome = StepOutcome::Warning;
+                false
+            }
+            Err(Skip::NotPositiveDefinite) => {
+                log.warning(
+                    "innovation covariance not positive definite: measurement update skipped",
+                );
+                outcome = StepOutcome::Warning;
+                false
+            }
+        };
         v.boolean[vr::UPDATED as usize] = updated;
         self.write_outputs(v);
         Ok(outcome)

@@ -17,12 +17,18 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod calibration;
+pub mod config;
+pub mod core;
 pub mod discretize;
+pub mod engine;
 pub mod filter;
 pub mod fmu;
 pub mod model;
 pub mod observability;
 pub mod params;
+pub mod prior;
+pub mod smoother;
+pub mod statespace;
 
 pub use fmu::Estimator;
 

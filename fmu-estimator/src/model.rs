@@ -105,6 +105,34 @@ pub fn second_order(p: &Params, v: f64) -> SecondOrder {
     }
 }
 
+/// `F_c` split by its speed dependence, `F_c(V) = base + per_inv_speed / V`: only the creep
+/// damping terms (`2 f22 / V`, ...) depend on the speed. The filter rebuilds `F_c` from these two
+/// at every change of speed without recomputing the model.
+pub fn state_matrix_parts(p: &Params) -> (Mat7, Mat7) {
+    let so = second_order(p, 1.0);
+    let structural = second_order(p, f64::INFINITY).damping;
+    let creep_times_v = so.damping - structural;
+    let m_inv = Matrix3::from_diagonal(&Vector3::new(1.0 / p.m, 1.0 / p.i, 1.0 / p.m_f));
+    let mut base = Mat7::zeros();
+    let mut per_inv_speed = Mat7::zeros();
+    let (a_q, a_qd, a_c, a_xi) = (
+        -(m_inv * so.stiffness),
+        -(m_inv * structural),
+        -(m_inv * creep_times_v),
+        m_inv * so.k_d,
+    );
+    for i in 0..3 {
+        base[(i, i + 3)] = 1.0;
+        for j in 0..3 {
+            base[(i + 3, j)] = a_q[(i, j)];
+            base[(i + 3, j + 3)] = a_qd[(i, j)];
+            per_inv_speed[(i + 3, j + 3)] = a_c[(i, j)];
+        }
+        base[(i + 3, 6)] = a_xi[i];
+    }
+    (base, per_inv_speed)
+}
+
 /// The continuous state matrix `F_c` (7x7).
 pub fn state_matrix(p: &Params, v: f64) -> Mat7 {
     let so = second_order(p, v);
@@ -183,6 +211,17 @@ mod tests {
         let p = Params::default();
         let l = 2.0 * std::f64::consts::PI * (p.r_0 * p.l / p.alpha).sqrt();
         assert!((l - 11.22).abs() < 0.01, "{l}");
+    }
+
+    #[test]
+    fn the_speed_split_rebuilds_the_state_matrix() {
+        let p = Params::default();
+        let (base, inv_v) = state_matrix_parts(&p);
+        for v in [0.7, 5.0, 20.0, 83.0] {
+            let direct = state_matrix(&p, v);
+            let split = base + inv_v / v;
+            assert!((direct - split).amax() <= 1e-12 * direct.amax(), "{v}");
+        }
     }
 
     #[test]

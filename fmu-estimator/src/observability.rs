@@ -4,15 +4,18 @@
 //! numeric rank routine reports 4 for an observable system; the PBH test works on one
 //! well-conditioned matrix per eigenvalue instead.
 
-use crate::model::{Mat4x7, Mat7};
-use nalgebra::{Complex, DMatrix};
+use nalgebra::{Complex, DMatrix, SMatrix};
 
 /// The smallest PBH rank over the eigenvalues of `f`, and the eigenvalue where it occurs.
-pub fn pbh_rank(f: &Mat7, h: &Mat4x7) -> (usize, Complex<f64>) {
-    let n = 7;
+pub fn pbh_rank<const N: usize>(
+    f: &SMatrix<f64, N, N>,
+    h: &SMatrix<f64, 4, N>,
+) -> (usize, Complex<f64>) {
+    let n = N;
+    let fd = DMatrix::from_iterator(N, N, f.iter().copied());
     let scale = f.norm().max(h.norm()).max(1.0);
     let mut worst = (n, Complex::new(0.0, 0.0));
-    for lambda in f.complex_eigenvalues().iter() {
+    for lambda in fd.complex_eigenvalues().iter() {
         let mut m = DMatrix::<Complex<f64>>::zeros(n + h.nrows(), n);
         for i in 0..n {
             for j in 0..n {

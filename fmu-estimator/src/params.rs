@@ -125,6 +125,11 @@ impl Params {
 
 include!(concat!(env!("OUT_DIR"), "/calibrated.rs"));
 
+/// The default sigma of the 8-state priors' virtual measurement [m]: the calibration file's
+/// `prior_sigma_xi` (tuned on the calibration seed), or 5 mm, the paper's value for its own
+/// virtual measurement.
+pub const PRIOR_SIGMA_XI: f64 = calibrated("prior_sigma_xi", 0.005);
+
 /// The value `CALIBRATED` gives `name`, if any (a `const fn`, so the variable table can use it).
 const fn calibrated(name: &str, default: f64) -> f64 {
     let mut i = 0;

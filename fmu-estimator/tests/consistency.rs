@@ -16,6 +16,7 @@ use fmu_estimator::filter::{Kalman, Mat4, Vec4, Vec7};
 use fmu_estimator::fmu::vr;
 use fmu_estimator::model::{Mat7, measurement_matrix, state_matrix};
 use fmu_estimator::params::Params;
+use fmu_estimator::statespace::{BodyNoise, StateSpace};
 use rand::SeedableRng;
 use rand::rngs::StdRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -170,9 +171,11 @@ fn the_fmu_runs_the_same_filter() {
 
     let p = Params::DEFAULTS;
     let h = 1e-3;
-    let fc = state_matrix(&p, 20.0);
-    let f = transition(&fc, h, Scheme::Exact);
-    let hm = measurement_matrix(&fc);
+    // The filter's matrices as the FMU builds them (statespace tests check them against
+    // `model::state_matrix` and `discretize::transition`).
+    let space = StateSpace::paper(&p, BodyNoise::Rate(default_q_rate()), true);
+    let d = space.discrete(20.0, h, Scheme::Exact);
+    let (f, hm) = (d.f, d.hm);
     let q = default_q_rate() * h;
     let r = Mat4::from_diagonal(&Vec4::new(1e-4, 2.5e-7, 1e-4, 2.5e-5));
     let s0 = [5e-3, 1e-3, 5e-3, 5e-2, 1e-2, 5e-2, 5e-3];

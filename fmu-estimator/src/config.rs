@@ -1,0 +1,219 @@
+//! Everything the user chose, read once from the FMI parameters (and the calibration file) at
+//! the end of initialization. The FMU and the offline processor ([`crate::offline`]) build the
+//! filter from the same `Config`, so a recorded run smoothed offline uses exactly the filter the
+//! FMU ran.
+
+use crate::calibration::{self, Calibration};
+use crate::core::Core;
+use crate::discretize::Scheme;
+use crate::engine::{Engine, Gain};
+use crate::filter::{Mat4, Vec4, Vec7};
+use crate::fmu::vr;
+use crate::observability::pbh_rank;
+use crate::params::Params;
+use crate::prior::{AlignmentModel, Spectrum};
+use crate::statespace::{BodyNoise, StateSpace};
+use fmi_abi::Values;
+use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A message for the FMU's logger (or the offline caller).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Note {
+    Info(String),
+    Warning(String),
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Config {
+    pub params: Params,
+    pub scheme: Scheme,
+    pub model: AlignmentModel,
+    pub gain: Gain,
+    pub body_noise: BodyNoise,
+    /// Measurement noise of the three sensors and of the virtual measurement (paper's model).
+    pub r: Mat4,
+    /// Sigma of the virtual measurement for the 8-state priors; `<= 0`: none.
+    pub prior_sigma_xi: f64,
+    pub p0_xi: f64,
+    pub min_speed: f64,
+    /// The calibration file's status line when its matrices are used.
+    pub calibration: Option<String>,
+}
+
+/// Reads the `Params` from the FMI values.
+pub fn params_from(v: &Values) -> Params {
+    let r = |i: u32| v.real[i as usize];
+    Params {
+        m: r(vr::M),
+        i: r(vr::I),
+        l: r(vr::L),
+        l_s: r(vr::L_S),
+        alpha: r(vr::ALPHA),
+        r_0: r(vr::R_0),
+        m_f: r(vr::M_F),
+        f11: r(vr::F11),
+        f22: r(vr::F22),
+        f23: r(vr::F23),
+        f33: r(vr::F33),
+        kx: r(vr::KX),
+        cx: r(vr::CX),
+        ky: r(vr::KY),
+        cy: r(vr::CY),
+        g: r(vr::G),
+    }
+}
+
+/// Where the calibration file named by the parameters is, if anywhere.
+fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
+    let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
+    if name.is_absolute() {
+        Some(name)
+    } else {
+        resources.map(|d| d.join(&name))
+    }
+}
+
+impl Config {
+    /// The configuration from the FMI values; `resources` is the FMU's resources directory.
+    pub fn from_values(
+        v: &Values,
+        resources: Option<&Path>,
+    ) -> Result<(Config, Vec<Note>), String> {
+        let mut notes = Vec::new();
+        let params = params_from(v);
+        params.check()?;
+        let r = |i: u32| v.real[i as usize];
+        let scheme = Scheme::from_fmi(v.integer[vr::DISCRETIZATION as usize])?;
+        let spectrum = Spectrum {
+            a: r(vr::PRIOR_A),
+            omega_r: r(vr::PRIOR_OMEGA_R),
+            omega_c: r(vr::PRIOR_OMEGA_C),
+        };
+        let model = AlignmentModel::from_fmi(v.integer[vr::ALIGNMENT_MODEL as usize], spectrum)?;
+        let gain = Gain::from_fmi(v.integer[vr::GAIN as usize])?;
+        let sig = [
+            r(vr::SIGMA_ACC_WS),
+            r(vr::SIGMA_YAW_RATE),
+            r(vr::SIGMA_ACC_FRAME),
+            r(vr::SIGMA_XI),
+        ];
+        let mut rm = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
+        let q = [
+            0.0,
+            0.0,
+            0.0,
+            r(vr::Q_ACC_WS),
+            r(vr::Q_YAW_ACC),
+            r(vr::Q_ACC_FRAME),
+            r(vr::Q_XI),
+        ];
+        let mut body_noise = BodyNoise::Rate(SMatrix::from_diagonal(&Vec7::from_fn(|i, _| q[i])));
+        let mut calibrated: Option<Calibration> = None;
+        if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
+            match calibration_path(v, resources) {
+                Some(path) if path.exists() => match calibration::load(&path)? {
+                    Some(c) => {
+                        notes.push(Note::Info(format!("Q and R from {} ({})", path.display(), c.status)));
+                        calibrated = Some(c);
+                    }
+                    None => notes.push(Note::Info(format!(
+                        "{} holds no matrices: using the diagonal noise model",
+                        path.display()
+                    ))),
+                },
+                Some(path) => notes.push(Note::Warning(format!(
+                    "calibration file {} not found: using the diagonal noise model from the FMI parameters",
+                    path.display()
+                ))),
+                None => notes.push(Note::Warning(
+                    "no resources directory: using the diagonal noise model from the FMI parameters".into(),
+                )),
+            }
+        }
+        if let Some(c) = &calibrated {
+            rm = c.r;
+            body_noise = BodyNoise::Calibrated {
+                q: c.q,
+                step_size: c.step_size,
+            };
+        } else if sig.iter().any(|s| !(*s > 0.0)) {
+            return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
+        }
+        let prior_sigma_xi = r(vr::PRIOR_SIGMA_XI);
+        if prior_sigma_xi.is_nan() {
+            return Err("parameter 'prior_sigma_xi' is NaN".into());
+        }
+        Ok((
+            Config {
+                params,
+                scheme,
+                model,
+                gain,
+                body_noise,
+                r: rm,
+                prior_sigma_xi,
+                p0_xi: r(vr::P0_XI),
+                min_speed: r(vr::MIN_SPEED),
+                calibration: calibrated.map(|c| c.status),
+            },
+            notes,
+        ))
+    }
+
+    /// The PBH observability rank of the filter's model at `speed`: `(rank, states, eigenvalue
+    /// where the rank is smallest)`.
+    pub fn observability(&self, speed: f64) -> (usize, usize, nalgebra::Complex<f64>) {
+        match self.core() {
+            Core::Seven(e) => {
+                let fc = e.space.fc(speed);
+                let (rank, l) = pbh_rank(&fc, &e.space.measurement(&fc));
+                (rank, 7, l)
+            }
+            Core::Eight(e) => {
+                let fc = e.space.fc(speed);
+                let (rank, l) = pbh_rank(&fc, &e.space.measurement(&fc));
+                (rank, 8, l)
+            }
+        }
+    }
+
+    /// A fresh filter for this configuration.
+    pub fn core(&self) -> Core {
+        // Initial covariance: the alignment from `p0_xi`, the body states from typical
+        // amplitudes (5 mm, 1 mrad, 5 mm; 0.05 m/s, 0.01 rad/s, 0.05 m/s) of a wheelset running
+        // at speed; the alignment's rate (8 states) from the prior's slope, 1e-3 * 20 m/s.
+        let s = [5e-3, 1e-3, 5e-3, 5e-2, 1e-2, 5e-2, self.p0_xi, 2e-2];
+        match self.model {
+            AlignmentModel::RandomWalk => {
+                let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from_fn(|i, _| s[i] * s[i]));
+                let space = StateSpace::paper(&self.params, self.body_noise.clone(), true);
+                Core::Seven(Engine::new(space, self.scheme, self.gain, self.r, p0))
+            }
+            model => {
+                let p0 = SMatrix::<f64, 8, 8>::from_diagonal(&SVector::from_fn(|i, _| s[i] * s[i]));
+                let virtual_measurement = self.prior_sigma_xi > 0.0;
+                let space = StateSpace::with_prior(
+                    &self.params,
+                    &model,
+                    self.body_noise.clone(),
+                    virtual_measurement,
+                );
+                // The sensors' block of R is kept; the virtual measurement is the prior's own,
+                // uncorrelated with the sensors.
+                let mut r = self.r;
+                for k in 0..4 {
+                    r[(3, k)] = 0.0;
+                    r[(k, 3)] = 0.0;
+                }
+                r[(3, 3)] = if virtual_measurement {
+                    self.prior_sigma_xi * self.prior_sigma_xi
+                } else {
+                    1.0
+                };
+                Core::Eight(Engine::new(space, self.scheme, self.gain, r, p0))
+            }
+        }
+    }
+}

@@ -1,0 +1,75 @@
+//! The filter behind the FMU, for whichever state dimension the alignment prior needs: one
+//! enum, so the FMU and the offline processor call one set of methods.
+
+use crate::engine::{Engine, Skip};
+use crate::filter::Vec4;
+use crate::smoother::smooth;
+use crate::statespace::XI;
+use serde::{Deserialize, Serialize};
+
+// Both variants are a few kilobytes (matrices by value, as the step needs them); the enum is
+// held once per FMU instance, so boxing would only add an indirection per step.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub enum Core {
+    /// The paper's model (random-walk alignment).
+    Seven(Engine<7>),
+    /// The alignment and its rate in the state.
+    Eight(Engine<8>),
+}
+
+macro_rules! each {
+    ($self:expr, $e:ident => $body:expr) => {
+        match $self {
+            Core::Seven($e) => $body,
+            Core::Eight($e) => $body,
+        }
+    };
+}
+
+impl Core {
+    pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<Result<f64, Skip>, String> {
+        each!(self, e => e.step(speed, h, z))
+    }
+
+    /// Alignment estimate and its standard deviation.
+    pub fn alignment(&self) -> (f64, f64) {
+        each!(self, e => e.alignment())
+    }
+
+    /// The body states `[y, psi, y_f, ydot, psidot, y_fdot]` and the alignment's rate (0 for the
+    /// 7-state model).
+    pub fn states(&self) -> ([f64; 6], f64) {
+        each!(self, e => {
+            let x = &e.filter.x;
+            ([x[0], x[1], x[2], x[3], x[4], x[5]], if x.len() > 7 { x[7] } else { 0.0 })
+        })
+    }
+
+    pub fn skipped(&self) -> i32 {
+        each!(self, e => e.skipped)
+    }
+
+    pub fn rebuilds(&self) -> i32 {
+        each!(self, e => e.rebuilds)
+    }
+
+    pub fn record_history(&mut self) {
+        each!(self, e => e.record_history())
+    }
+
+    /// The smoothed alignment and its standard deviation at every recorded step (empty if no
+    /// history was recorded).
+    pub fn smoothed_alignment(&self) -> Vec<(f64, f64)> {
+        each!(self, e => match &e.history {
+            None => Vec::new(),
+            Some(h) => {
+                let (xs, ps) = smooth(h);
+                xs.iter()
+                    .zip(&ps)
+                    .map(|(x, p)| (x[XI], p[(XI, XI)].max(0.0).sqrt()))
+                    .collect()
+            }
+        })
+    }
+}
