@@ -22,13 +22,41 @@ impl ModelDescription {
         Reader { text: xml }.model_description(&root)
     }
 
+    /// Parses the bytes of a `modelDescription.xml`, which must be UTF-8 (as FMI requires): the
+    /// first invalid byte is an error with its line and column.
+    pub fn from_bytes(bytes: &[u8]) -> Result<ModelDescription, ParseError> {
+        match std::str::from_utf8(bytes) {
+            Ok(text) => ModelDescription::from_xml(text),
+            Err(e) => {
+                let valid = e.valid_up_to();
+                // The prefix is valid UTF-8 by definition.
+                let before = std::str::from_utf8(&bytes[..valid]).unwrap_or_default();
+                let (line, column) = line_column(before, valid);
+                let utf16 = bytes.starts_with(&[0xff, 0xfe]) || bytes.starts_with(&[0xfe, 0xff]);
+                Err(ParseError::Xml {
+                    line,
+                    column,
+                    message: format!(
+                        "byte 0x{:02X} (offset {valid}) is not UTF-8{}; modelDescription.xml must be UTF-8",
+                        bytes[valid],
+                        if utf16 {
+                            " (the file starts with a UTF-16 byte-order mark)"
+                        } else {
+                            ""
+                        }
+                    ),
+                })
+            }
+        }
+    }
+
     /// Reads and parses a file; errors name the path.
     pub fn from_file(path: &Path) -> Result<ModelDescription, ParseError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ParseError::Io {
+        let bytes = std::fs::read(path).map_err(|source| ParseError::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        ModelDescription::from_xml(&text).map_err(|source| ParseError::InFile {
+        ModelDescription::from_bytes(&bytes).map_err(|source| ParseError::InFile {
             path: path.to_path_buf(),
             source: Box::new(source),
         })

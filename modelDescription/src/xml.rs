@@ -99,8 +99,32 @@ impl XmlError {
     }
 }
 
+/// The deepest element nesting [`parse`] accepts. FMI 2.0 files need 4 levels and SSP 1.0
+/// files a handful more (tool annotations a few more again); the limit exists because the tree
+/// is dropped (and compared, cloned, printed) recursively, so a hostile file of a million
+/// nested `<a>` would overflow the stack instead of giving an error.
+pub const MAX_DEPTH: usize = 1000;
+
 /// Parses `text` into its root element, or reports the first well-formedness error.
+///
+/// Elements nested deeper than [`MAX_DEPTH`] are an error, and so are characters XML 1.0
+/// does not allow (C0 controls other than tab, newline and carriage return; U+FFFE, U+FFFF). Only the predefined entities and
+/// character references are resolved (in attribute values); entities declared in a DOCTYPE are
+/// never expanded (an attribute using one is an "unknown entity" error, and references in text
+/// are skipped with the text), so entity-expansion attacks ("billion laughs") cost nothing.
 pub fn parse(text: &str) -> Result<Element, XmlError> {
+    // XML 1.0 allows no C0 control character but tab, newline and carriage return, and neither
+    // U+FFFE nor U+FFFF; quick-xml does not check, and a NUL inside a name or a string would
+    // reach C code as a truncated string.
+    if let Some((offset, c)) = text.char_indices().find(|&(_, c)| {
+        (c < ' ' && !matches!(c, '\t' | '\n' | '\r')) || matches!(c, '\u{fffe}' | '\u{ffff}')
+    }) {
+        return Err(XmlError::new(
+            text,
+            offset,
+            format!("the character U+{:04X} is not allowed in XML", c as u32),
+        ));
+    }
     let mut reader = Reader::from_str(text);
     reader.config_mut().check_end_names = true;
     let mut stack: Vec<Element> = Vec::new();
@@ -120,7 +144,20 @@ pub fn parse(text: &str) -> Result<Element, XmlError> {
             }
         };
         match event {
-            Event::Start(start) => stack.push(element(text, offset, &start)?),
+            Event::Start(start) => {
+                if stack.len() >= MAX_DEPTH {
+                    return Err(XmlError::new(
+                        text,
+                        offset,
+                        format!(
+                            "elements are nested more than {MAX_DEPTH} levels deep (<{}> inside <{}>)",
+                            start.local_name().as_ref(),
+                            stack.last().map_or("", |e| e.name.as_str())
+                        ),
+                    ));
+                }
+                stack.push(element(text, offset, &start)?)
+            }
             Event::Empty(start) => {
                 let element = element(text, offset, &start)?;
                 attach(text, &mut stack, &mut root, element)?;
