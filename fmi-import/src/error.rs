@@ -50,6 +50,18 @@ pub enum ImportError {
         reason: &'static str,
     },
 
+    /// The archive has more entries, or unpacks to more bytes, than
+    /// [`UnpackLimits`](crate::UnpackLimits) allow (a zip bomb), or an entry decompresses to
+    /// more than the size it declares. Nothing beyond the declared sizes has been written.
+    #[error("{}: refusing to unpack the archive: {what}", path.display())]
+    TooLarge {
+        path: PathBuf,
+        /// The entry that crossed the limit (none when the entry count did).
+        entry: Option<String>,
+        /// What was too large, with the sizes and the limit.
+        what: String,
+    },
+
     /// The archive has no `modelDescription.xml` at its root.
     #[error("{}: the archive has no modelDescription.xml at its root", path.display())]
     MissingModelDescription { path: PathBuf },
@@ -180,6 +192,7 @@ impl ImportError {
             | ImportError::Archive { path, .. }
             | ImportError::Extract { path, .. }
             | ImportError::UnsafeEntry { path, .. }
+            | ImportError::TooLarge { path, .. }
             | ImportError::MissingModelDescription { path }
             | ImportError::ModelDescription { path, .. }
             | ImportError::UnsupportedFmiVersion { path, .. }

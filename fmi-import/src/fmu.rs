@@ -4,7 +4,7 @@ use crate::error::ImportError;
 use crate::instance::Instance;
 use crate::library::{self, Functions, platform_binary};
 use crate::logging::LogConfig;
-use crate::unpack::unpack;
+use crate::unpack::{UnpackLimits, unpack};
 use libloading::Library;
 use model_description::{BaseType, ModelDescription, ScalarVariable};
 use std::ffi::{CStr, CString, c_char};
@@ -60,8 +60,13 @@ unsafe fn returned(p: *const c_char) -> Option<String> {
 impl Fmu {
     /// Unpacks `path` into a fresh temporary directory (in the system's temp dir), reads the
     /// model description, loads this platform's binary and checks it is an FMI 2.0
-    /// co-simulation library.
+    /// co-simulation library. The archive may unpack to at most [`UnpackLimits::DEFAULT`].
     pub fn open(path: &Path) -> Result<Fmu, ImportError> {
+        Fmu::open_with_limits(path, &UnpackLimits::DEFAULT)
+    }
+
+    /// Like [`open`](Fmu::open), with other limits on what the archive may unpack to.
+    pub fn open_with_limits(path: &Path, limits: &UnpackLimits) -> Result<Fmu, ImportError> {
         let dir = tempfile::Builder::new()
             .prefix("fmi-import-")
             .tempdir()
@@ -70,11 +75,20 @@ impl Fmu {
                 action: "cannot create a temporary directory to unpack into".into(),
                 source,
             })?;
-        Fmu::open_into(path, dir)
+        Fmu::open_into(path, dir, limits)
     }
 
     /// Like [`open`](Fmu::open), with the temporary directory created inside `parent`.
     pub fn open_in(path: &Path, parent: &Path) -> Result<Fmu, ImportError> {
+        Fmu::open_with_limits_in(path, parent, &UnpackLimits::DEFAULT)
+    }
+
+    /// [`open_in`](Fmu::open_in) and [`open_with_limits`](Fmu::open_with_limits) together.
+    pub fn open_with_limits_in(
+        path: &Path,
+        parent: &Path,
+        limits: &UnpackLimits,
+    ) -> Result<Fmu, ImportError> {
         let dir = tempfile::Builder::new()
             .prefix("fmi-import-")
             .tempdir_in(parent)
@@ -86,12 +100,12 @@ impl Fmu {
                 ),
                 source,
             })?;
-        Fmu::open_into(path, dir)
+        Fmu::open_into(path, dir, limits)
     }
 
-    fn open_into(path: &Path, dir: TempDir) -> Result<Fmu, ImportError> {
+    fn open_into(path: &Path, dir: TempDir, limits: &UnpackLimits) -> Result<Fmu, ImportError> {
         let fmu = path.to_path_buf();
-        let unpacked = unpack(path, dir.path())?;
+        let unpacked = unpack(path, dir.path(), limits)?;
 
         let md_path = dir.path().join("modelDescription.xml");
         let io = |action: &str, source| ImportError::Io {
@@ -101,17 +115,13 @@ impl Fmu {
         };
         let bytes =
             std::fs::read(&md_path).map_err(|e| io("cannot read modelDescription.xml", e))?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            io(
-                "modelDescription.xml is not valid UTF-8",
-                std::io::Error::new(std::io::ErrorKind::InvalidData, e),
-            )
-        })?;
-        let md =
-            ModelDescription::from_xml(&text).map_err(|source| ImportError::ModelDescription {
+        // Invalid UTF-8 is reported with its line and column, like any parse error.
+        let md = ModelDescription::from_bytes(&bytes).map_err(|source| {
+            ImportError::ModelDescription {
                 path: fmu.clone(),
                 source,
-            })?;
+            }
+        })?;
         if !md.fmi_version.trim().starts_with("2.") {
             return Err(ImportError::UnsupportedFmiVersion {
                 path: fmu,

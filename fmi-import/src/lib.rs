@@ -26,7 +26,10 @@
 //! component, contains a backslash or NUL, is a symbolic link or other special file (by the
 //! unix mode stored in the entry), or appears twice: an FMU is foreign input, and a crafted
 //! archive must not write outside its directory (zip-slip) or plant links. Files are then
-//! created with `create_new` only.
+//! created with `create_new` only. Zip bombs are refused by [`UnpackLimits`] (default 4 GiB
+//! uncompressed, 100 000 entries; [`Fmu::open_with_limits`] sets others): on the sizes the
+//! entries declare before anything is written, and on the bytes actually decompressed, since
+//! declared sizes can lie.
 //!
 //! The model description must parse (errors give line and column), declare FMI 2.x and a
 //! `<CoSimulation>` element. The binary is `binaries/<platform>/<modelIdentifier>.<ext>`
@@ -98,3 +101,4 @@ pub use instance::{FmuState, Instance};
 pub use library::platform_binary;
 pub use logging::{LogConfig, LogRecord, stderr_sink};
 pub use model_description::ModelDescription;
+pub use unpack::UnpackLimits;

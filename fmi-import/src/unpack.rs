@@ -6,11 +6,17 @@
 //! and other special files (by the unix mode stored in the entry), and names that appear
 //! twice. Entries are then written with `create_new` under a fresh directory, so nothing
 //! outside it is ever opened for writing.
+//!
+//! Zip bombs: the archive is refused before anything is written when it has more entries than
+//! [`UnpackLimits::max_entries`] or when the uncompressed sizes its entries declare add up to
+//! more than [`UnpackLimits::max_total_bytes`]. Declared sizes can lie, so while extracting,
+//! every entry is cut off one byte past its declared size and refused if it reaches it: the
+//! bytes written never exceed the declared total, hence never the limit.
 
 use crate::error::ImportError;
 use std::collections::{BTreeSet, HashSet};
 use std::fs::{self, File};
-use std::io::{self, BufReader};
+use std::io::{self, BufReader, Read};
 use std::path::{Path, PathBuf};
 use zip::ZipArchive;
 
@@ -18,6 +24,52 @@ const S_IFMT: u32 = 0o170_000;
 const S_IFLNK: u32 = 0o120_000;
 const S_IFREG: u32 = 0o100_000;
 const S_IFDIR: u32 = 0o040_000;
+
+/// How much an archive may unpack to. The defaults are far above any real FMU (the largest
+/// FMUs with lookup tables or embedded solvers unpack to a few hundred MB, with a few thousand
+/// files) and far below what would fill a disk or a memory-backed temporary directory by
+/// accident.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UnpackLimits {
+    /// The sum of the entries' uncompressed sizes, in bytes (default 4 GiB).
+    pub max_total_bytes: u64,
+    /// The number of entries, directories included (default 100 000).
+    pub max_entries: usize,
+    /// The size of `modelDescription.xml`, which is read into memory and parsed into a tree
+    /// several times its size (default 256 MiB; descriptions with 100 000 variables are about
+    /// 50 MB).
+    pub max_model_description_bytes: u64,
+}
+
+impl UnpackLimits {
+    pub const DEFAULT: UnpackLimits = UnpackLimits {
+        max_total_bytes: 4 << 30,
+        max_entries: 100_000,
+        max_model_description_bytes: 256 << 20,
+    };
+}
+
+impl Default for UnpackLimits {
+    fn default() -> UnpackLimits {
+        UnpackLimits::DEFAULT
+    }
+}
+
+/// Bytes in a readable unit for messages ("4 GiB", "1.5 MiB", "12 bytes").
+pub(crate) fn bytes(n: u64) -> String {
+    const UNITS: [(&str, u64); 3] = [("GiB", 1 << 30), ("MiB", 1 << 20), ("KiB", 1 << 10)];
+    for (name, size) in UNITS {
+        if n >= size {
+            let x = n as f64 / size as f64;
+            return if n.is_multiple_of(size) {
+                format!("{} {name}", n / size)
+            } else {
+                format!("{x:.1} {name} ({n} bytes)")
+            };
+        }
+    }
+    format!("{n} bytes")
+}
 
 /// What the unpacked archive holds, as far as opening the FMU needs to know.
 pub(crate) struct Unpacked {
@@ -31,6 +83,8 @@ struct Planned {
     name: String,
     relative: PathBuf,
     dir: bool,
+    /// The uncompressed size the archive declares.
+    declared: u64,
 }
 
 /// The name shown in errors: the stored name with NUL made visible.
@@ -77,7 +131,11 @@ fn check_mode(mode: Option<u32>) -> Result<(), &'static str> {
 }
 
 /// Checks every entry of `fmu`, then extracts all of them into `dir`.
-pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
+pub(crate) fn unpack(
+    fmu: &Path,
+    dir: &Path,
+    limits: &UnpackLimits,
+) -> Result<Unpacked, ImportError> {
     let file = File::open(fmu).map_err(|source| ImportError::Io {
         path: fmu.to_path_buf(),
         action: "cannot open the FMU file".into(),
@@ -88,9 +146,25 @@ pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
         source,
     };
     let mut zip = ZipArchive::new(BufReader::new(file)).map_err(archive_error)?;
+    let too_large = |entry: Option<String>, what: String| ImportError::TooLarge {
+        path: fmu.to_path_buf(),
+        entry,
+        what,
+    };
+    if zip.len() > limits.max_entries {
+        return Err(too_large(
+            None,
+            format!(
+                "the archive has {} entries, more than the limit of {}",
+                zip.len(),
+                limits.max_entries
+            ),
+        ));
+    }
 
     // Pass 1: check everything, extract nothing.
     let mut plan = Vec::with_capacity(zip.len());
+    let mut declared_total: u64 = 0;
     let mut seen = HashSet::new();
     let mut platforms = BTreeSet::new();
     let mut has_model_description = false;
@@ -105,6 +179,19 @@ pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
         let name = entry.name().map_err(archive_error)?.into_owned();
         let parts = check_name(&name, raw).map_err(unsafe_entry)?;
         check_mode(entry.unix_mode()).map_err(unsafe_entry)?;
+        declared_total = declared_total.saturating_add(entry.size());
+        if declared_total > limits.max_total_bytes {
+            return Err(too_large(
+                Some(shown(raw)),
+                format!(
+                    "entry '{}' declares {}, which brings the uncompressed total to {}, more than the limit of {}",
+                    shown(raw),
+                    bytes(entry.size()),
+                    bytes(declared_total),
+                    bytes(limits.max_total_bytes)
+                ),
+            ));
+        }
         let dir = name.ends_with('/') || entry.unix_mode().is_some_and(|m| m & S_IFMT == S_IFDIR);
         if parts.is_empty() {
             continue; // "./": the unpack directory itself
@@ -115,6 +202,16 @@ pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
         }
         if normalized == "modelDescription.xml" && !dir {
             has_model_description = true;
+            if entry.size() > limits.max_model_description_bytes {
+                return Err(too_large(
+                    Some(shown(raw)),
+                    format!(
+                        "modelDescription.xml declares {}, more than the limit of {}",
+                        bytes(entry.size()),
+                        bytes(limits.max_model_description_bytes)
+                    ),
+                ));
+            }
         }
         if let ["binaries", platform, ..] = parts.as_slice()
             && (parts.len() > 2 || dir)
@@ -126,6 +223,7 @@ pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
             name: shown(raw),
             relative: parts.iter().collect(),
             dir,
+            declared: entry.size(),
         });
     }
     if zip.has_duplicate_names() {
@@ -156,7 +254,19 @@ pub(crate) fn unpack(fmu: &Path, dir: &Path) -> Result<Unpacked, ImportError> {
         }
         let mut entry = zip.by_index(p.index).map_err(archive_error)?;
         let mut out = File::create_new(&target).map_err(extract_error)?;
-        io::copy(&mut entry, &mut out).map_err(extract_error)?;
+        // One byte more than declared tells a lying size from an honest one.
+        let written =
+            io::copy(&mut (&mut entry).take(p.declared + 1), &mut out).map_err(extract_error)?;
+        if written > p.declared {
+            return Err(too_large(
+                Some(p.name.clone()),
+                format!(
+                    "entry '{}' decompresses to more than the {} it declares (a corrupt or crafted archive)",
+                    p.name,
+                    bytes(p.declared)
+                ),
+            ));
+        }
     }
     Ok(Unpacked {
         platforms: platforms.into_iter().collect(),
