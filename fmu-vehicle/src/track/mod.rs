@@ -102,7 +102,9 @@
 //! and samples it (value and derivatives) on a uniform grid of step `min(0.05 m, median data
 //! spacing)` (at least 1 mm) from the first to the last distance; [`Track::at`] then interpolates as above.
 //! Beyond the measured range the first/last value is **held with zero derivatives** (a step in
-//! slope at the ends), and [`Track::ensure_covers`] cannot extend it (returns `false`).
+//! slope at the ends), and [`Track::ensure_covers`] cannot extend it (returns `false`). A profile
+//! whose grid would exceed [`MAX_MEASURED_NODES`] nodes, or whose spline is not finite, is
+//! refused with an error naming the file.
 
 mod csv;
 mod hermite;
@@ -128,6 +130,10 @@ pub const COMPONENTS: usize = 2048;
 const EXTEND_MARGIN_BLOCKS: i64 = 4;
 /// Finest grid step for a measured profile \[m\] (bounds the memory for very dense files).
 const MIN_MEASURED_STEP: f64 = 1e-3;
+/// Most grid nodes of a measured profile (72 bytes each: 720 MB; 500 km at 0.05 m). A longer
+/// profile (or distances like 0 and 1e300) is refused with an error instead of exhausting the
+/// memory of the process that loaded the FMU.
+pub const MAX_MEASURED_NODES: usize = 10_000_000;
 /// Smallest synthesis (in blocks) worth spreading the channels over threads.
 const PARALLEL_MIN_BLOCKS: usize = 4;
 
@@ -345,7 +351,26 @@ impl Track {
         let median = gaps[gaps.len() / 2];
         let target = GRID_STEP.min(median).max(MIN_MEASURED_STEP);
         let length = x[n - 1] - x[0];
-        let intervals = ((length / target).ceil() as usize).max(1);
+        let wanted = (length / target).ceil();
+        if !(wanted < MAX_MEASURED_NODES as f64) {
+            // Plain digits up to a billion metres, exponent form beyond.
+            let m = |x: f64| {
+                if x.abs() < 1e9 {
+                    format!("{x}")
+                } else {
+                    format!("{x:e}")
+                }
+            };
+            return Err(format!(
+                "{}: the profile spans {} m (distance {} to {} m), which on its {target} m grid needs {wanted:e} nodes, more than the limit of {MAX_MEASURED_NODES:e} ({} km at 0.05 m); split the file",
+                path.display(),
+                m(length),
+                m(x[0]),
+                m(x[n - 1]),
+                MAX_MEASURED_NODES as f64 * GRID_STEP / 1000.0
+            ));
+        }
+        let intervals = (wanted as usize).max(1);
         let step = length / intervals as f64;
         let splines: Vec<csv::Spline> = prof
             .channels
@@ -366,6 +391,14 @@ impl Track {
             let mut node = [0.0; 9];
             for (c, sp) in splines.iter().enumerate() {
                 node[3 * c..3 * c + 3].copy_from_slice(&sp.eval(seg, s));
+            }
+            if let Some(bad) = node.iter().position(|v| !v.is_finite()) {
+                const NAMES: [&str; 3] = ["alignment", "vertical", "cross_level"];
+                return Err(format!(
+                    "{}: the spline through the '{}' column is not finite near distance {s} m (data points too close together for their values?)",
+                    path.display(),
+                    NAMES[bad / 3]
+                ));
             }
             nodes.push(node);
         }
