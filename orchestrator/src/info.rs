@@ -27,10 +27,19 @@ pub fn read_archive(path: &Path) -> Result<Archive, String> {
         })
         .collect();
     let mut xml = String::new();
+    // Bounded: a zip bomb's modelDescription.xml must not exhaust the memory.
+    let limit = fmi_import::UnpackLimits::DEFAULT.max_model_description_bytes;
     zip.by_name("modelDescription.xml")
         .map_err(|_| format!("{} has no modelDescription.xml", path.display()))?
+        .take(limit + 1)
         .read_to_string(&mut xml)
         .map_err(|e| format!("{}: cannot read modelDescription.xml: {e}", path.display()))?;
+    if xml.len() as u64 > limit {
+        return Err(format!(
+            "{}: modelDescription.xml is larger than the limit of {limit} bytes",
+            path.display()
+        ));
+    }
     let model_description = ModelDescription::from_xml(&xml)
         .map_err(|e| format!("{}: modelDescription.xml: {e}", path.display()))?;
     Ok(Archive {

@@ -3,7 +3,9 @@
 //!
 //! Exit codes: 0 success; 1 an I/O failure (results cannot be written); 2 bad input (a file,
 //! the system description, a connection, a parameter, the command line); 3 an FMU failed during
-//! the run (results recorded until then are kept).
+//! the run (results recorded until then are kept); 130 `run` or `simulate` interrupted by
+//! Ctrl-C (SIGINT), SIGTERM or SIGHUP: the run stops at the next step boundary and keeps the
+//! results recorded until then (a second signal quits at once, leaving `results.csv.partial`).
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use fmi_abi::types::fmi2Status;
@@ -595,8 +597,30 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
     Ok(())
 }
 
+/// Ctrl-C (and SIGTERM, SIGHUP) during `run` or `simulate`: the first asks the master to stop
+/// at the next step boundary and keep the results; a second one quits at once. The handler runs
+/// on ctrlc's own thread, not in signal context, so printing and exiting there are safe.
+fn stop_on_interrupt() {
+    let installed = ctrlc::set_handler(|| {
+        if orchestrator::master::request_stop() {
+            eprintln!(
+                "interrupted: stopping at the next step boundary and keeping the results (interrupt again to quit at once)"
+            );
+        } else {
+            eprintln!("interrupted again: quitting at once");
+            std::process::exit(130);
+        }
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: cannot handle Ctrl-C ({e}); an interrupt will lose the results");
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if matches!(cli.command, Command::Run(_) | Command::Simulate(_)) {
+        stop_on_interrupt();
+    }
     let result = match cli.command {
         Command::Run(a) => run(a),
         Command::Simulate(a) => simulate(a),

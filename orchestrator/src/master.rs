@@ -13,6 +13,12 @@
 //! contiguous range, read with one fmi2GetXxx call per component and type; each component's
 //! inputs are gathered (with their linear transformation) and written with one fmi2SetXxx call.
 //! Nothing is allocated inside the stepping loop.
+//!
+//! Reliability: the results file is created (and its header flushed) before any FMU is
+//! instantiated, so an unwritable destination or a full disk stops the run before it starts;
+//! an FMU failing mid-run, or [`request_stop`] (Ctrl-C on the command line, checked once per
+//! step), ends the run at a step boundary with every recorded row kept as whole lines in
+//! `results.csv`; a write failing mid-run names the file and the time the run stopped at.
 
 use crate::record::Recorder;
 use crate::resolve::{Link, Plan, resolve};
@@ -20,7 +26,23 @@ use crate::system::{Endpoint, Linear, System, Value};
 use fmi_import::{FmiError, Fmu, ImportError, Instance, LogConfig};
 use model_description::{BaseType, Causality, ModelDescription, VariableKind};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
+
+/// Set by [`request_stop`]; read by the stepping loop once per step.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Asks every run in this process to stop at its next step boundary (what the command line's
+/// Ctrl-C handler calls). The run then flushes and keeps its results and returns
+/// [`RunError::Interrupted`]. Returns whether this is the first request.
+pub fn request_stop() -> bool {
+    !STOP.swap(true, Ordering::SeqCst)
+}
+
+/// Whether [`request_stop`] has been called.
+pub fn stop_requested() -> bool {
+    STOP.load(Ordering::Relaxed)
+}
 
 /// Fills the buffer with (value reference, value) pairs for the first component at time `t`.
 pub type ExternalInputs<'a> = dyn Fn(f64, &mut Vec<(u32, f64)>) + 'a;
@@ -91,16 +113,33 @@ pub enum RunError {
     },
     #[error("{0}")]
     Io(String),
+    /// The run was asked to stop ([`request_stop`], e.g. Ctrl-C) and stopped at a step boundary.
+    #[error(
+        "interrupted at t = {time} s, after {steps} of {total} steps{}",
+        match .results {
+            Some(p) => format!("; the {rows} rows recorded until then are in {}", p.display()),
+            None => String::new(),
+        }
+    )]
+    Interrupted {
+        time: f64,
+        steps: u64,
+        total: u64,
+        rows: u64,
+        results: Option<PathBuf>,
+    },
 }
 
 impl RunError {
     /// The process exit code: 2 for a problem with the input (files, system, parameters),
-    /// 3 for an FMU that failed during the run, 1 for an I/O failure.
+    /// 3 for an FMU that failed during the run, 1 for an I/O failure, 130 (128 + SIGINT, as
+    /// shells report a process ended by Ctrl-C) for an interrupted run.
     pub fn exit_code(&self) -> i32 {
         match self {
             RunError::Import(_) | RunError::Resolve(_) | RunError::Config(_) => 2,
             RunError::Fmi { .. } => 3,
             RunError::Io(_) => 1,
+            RunError::Interrupted { .. } => 130,
         }
     }
 }
@@ -431,6 +470,12 @@ impl Cosimulation {
                 opts.step
             )));
         }
+        if !(opts.start.is_finite() && opts.stop.is_finite()) {
+            return Err(RunError::Config(format!(
+                "the start time {} s and the stop time {} s must be finite numbers",
+                opts.start, opts.stop
+            )));
+        }
         let span = opts.stop - opts.start;
         if !(span >= 0.0) {
             return Err(RunError::Config(format!(
@@ -443,6 +488,17 @@ impl Cosimulation {
             return Err(RunError::Config(format!(
                 "the run from {} s to {} s is not a whole number of {} s steps",
                 opts.start, opts.stop, opts.step
+            )));
+        }
+        // Communication points are start + k * step with k exact in an f64.
+        const MAX_STEPS: f64 = (1u64 << 53) as f64;
+        if steps > MAX_STEPS {
+            use model_description::format_f64 as f;
+            return Err(RunError::Config(format!(
+                "the run from {} s to {} s has {steps:e} steps of {} s, more than 2^53",
+                f(opts.start),
+                f(opts.stop),
+                f(opts.step)
             )));
         }
         let steps = steps as u64;
@@ -460,6 +516,35 @@ impl Cosimulation {
             }
         };
 
+        // The results file first: an unwritable destination stops us before any FMU runs.
+        let mds = self.model_descriptions();
+        let mut recording = if opts.out_dir.is_some() || opts.collect {
+            let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
+            let recorder = match &opts.out_dir {
+                Some(dir) => Some(Recorder::create(dir, &rec.columns, &rec.units).map_err(
+                    |e| {
+                        RunError::Io(format!(
+                            "cannot write results in {} (nothing was run): {e}",
+                            dir.display()
+                        ))
+                    },
+                )?),
+                None => None,
+            };
+            let table = opts.collect.then(|| Table {
+                columns: std::iter::once("time".to_string())
+                    .chain(rec.columns.iter().cloned())
+                    .collect(),
+                // Reserved up to a million rows; a longer run grows the columns as it goes.
+                data: vec![
+                    Vec::with_capacity(steps.min(1 << 20) as usize + 1);
+                    rec.columns.len() + 1
+                ],
+            });
+            Some((rec, recorder, table))
+        } else {
+            None
+        };
         let mut instances = Vec::with_capacity(n);
         for (c, fmu) in self.system.components.iter().zip(&self.fmus) {
             instances.push(fmu.instantiate(&c.name, opts.log.clone())?);
@@ -531,26 +616,7 @@ impl Cosimulation {
             boolean.read_outputs(c, inst).map_err(fmi)?;
         }
 
-        let mds = self.model_descriptions();
-        let mut recording = if opts.out_dir.is_some() || opts.collect {
-            let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
-            let recorder = match &opts.out_dir {
-                Some(dir) => Some(Recorder::create(dir, &rec.columns, &rec.units).map_err(
-                    |e| RunError::Io(format!("cannot write results in {}: {e}", dir.display())),
-                )?),
-                None => None,
-            };
-            let table = opts.collect.then(|| Table {
-                columns: std::iter::once("time".to_string())
-                    .chain(rec.columns.iter().cloned())
-                    .collect(),
-                data: vec![Vec::with_capacity(steps as usize + 1); rec.columns.len() + 1],
-            });
-            Some((rec, recorder, table))
-        } else {
-            None
-        };
-        let io = |e: std::io::Error| RunError::Io(format!("writing results: {e}"));
+        let io = |e: std::io::Error| RunError::Io(e.to_string());
         let keep = |t: f64,
                     row: &[f64],
                     recorder: &mut Option<Recorder>,
@@ -567,9 +633,18 @@ impl Cosimulation {
             }
             Ok(())
         };
+        // A write failing mid-run: say where the run stopped and what is left on disk.
+        let stopped = |e: RunError, t: f64, recorder: &Option<Recorder>| match (e, recorder) {
+            (RunError::Io(m), Some(r)) => RunError::Io(format!(
+                "{m}; the run stopped at t = {t} s; the rows written until then are in {} (the last one may be incomplete)",
+                r.partial_path().display()
+            )),
+            (e, _) => e,
+        };
         if let Some((rec, recorder, table)) = recording.as_mut() {
             rec.sample(&mut instances).map_err(fmi)?;
-            keep(opts.start, &rec.row, recorder, table)?;
+            keep(opts.start, &rec.row, recorder, table)
+                .map_err(|e| stopped(e, opts.start, recorder))?;
         }
 
         let bar = if opts.progress && steps >= 10_000 {
@@ -587,8 +662,13 @@ impl Cosimulation {
 
         let order = &self.plan.order;
         let mut failure: Option<FmiError> = None;
+        let mut interrupted = false;
         let mut k: u64 = 0;
         'steps: while k < steps {
+            if stop_requested() {
+                interrupted = true;
+                break 'steps;
+            }
             let t = opts.start + k as f64 * opts.step;
             let result: Result<(), FmiError> = (|| {
                 set_external(&mut instances[0], &mut ext, t)?;
@@ -637,7 +717,8 @@ impl Cosimulation {
                     failure = Some(e);
                     break 'steps;
                 }
-                keep(opts.start + k as f64 * opts.step, &rec.row, recorder, table)?;
+                let t = opts.start + k as f64 * opts.step;
+                keep(t, &rec.row, recorder, table).map_err(|e| stopped(e, t, recorder))?;
             }
             if let Some(bar) = &bar
                 && k.is_multiple_of(1000)
@@ -663,6 +744,19 @@ impl Cosimulation {
         };
         if let Some(error) = failure {
             return Err(RunError::Fmi { error, results });
+        }
+        if interrupted {
+            for inst in instances.iter_mut() {
+                // Terminating is a courtesy here; the interrupt is what the caller hears of.
+                let _ = inst.terminate();
+            }
+            return Err(RunError::Interrupted {
+                time: opts.start + k as f64 * opts.step,
+                steps: k,
+                total: steps,
+                rows,
+                results,
+            });
         }
         for inst in instances.iter_mut() {
             inst.terminate().map_err(|error| RunError::Fmi {

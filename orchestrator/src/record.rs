@@ -7,11 +7,23 @@
 //! buffer and writes through a large `BufWriter`. Rows are written as they come: when a run
 //! fails, everything recorded so far is flushed and kept. The file is written as
 //! `results.csv.partial` and renamed to `results.csv` when the run is finished (or stopped by an
-//! error), so a reader never sees a half-written file under the final name.
+//! FMU error or an interrupt), so a reader never sees a half-written file under the final name.
+//!
+//! [`Recorder::create`] is the probe that makes an unwritable destination fail before the run
+//! starts: it creates the directory, writes `results.units.csv` and the header of the partial
+//! file, and flushes the header to the file at once, so a missing permission, a path through a
+//! regular file or a full disk is reported then, naming the file. Every I/O error names the
+//! file it happened on.
 
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+/// The error with the file it happened on in front.
+fn naming(path: &Path, action: &str) -> impl FnOnce(io::Error) -> io::Error {
+    let prefix = format!("cannot {action} {}", path.display());
+    move |e| io::Error::new(e.kind(), format!("{prefix}: {e}"))
+}
 
 pub struct Recorder {
     out: BufWriter<File>,
@@ -20,6 +32,21 @@ pub struct Recorder {
     path: PathBuf,
     columns: usize,
     pub rows: u64,
+    finished: bool,
+}
+
+/// A recorder dropped before [`Recorder::finish`] with no row written (the run failed before
+/// it started) removes its files: there is nothing to keep. One with rows keeps the partial
+/// file (a write failed mid-run).
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if !self.finished && self.rows == 0 {
+            let _ = std::fs::remove_file(&self.partial);
+            if let Some(dir) = self.partial.parent() {
+                let _ = std::fs::remove_file(dir.join("results.units.csv"));
+            }
+        }
+    }
 }
 
 fn push_f64(line: &mut Vec<u8>, x: f64, buf: &mut ryu::Buffer) {
@@ -45,23 +72,39 @@ fn csv_field(name: &str) -> String {
 }
 
 impl Recorder {
-    /// Creates `dir/results.csv.partial` with the header, and `dir/results.units.csv`.
+    /// Creates `dir/results.csv.partial` with the header (flushed to the file at once, so that
+    /// an unwritable destination fails here), and `dir/results.units.csv`. Errors name the
+    /// directory or file.
     pub fn create(dir: &Path, columns: &[String], units: &[String]) -> std::io::Result<Recorder> {
-        std::fs::create_dir_all(dir)?;
+        std::fs::create_dir_all(dir).map_err(naming(dir, "create the directory"))?;
         let path = dir.join("results.csv");
         let partial = dir.join("results.csv.partial");
-        let mut out = BufWriter::with_capacity(1 << 20, File::create(&partial)?);
+        let file = File::create(&partial).map_err(naming(&partial, "create"))?;
+        let mut out = BufWriter::with_capacity(1 << 20, file);
         let header: Vec<String> = std::iter::once("time".to_string())
             .chain(columns.iter().map(|c| csv_field(c)))
             .collect();
-        writeln!(out, "{}", header.join(","))?;
+        // Whatever this function created is removed again when it fails.
+        let undo = |e: io::Error, files: &[&Path]| {
+            for f in files {
+                let _ = std::fs::remove_file(f);
+            }
+            e
+        };
+        writeln!(out, "{}", header.join(","))
+            .and_then(|()| out.flush())
+            .map_err(naming(&partial, "write"))
+            .map_err(|e| undo(e, &[&partial]))?;
         let unit_row: Vec<String> = std::iter::once("s".to_string())
             .chain(units.iter().map(|u| csv_field(u)))
             .collect();
+        let units_path = dir.join("results.units.csv");
         std::fs::write(
-            dir.join("results.units.csv"),
+            &units_path,
             format!("{}\n{}\n", header.join(","), unit_row.join(",")),
-        )?;
+        )
+        .map_err(naming(&units_path, "write"))
+        .map_err(|e| undo(e, &[&partial, &units_path]))?;
         Ok(Recorder {
             out,
             line: Vec::with_capacity(32 * (columns.len() + 1)),
@@ -69,6 +112,7 @@ impl Recorder {
             path,
             columns: columns.len(),
             rows: 0,
+            finished: false,
         })
     }
 
@@ -83,15 +127,36 @@ impl Recorder {
             push_f64(&mut self.line, v, &mut buf);
         }
         self.line.push(b'\n');
+        self.out
+            .write_all(&self.line)
+            .map_err(naming(&self.partial, "write"))?;
         self.rows += 1;
-        self.out.write_all(&self.line)
+        Ok(())
     }
 
-    /// Flushes and renames to `results.csv`; returns its path.
+    /// The file being written (`results.csv.partial`).
+    pub fn partial_path(&self) -> &Path {
+        &self.partial
+    }
+
+    /// Flushes, syncs and renames to `results.csv`; returns its path. Errors name the file.
     pub fn finish(mut self) -> std::io::Result<PathBuf> {
-        self.out.flush()?;
-        self.out.get_ref().sync_all()?;
-        std::fs::rename(&self.partial, &self.path)?;
+        self.out.flush().map_err(naming(&self.partial, "write"))?;
+        self.out
+            .get_ref()
+            .sync_all()
+            .map_err(naming(&self.partial, "write"))?;
+        std::fs::rename(&self.partial, &self.path).map_err(|e| {
+            io::Error::new(
+                e.kind(),
+                format!(
+                    "cannot rename {} to {}: {e}",
+                    self.partial.display(),
+                    self.path.display()
+                ),
+            )
+        })?;
+        self.finished = true;
         Ok(self.path.clone())
     }
 }

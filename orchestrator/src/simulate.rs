@@ -2,7 +2,9 @@
 //! like `fmpy simulate`. The input file is a CSV whose first column is `time` and whose other
 //! columns are named after input variables of the FMU; at each communication point `t` the
 //! inputs are set to the signals linearly interpolated at `t` (held beyond the last row), then
-//! the FMU steps to `t + h`. Every output is recorded.
+//! the FMU steps to `t + h`. Every output is recorded. Times must be finite and must not go
+//! backwards; signal values are any number `f64` parses (`nan` and `inf` included, so that an
+//! FMU's handling of bad samples can be driven). Errors name the file, the line and the column.
 
 use crate::master::{Cosimulation, RunError, RunOptions, RunSummary};
 use crate::system::{Component, Experiment, System};
@@ -29,14 +31,15 @@ impl Signals {
             .lines()
             .enumerate()
             .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-        let (_, header) = lines.next().ok_or("the file is empty")?;
+        let (header_index, header) = lines.next().ok_or("the file is empty")?;
         let names: Vec<String> = header
             .split(',')
             .map(|s| s.trim().trim_matches('"').to_string())
             .collect();
         if names.first().map(String::as_str) != Some("time") {
             return Err(format!(
-                "line 1: the first column must be 'time', found '{}'",
+                "line {}: the first column must be 'time', found '{}'",
+                header_index + 1,
                 names.first().map(String::as_str).unwrap_or("")
             ));
         }
@@ -62,6 +65,16 @@ impl Signals {
                         f.trim()
                     )
                 })?);
+            }
+            // A NaN or infinite time would break the interpolation's ordering (and a NaN
+            // slips through every comparison); the signal values themselves may be anything,
+            // NaN included, to drive an FMU's handling of bad samples.
+            if !values[0].is_finite() {
+                return Err(format!(
+                    "line {}, column 'time': '{}' is not a finite time",
+                    i + 1,
+                    fields[0].trim()
+                ));
             }
             if let Some(&last) = time.last()
                 && values[0] < last

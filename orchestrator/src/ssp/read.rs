@@ -101,9 +101,23 @@ fn read_text(path: &Path, shown: &Path) -> Result<String, SspError> {
         path: shown.to_path_buf(),
         source,
     })?;
-    let text = String::from_utf8(bytes).map_err(|e| SspError::Io {
-        path: shown.to_path_buf(),
-        source: io::Error::new(io::ErrorKind::InvalidData, format!("not UTF-8 text: {e}")),
+    let text = String::from_utf8(bytes).map_err(|e| {
+        // Where the first bad byte is, as a line and column of the valid text before it.
+        let valid = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = std::str::from_utf8(&bytes[..valid]).unwrap_or_default();
+        let (line, column) = line_column(before, valid);
+        in_file(
+            shown.to_path_buf(),
+            SspError::Xml {
+                line,
+                column,
+                message: format!(
+                    "byte 0x{:02X} (offset {valid}) is not UTF-8; SSP files must be UTF-8",
+                    bytes[valid]
+                ),
+            },
+        )
     })?;
     Ok(match text.strip_prefix('\u{feff}') {
         Some(rest) => rest.to_string(),
@@ -167,8 +181,14 @@ fn is_archive(path: &Path) -> Result<bool, SspError> {
 }
 
 /// Extracts every entry of the archive into `dir`, refusing the whole archive if any entry's
-/// name is absolute or climbs out with `..`.
+/// name is absolute or climbs out with `..`, or if it is a zip bomb: more entries or more
+/// declared uncompressed bytes than fmi-import's [`UnpackLimits::DEFAULT`] (the FMUs inside
+/// are unpacked under the same limits later), or an entry that decompresses to more than it
+/// declares (cut off one byte past its declared size).
+///
+/// [`UnpackLimits::DEFAULT`]: fmi_import::UnpackLimits::DEFAULT
 fn extract(archive: &Path, dir: &Path) -> Result<(), SspError> {
+    let limits = fmi_import::UnpackLimits::DEFAULT;
     let bad = |message: String| SspError::Archive {
         path: archive.to_path_buf(),
         message,
@@ -178,8 +198,16 @@ fn extract(archive: &Path, dir: &Path) -> Result<(), SspError> {
         source,
     })?;
     let mut zip = zip::ZipArchive::new(io::BufReader::new(file)).map_err(|e| bad(e.to_string()))?;
-    // Check every name before writing anything.
+    if zip.len() > limits.max_entries {
+        return Err(bad(format!(
+            "it has {} entries, more than the limit of {}",
+            zip.len(),
+            limits.max_entries
+        )));
+    }
+    // Check every name (and the declared sizes) before writing anything.
     let mut entries = Vec::with_capacity(zip.len());
+    let mut declared_total: u64 = 0;
     for i in 0..zip.len() {
         let entry = zip
             .by_index_raw(i)
@@ -188,12 +216,21 @@ fn extract(archive: &Path, dir: &Path) -> Result<(), SspError> {
             .name()
             .map_err(|e| bad(format!("entry {i}: {e}")))?
             .into_owned();
+        declared_total = declared_total.saturating_add(entry.size());
+        if declared_total > limits.max_total_bytes {
+            return Err(bad(format!(
+                "entry '{name}' declares {} bytes, which brings the uncompressed total to {declared_total} bytes, more than the limit of {} bytes",
+                entry.size(),
+                limits.max_total_bytes
+            )));
+        }
+        let declared = entry.size();
         let absolute_name = name.starts_with('/')
             || name.starts_with('\\')
             || name.as_bytes().get(1) == Some(&b':');
         match entry.enclosed_name() {
             Some(rel) if !absolute_name && !name.contains('\\') => {
-                entries.push((rel, entry.is_dir()))
+                entries.push((rel, entry.is_dir(), declared))
             }
             _ => {
                 return Err(SspError::UnsafeEntry {
@@ -203,7 +240,7 @@ fn extract(archive: &Path, dir: &Path) -> Result<(), SspError> {
             }
         }
     }
-    for (i, (rel, is_dir)) in entries.into_iter().enumerate() {
+    for (i, (rel, is_dir, declared)) in entries.into_iter().enumerate() {
         let target = dir.join(&rel);
         let io_err = |source| SspError::Io {
             path: archive.join(&rel),
@@ -220,7 +257,14 @@ fn extract(archive: &Path, dir: &Path) -> Result<(), SspError> {
             .by_index(i)
             .map_err(|e| bad(format!("entry '{}': {e}", rel.display())))?;
         let mut out = fs::File::create(&target).map_err(io_err)?;
-        io::copy(&mut entry, &mut out).map_err(io_err)?;
+        let written = io::copy(&mut io::Read::take(&mut entry, declared + 1), &mut out)
+            .map_err(|e| bad(format!("cannot extract entry '{}': {e}", rel.display())))?;
+        if written > declared {
+            return Err(bad(format!(
+                "entry '{}' decompresses to more than the {declared} bytes it declares (a corrupt or crafted archive)",
+                rel.display()
+            )));
+        }
     }
     Ok(())
 }
@@ -348,6 +392,11 @@ impl Reader<'_> {
             Some(de) => {
                 let start = self.optional_double(de, "startTime", None)?.unwrap_or(0.0);
                 let stop = self.optional_double(de, "stopTime", None)?;
+                for (attribute, value) in [("startTime", Some(start)), ("stopTime", stop)] {
+                    if value.is_some_and(|v| !v.is_finite()) {
+                        return Err(self.invalid(de, attribute, "a finite time", None));
+                    }
+                }
                 if stop.is_some_and(|stop| stop < start) {
                     return Err(self.invalid(
                         de,

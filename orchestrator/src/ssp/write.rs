@@ -106,9 +106,16 @@ fn fmu_model_description(c: &Component) -> Result<ModelDescription, SspError> {
         .by_name("modelDescription.xml")
         .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?;
     let mut text = String::new();
-    entry
+    // Bounded: a zip bomb's modelDescription.xml must not exhaust the memory.
+    let limit = fmi_import::UnpackLimits::DEFAULT.max_model_description_bytes;
+    io::Read::take(&mut entry, limit + 1)
         .read_to_string(&mut text)
         .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
+    if text.len() as u64 > limit {
+        return Err(fail(format!(
+            "modelDescription.xml is larger than the limit of {limit} bytes"
+        )));
+    }
     ModelDescription::from_xml(&text).map_err(|source| SspError::ModelDescription {
         component: c.name.clone(),
         path: c.source.clone(),
