@@ -100,12 +100,34 @@ fn matrix<const N: usize>(
     Ok(m)
 }
 
+impl Calibration {
+    /// The filter's body process noise and measurement noise from these matrices.
+    pub fn noise(&self) -> (crate::statespace::BodyNoise, Mat4) {
+        (
+            crate::statespace::BodyNoise::Calibrated {
+                q: self.q,
+                step_size: self.step_size,
+            },
+            self.r,
+        )
+    }
+}
+
+/// The calibration file shipped in the FMU's resources, as built into this library (for
+/// offline processing without an unpacked FMU).
+pub const SHIPPED: &str = include_str!("../resources/calibration.toml");
+
 /// Reads a calibration file. `Ok(None)`: the file holds no matrices (not yet calibrated).
 pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| format!("cannot read calibration file {}: {e}", path.display()))?;
+    parse(&text, path)
+}
+
+/// Parses a calibration file's text; `path` names it in messages.
+pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
     let file: File =
-        toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
+        toml::from_str(text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
     let status = file.status.unwrap_or_else(|| "unspecified".into());
     let (q, r) = file.noise.map_or((None, None), |n| (n.q, n.r));
     match (q, r) {

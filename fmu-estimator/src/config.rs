@@ -37,7 +37,11 @@ pub struct Config {
     /// Sigma of the virtual measurement for the 8-state priors; `<= 0`: none.
     pub prior_sigma_xi: f64,
     pub p0_xi: f64,
+    /// Start from the stationary covariance (`p0_stationary`).
+    pub p0_stationary: bool,
     pub min_speed: f64,
+    /// `> 0`: build the matrices once for this speed (the paper's constant-speed filter).
+    pub design_speed: f64,
     /// The calibration file's status line when its matrices are used.
     pub calibration: Option<String>,
 }
@@ -133,13 +137,15 @@ impl Config {
             }
         }
         if let Some(c) = &calibrated {
-            rm = c.r;
-            body_noise = BodyNoise::Calibrated {
-                q: c.q,
-                step_size: c.step_size,
-            };
+            (body_noise, rm) = c.noise();
         } else if sig.iter().any(|s| !(*s > 0.0)) {
             return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
+        }
+        let design_speed = r(vr::DESIGN_SPEED);
+        if !(design_speed >= 0.0 && design_speed.is_finite()) {
+            return Err(format!(
+                "parameter 'design_speed' = {design_speed} must be 0 (follow the speed input) or a positive speed"
+            ));
         }
         let prior_sigma_xi = r(vr::PRIOR_SIGMA_XI);
         if prior_sigma_xi.is_nan() {
@@ -155,7 +161,9 @@ impl Config {
                 r: rm,
                 prior_sigma_xi,
                 p0_xi: r(vr::P0_XI),
+                p0_stationary: v.boolean[vr::P0_STATIONARY as usize],
                 min_speed: r(vr::MIN_SPEED),
+                design_speed: r(vr::DESIGN_SPEED),
                 calibration: calibrated.map(|c| c.status),
             },
             notes,
@@ -189,7 +197,9 @@ impl Config {
             AlignmentModel::RandomWalk => {
                 let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from_fn(|i, _| s[i] * s[i]));
                 let space = StateSpace::paper(&self.params, self.body_noise.clone(), true);
-                Core::Seven(Engine::new(space, self.scheme, self.gain, self.r, p0))
+                let mut e = Engine::new(space, self.scheme, self.gain, self.r, p0);
+                e.stationary_start = self.p0_stationary;
+                Core::Seven(e)
             }
             model => {
                 let p0 = SMatrix::<f64, 8, 8>::from_diagonal(&SVector::from_fn(|i, _| s[i] * s[i]));
@@ -212,7 +222,9 @@ impl Config {
                 } else {
                     1.0
                 };
-                Core::Eight(Engine::new(space, self.scheme, self.gain, r, p0))
+                let mut e = Engine::new(space, self.scheme, self.gain, r, p0);
+                e.stationary_start = self.p0_stationary;
+                Core::Eight(e)
             }
         }
     }

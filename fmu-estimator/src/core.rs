@@ -46,6 +46,11 @@ impl Core {
         })
     }
 
+    /// A message, once, when the stationary start fell back to the initial covariance.
+    pub fn take_start_note(&mut self) -> Option<String> {
+        each!(self, e => e.start_note.take())
+    }
+
     pub fn skipped(&self) -> i32 {
         each!(self, e => e.skipped)
     }

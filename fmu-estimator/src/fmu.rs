@@ -62,6 +62,7 @@ pub mod vr {
     pub const PRIOR_OMEGA_C: u32 = 42;
     pub const PRIOR_SIGMA_XI: u32 = 43;
     pub const EST_XI_RATE: u32 = 44;
+    pub const DESIGN_SPEED: u32 = 45;
     // Integer
     pub const DISCRETIZATION: u32 = 0;
     pub const SKIPPED_UPDATES: u32 = 1;
@@ -71,6 +72,7 @@ pub mod vr {
     // Boolean
     pub const USE_CALIBRATION_FILE: u32 = 0;
     pub const UPDATED: u32 = 1;
+    pub const P0_STATIONARY: u32 = 2;
     // String
     pub const CALIBRATION_FILE: u32 = 0;
 }
@@ -125,12 +127,14 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::PRIOR_OMEGA_C, "prior_omega_c", "rad/m", Spectrum::GERMAN_LOW.omega_c, "Upper corner wavenumber of the alignment spectrum (alignment_models 2 and 3)").min(0.0),
     VarSpec::real_parameter(vr::PRIOR_SIGMA_XI, "prior_sigma_xi", "m", P_SIGMA_XI, "Sigma of the virtual measurement alignment = 0 for alignment_models 2 and 3; 0 switches it off (tuned on the calibration seed)").min(0.0),
     VarSpec::real_output(vr::EST_XI_RATE, "est_xi_rate", "m/s", 0.0, "Estimated rate of change of the alignment seen by the wheelset (alignment_models 2 and 3; 0 otherwise)"),
+    VarSpec::real_parameter(vr::DESIGN_SPEED, "design_speed", "m/s", 0.0, "0: the filter's matrices follow the speed input at every step; > 0: they are built once for this speed, as in the paper (the input still drives the distance)").min(0.0),
     VarSpec::integer_parameter(vr::ALIGNMENT_MODEL, "alignment_model", 1, "Alignment prior: 1 the paper's random walk; 2 integrated random walk; 3 shaping filter of the track spectrum").min(1.0).max(3.0),
     VarSpec::integer_parameter(vr::GAIN, "gain", 1, "1: time-varying Kalman gain; 2: steady-state gain from the discrete algebraic Riccati equation (constant speed)").min(1.0).max(2.0),
     VarSpec::integer_parameter(vr::DISCRETIZATION, "discretization", 1, "1: the paper's second-order Taylor scheme; 2: exact (matrix exponential)").min(1.0).max(2.0),
     VarSpec::integer_output(vr::SKIPPED_UPDATES, "skipped_updates", 0, "Steps whose measurement update was skipped (non-finite sample or singular innovation covariance)"),
     VarSpec::integer_output(vr::REBUILDS, "rebuilds", 0, "How many times F, H and Q were rebuilt (on a change of speed or step size)"),
     VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
+    VarSpec::boolean_parameter(vr::P0_STATIONARY, "p0_stationary", true, "Start the time-varying filter from the stationary covariance at the first step's speed (no start-up transient); false: from p0_xi and typical body amplitudes, as the paper"),
     VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file, relative to the FMU's resources directory or absolute"),
 ];
@@ -142,6 +146,8 @@ pub struct Estimator {
     /// The filter, built at the end of initialization.
     core: Option<Core>,
     min_speed: f64,
+    /// `> 0`: the speed the filter's matrices are built for, whatever the input says.
+    design_speed: f64,
     holding: bool,
 }
 
@@ -194,6 +200,7 @@ impl Model for Estimator {
             resources: ctx.resources.clone(),
             core: None,
             min_speed: 0.5,
+            design_speed: 0.0,
             holding: false,
         })
     }
@@ -220,6 +227,7 @@ impl Model for Estimator {
             }
         }
         self.min_speed = config.min_speed;
+        self.design_speed = config.design_speed;
         self.core = Some(config.core());
         self.holding = false;
         self.write_outputs(v);
@@ -261,7 +269,16 @@ impl Model for Estimator {
             0.0,
         );
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
-        let updated = match core.step(speed, h, &z)? {
+        let filter_speed = if self.design_speed > 0.0 {
+            self.design_speed
+        } else {
+            speed
+        };
+        let result = core.step(filter_speed, h, &z)?;
+        if let Some(note) = core.take_start_note() {
+            log.warning(&note);
+        }
+        let updated = match result {
             Ok(nis) => {
                 v.real[vr::NIS as usize] = nis;
                 true

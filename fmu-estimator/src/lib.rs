@@ -25,6 +25,7 @@ pub mod filter;
 pub mod fmu;
 pub mod model;
 pub mod observability;
+pub mod offline;
 pub mod params;
 pub mod prior;
 pub mod smoother;

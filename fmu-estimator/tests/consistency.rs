@@ -162,8 +162,11 @@ fn the_fmu_runs_the_same_filter() {
     let mut inst = Instance::<Estimator>::new(&ctx, Logger::silent())
         .map_err(|(_, e)| e)
         .unwrap();
-    inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false])
-        .unwrap();
+    inst.set_boolean(
+        &[vr::USE_CALIBRATION_FILE, vr::P0_STATIONARY],
+        &[false, false],
+    )
+    .unwrap();
     inst.set_integer(&[vr::DISCRETIZATION], &[2]).unwrap();
     inst.setup_experiment(0.0, Some(1.0)).unwrap();
     inst.enter_initialization_mode().unwrap();

@@ -1,0 +1,252 @@
+//! Offline processing of recorded sensor signals: the FMU's filter run over a whole record, and
+//! the Rauch-Tung-Striebel smoother ([`crate::smoother`]) on top of it.
+//!
+//! The filter is configured exactly as the FMU is, by FMI parameter names and values
+//! ([`settings`]), starting from the FMU's defaults, and steps exactly as `fmi2DoStep` does:
+//! sample `k` holds the sensors and speed at the end of step `k`; the distance is the rectangle
+//! rule of the speed; below `min_speed` the estimate is held. So the filtered output of
+//! [`process`] equals the FMU's output on the same samples, bit for bit (a test).
+
+use crate::calibration::{self, SHIPPED};
+use crate::config::{Config, Note};
+use crate::core::Core;
+use crate::filter::Vec4;
+use crate::fmu::{VARIABLES, vr};
+use fmi_abi::Values;
+use fmi_abi::variables::Start;
+use std::path::Path;
+
+/// One recorded step: the speed and the three sensor samples at its end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    pub speed: f64,
+    pub ws_acc_y: f64,
+    pub ws_yaw_rate: f64,
+    pub frame_acc_y: f64,
+}
+
+/// Estimates per sample.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Processed {
+    /// Distance travelled at each sample [m].
+    pub distance: Vec<f64>,
+    /// The causal filter's alignment estimate and its standard deviation [m].
+    pub filtered: Vec<(f64, f64)>,
+    /// The smoothed estimate and its standard deviation (when asked for).
+    pub smoothed: Option<Vec<(f64, f64)>>,
+    /// Samples whose measurement update was skipped (non-finite values).
+    pub skipped: usize,
+}
+
+/// The FMU's parameter values with `overrides` (FMI name, value as text) applied, refusing
+/// unknown names, non-parameters and unparsable values by name.
+pub fn settings(overrides: &[(String, String)]) -> Result<Values, String> {
+    let mut v = Values::from_table(VARIABLES);
+    for (name, text) in overrides {
+        let spec = VARIABLES
+            .iter()
+            .find(|s| s.name == name)
+            .ok_or_else(|| format!("the estimator has no variable '{name}'"))?;
+        if !spec.is_parameter() {
+            return Err(format!("'{name}' is not a parameter of the estimator"));
+        }
+        let bad = |what: &str| format!("'{name}' = '{text}': {what}");
+        let i = spec.vr as usize;
+        match spec.start {
+            Start::Real(_) => {
+                v.real[i] = text.trim().parse().map_err(|_| bad("not a number"))?;
+            }
+            Start::Integer(_) => {
+                v.integer[i] = text.trim().parse().map_err(|_| bad("not an integer"))?;
+            }
+            Start::Boolean(_) => {
+                v.boolean[i] = match text.trim() {
+                    "true" | "1" => true,
+                    "false" | "0" => false,
+                    _ => return Err(bad("not a boolean (true/false)")),
+                }
+            }
+            Start::String(_) => v.string[i] = text.clone(),
+        }
+    }
+    Ok(v)
+}
+
+/// The configuration for `values`. The calibration file is the one named by `calibration`, or,
+/// if none is given and `use_calibration_file` is on, the file shipped in the FMU (built in).
+pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Vec<Note>), String> {
+    let use_file = values.boolean[vr::USE_CALIBRATION_FILE as usize];
+    let mut v = values.clone();
+    v.boolean[vr::USE_CALIBRATION_FILE as usize] = false;
+    // The diagonal model's sigmas must be valid even when a calibration replaces them.
+    let (mut config, mut notes) = Config::from_values(&v, None)?;
+    if use_file {
+        let c = match calibration {
+            Some(path) => calibration::load(path)?,
+            None => calibration::parse(SHIPPED, Path::new("calibration.toml (built in)"))?,
+        };
+        if let Some(c) = c {
+            notes.push(Note::Info(format!(
+                "Q and R from the calibration ({})",
+                c.status
+            )));
+            (config.body_noise, config.r) = c.noise();
+            config.calibration = Some(c.status);
+        }
+    }
+    Ok((config, notes))
+}
+
+/// Runs the filter (and the smoother, if `smooth`) over `samples` taken every `h` seconds.
+pub fn process(
+    config: &Config,
+    h: f64,
+    samples: &[Sample],
+    smooth: bool,
+) -> Result<Processed, String> {
+    if !(h > 0.0 && h.is_finite()) {
+        return Err(format!("step {h} s must be a positive number"));
+    }
+    let mut core: Core = config.core();
+    if smooth {
+        core.record_history();
+    }
+    let mut out = Processed::default();
+    let mut distance = 0.0;
+    // For each sample, the index of the last filter step at or before it (None before the first).
+    let mut step_of: Vec<Option<usize>> = Vec::with_capacity(samples.len());
+    let mut steps = 0usize;
+    let initial = core.alignment();
+    for s in samples {
+        if s.speed.is_finite() {
+            distance += s.speed * h;
+        }
+        if s.speed.is_finite() && s.speed >= config.min_speed {
+            let speed = if config.design_speed > 0.0 {
+                config.design_speed
+            } else {
+                s.speed
+            };
+            let z = Vec4::new(s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, 0.0);
+            if core.step(speed, h, &z)?.is_err() {
+                out.skipped += 1;
+            }
+            steps += 1;
+        }
+        step_of.push(steps.checked_sub(1));
+        out.distance.push(distance);
+        out.filtered.push(core.alignment());
+    }
+    if smooth {
+        let smoothed = core.smoothed_alignment();
+        out.smoothed = Some(
+            step_of
+                .iter()
+                .map(|k| k.map_or(initial, |k| smoothed[k]))
+                .collect(),
+        );
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fmi_abi::instance::Instance;
+    use fmi_abi::{InstantiateContext, Logger};
+
+    fn samples(n: usize, speed: impl Fn(usize) -> f64) -> Vec<Sample> {
+        (0..n)
+            .map(|k| Sample {
+                speed: speed(k),
+                ws_acc_y: 0.3 * (k as f64 * 0.05).sin(),
+                ws_yaw_rate: 0.01 * (k as f64 * 0.03).cos(),
+                frame_acc_y: 0.05 * (k as f64 * 0.02).sin(),
+            })
+            .collect()
+    }
+
+    /// The offline filter is the FMU's filter: same outputs, bit for bit, for every prior and
+    /// gain, under a speed that starts below min_speed and changes at every step.
+    #[test]
+    fn offline_filtering_equals_the_fmu() {
+        for (model, gain) in [("1", "1"), ("2", "1"), ("3", "1"), ("3", "2")] {
+            let overrides = vec![
+                ("use_calibration_file".to_string(), "false".to_string()),
+                ("alignment_model".to_string(), model.to_string()),
+                ("gain".to_string(), gain.to_string()),
+            ];
+            let values = settings(&overrides).unwrap();
+            let (config, _) = config(&values, None).unwrap();
+            let speed = |k: usize| if gain == "2" { 20.0 } else { 0.002 * k as f64 };
+            let recorded = samples(1500, speed);
+            let offline = process(&config, 1e-3, &recorded, false).unwrap();
+
+            let ctx = InstantiateContext {
+                instance_name: "t".into(),
+                resources: None,
+            };
+            let mut inst = Instance::<crate::Estimator>::new(&ctx, Logger::silent())
+                .map_err(|(_, e)| e)
+                .unwrap();
+            inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false])
+                .unwrap();
+            inst.set_integer(
+                &[vr::ALIGNMENT_MODEL, vr::GAIN],
+                &[model.parse().unwrap(), gain.parse().unwrap()],
+            )
+            .unwrap();
+            inst.setup_experiment(0.0, None).unwrap();
+            inst.enter_initialization_mode().unwrap();
+            inst.exit_initialization_mode().unwrap();
+            let mut t = 0.0;
+            for (k, s) in recorded.iter().enumerate() {
+                inst.set_real(
+                    &[vr::SPEED, vr::WS_ACC_Y, vr::WS_YAW_RATE, vr::FRAME_ACC_Y],
+                    &[s.speed, s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y],
+                )
+                .unwrap();
+                inst.do_step(t, 1e-3).unwrap();
+                t += 1e-3;
+                let mut o = [0.0; 3];
+                inst.get_real(&[vr::ALIGNMENT, vr::ALIGNMENT_STD, vr::DISTANCE], &mut o)
+                    .unwrap();
+                assert_eq!(
+                    (o[0], o[1]),
+                    offline.filtered[k],
+                    "model {model} gain {gain} step {k}"
+                );
+                assert_eq!(o[2], offline.distance[k]);
+            }
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_named() {
+        let e = settings(&[("nope".into(), "1".into())]).unwrap_err();
+        assert!(e.contains("'nope'"), "{e}");
+        let e = settings(&[("prior_a".into(), "x".into())]).unwrap_err();
+        assert!(e.contains("prior_a") && e.contains("not a number"), "{e}");
+        let e = settings(&[("alignment".into(), "1".into())]).unwrap_err();
+        assert!(e.contains("not a parameter"), "{e}");
+        let v = settings(&[("alignment_model".into(), "7".into())]).unwrap();
+        assert!(config(&v, None).unwrap_err().contains("alignment_model"));
+    }
+
+    /// The smoother's estimate is at least as good as the filter's on data from the model
+    /// itself, and its variance is never larger than the filter's.
+    #[test]
+    fn smoothing_never_increases_the_variance() {
+        let values = settings(&[("alignment_model".into(), "3".into())]).unwrap();
+        let (config, _) = config(&values, None).unwrap();
+        let recorded = samples(3000, |_| 20.0);
+        let out = process(&config, 1e-3, &recorded, true).unwrap();
+        let smoothed = out.smoothed.unwrap();
+        assert_eq!(smoothed.len(), recorded.len());
+        for (f, s) in out.filtered.iter().zip(&smoothed) {
+            assert!(s.1 <= f.1 * (1.0 + 1e-9), "{} > {}", s.1, f.1);
+        }
+        // The last sample has seen everything in both.
+        assert_eq!(smoothed.last(), out.filtered.last());
+    }
+}
