@@ -44,6 +44,21 @@ enum Command {
         #[command(subcommand)]
         what: StudyCommand,
     },
+    /// Filter and smooth recorded sensor signals offline with the estimator (RTS smoother): a
+    /// CSV with time, speed, ws_acc_y, ws_yaw_rate, frame_acc_y (e.g. a run's results.csv).
+    Smooth {
+        /// The CSV of recorded signals.
+        input: PathBuf,
+        /// The CSV to write (time, distance, alignment_filtered[_std], alignment_smoothed[_std]).
+        #[arg(long, default_value = "out/smoothed.csv")]
+        out: PathBuf,
+        /// Set an estimator parameter: name=value (repeatable), e.g. alignment_model=3.
+        #[arg(long = "set", value_name = "PARAMETER=VALUE")]
+        set: Vec<String>,
+        /// A calibration file instead of the one built into the estimator.
+        #[arg(long)]
+        calibration: Option<PathBuf>,
+    },
     /// Write a system (by default the standard case) as an .ssp archive that other masters
     /// (libcosim, OMSimulator, fmpy) can run.
     ExportSsp {
@@ -86,6 +101,9 @@ enum StudyCommand {
     Resonance(StudyArgs),
     /// Every case, in parallel.
     All(StudyArgs),
+    /// Beyond the paper: the estimator's options (alignment prior, steady-state gain, RTS
+    /// smoother, speed following) against the paper's filter, at constant and variable speed.
+    Variants(StudyArgs),
 }
 
 #[derive(Args, Clone)]
@@ -458,6 +476,12 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
                 cal.xi_scale,
                 cal.tuned_jrel.unwrap_or(f64::NAN)
             );
+            let cal = calibrate::tune_prior(&fmus, &cal).map_err(RunError::Config)?;
+            println!(
+                "8-state prior (integrated random walk) on seed {seed}: prior_sigma_xi {} m (whole-band Jrel there {:.4})",
+                cal.prior_sigma_xi.unwrap_or(f64::NAN),
+                cal.prior_jrel.unwrap_or(f64::NAN)
+            );
             let text = calibrate::to_toml(&cal, seed, calibrate::PROVENANCE);
             std::fs::write(&out, text)
                 .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
@@ -471,6 +495,7 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         StudyCommand::Robustness(a) => (a, vec!["robustness"]),
         StudyCommand::Resonance(a) => (a, vec!["resonance"]),
         StudyCommand::All(a) => (a, vec!["standard", "robustness", "resonance"]),
+        StudyCommand::Variants(a) => return study_variants(&a),
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -597,6 +622,115 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
     Ok(())
 }
 
+fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
+    use orchestrator::study::variants;
+    if a.seeds.contains(&a.calibration_seed) {
+        return Err(RunError::Config(format!(
+            "seed {} is the calibration seed: accuracy must be measured on other tracks",
+            a.calibration_seed
+        )));
+    }
+    let fmus = study_fmus(&a.fmus);
+    let started = std::time::Instant::now();
+    let cfg = |e: String| RunError::Config(e);
+    use variants::Conditions;
+    let calibration =
+        variants::record_seeds(&fmus, &[a.calibration_seed], Conditions::Standard).map_err(cfg)?;
+    let (irw, irw_j) = variants::tune_prior_sigma(&calibration[0], 2, &[], None).map_err(cfg)?;
+    let (shaping, shaping_j) =
+        variants::tune_prior_sigma(&calibration[0], 3, &[], None).map_err(cfg)?;
+    println!(
+        "prior_sigma_xi chosen on the calibration seed {}: integrated random walk {irw} m (whole Jrel there {irw_j:.3}), shaping filter {shaping} m ({shaping_j:.3})",
+        a.calibration_seed
+    );
+    let tuned = variants::Tuned {
+        irw_sigma_xi: irw,
+        shaping_sigma_xi: shaping,
+    };
+    let constant = variants::record_seeds(&fmus, &a.seeds, Conditions::Standard).map_err(cfg)?;
+    let at_constant = variants::compare(&constant, &variants::variants(&tuned)).map_err(cfg)?;
+    let flat = variants::record_seeds(&fmus, &a.seeds, Conditions::NoVertical).map_err(cfg)?;
+    let at_flat = variants::compare(&flat, &variants::variants(&tuned)).map_err(cfg)?;
+    let variable =
+        variants::record_seeds(&fmus, &a.seeds, Conditions::VariableSpeed).map_err(cfg)?;
+    let at_variable =
+        variants::compare(&variable, &variants::speed_variants(&tuned)).map_err(cfg)?;
+    let mut md = String::from("# Beyond the paper: estimator variants\n\n");
+    md.push_str(&variants::markdown(
+        "Standard case (20 m/s, 20 s)",
+        &a.seeds,
+        &at_constant,
+    ));
+    md.push('\n');
+    md.push_str(&variants::markdown(
+        "Standard case without vertical irregularities (vertical profile and cross-level off)",
+        &a.seeds,
+        &at_flat,
+    ));
+    md.push('\n');
+    md.push_str(&variants::markdown(
+        "Variable speed (0 -> 20 -> 10 m/s, 50 s)",
+        &a.seeds,
+        &at_variable,
+    ));
+    println!("{md}");
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| RunError::Io(format!("cannot create {}: {e}", a.out.display())))?;
+    let json = serde_json::json!({
+        "calibration_seed": a.calibration_seed,
+        "tuned": tuned,
+        "constant_speed": at_constant,
+        "no_vertical_irregularity": at_flat,
+        "variable_speed": at_variable,
+    });
+    for (name, text) in [
+        ("variants.md", md),
+        (
+            "variants.json",
+            serde_json::to_string_pretty(&json).unwrap_or_default(),
+        ),
+    ] {
+        let path = a.out.join(name);
+        std::fs::write(&path, text)
+            .map_err(|e| RunError::Io(format!("cannot write {}: {e}", path.display())))?;
+    }
+    eprintln!(
+        "variants in {:.1} s; written to {}",
+        started.elapsed().as_secs_f64(),
+        a.out.join("variants.md").display()
+    );
+    Ok(())
+}
+
+fn smooth(
+    input: &Path,
+    out: &Path,
+    set: &[String],
+    calibration: Option<&Path>,
+) -> Result<(), RunError> {
+    let overrides = set
+        .iter()
+        .map(|s| {
+            s.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+                .ok_or_else(|| RunError::Config(format!("--set {s}: expected name=value")))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let processed = orchestrator::smooth::smooth_file(input, out, &overrides, calibration)
+        .map_err(RunError::Config)?;
+    eprintln!(
+        "{} samples filtered and smoothed ({} updates skipped); wrote {}",
+        processed.filtered.len(),
+        processed.skipped,
+        out.display()
+    );
+    Ok(())
+}
+
 /// Ctrl-C (and SIGTERM, SIGHUP) during `run` or `simulate`: the first asks the master to stop
 /// at the next step boundary and keep the results; a second one quits at once. The handler runs
 /// on ctrlc's own thread, not in signal context, so printing and exiting there are safe.
@@ -627,6 +761,12 @@ fn main() -> ExitCode {
         Command::Info { fmu } => info(&fmu),
         Command::ExportSsp { out, system, fmus } => export_ssp(&out, system.as_deref(), &fmus),
         Command::Study { what } => study(what),
+        Command::Smooth {
+            input,
+            out,
+            set,
+            calibration,
+        } => smooth(&input, &out, &set, calibration.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -17,6 +17,7 @@ fn regenerating_the_calibration_reproduces_the_committed_file() {
     let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP).unwrap();
     let cal = calibrate::calibrate(&fmus, &id.params, seed, runs::STOP, runs::STEP).unwrap();
     let cal = calibrate::tune(&fmus, &cal, runs::STOP).unwrap();
+    let cal = calibrate::tune_prior(&fmus, &cal).unwrap();
     let text = calibrate::to_toml(&cal, seed, calibrate::PROVENANCE);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fmu-estimator/resources/calibration.toml");

@@ -43,6 +43,10 @@ pub struct Calibration {
     pub xi_scale: f64,
     /// Whole-band Jrel on the calibration seed with the chosen factors, when tuned.
     pub tuned_jrel: Option<f64>,
+    /// The 8-state priors' virtual-measurement sigma [m] and the whole-band Jrel it gave on the
+    /// calibration seed (integrated random walk), when tuned ([`tune_prior`]).
+    pub prior_sigma_xi: Option<f64>,
+    pub prior_jrel: Option<f64>,
 }
 
 impl Calibration {
@@ -107,6 +111,8 @@ pub fn calibrate(
         virtual_scale: 1.0,
         xi_scale: 1.0,
         tuned_jrel: None,
+        prior_sigma_xi: None,
+        prior_jrel: None,
     })
 }
 
@@ -142,7 +148,7 @@ pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> S
          [parameters]\n\
          m = {m:e}\nI = {i:e}\nl = {l:e}\nl_s = {l_s:e}\nalpha = {alpha:e}\nr_0 = {r_0:e}\nm_f = {m_f:e}\n\
          f11 = {f11:e}\nf22 = {f22:e}\nf23 = {f23:e}\nf33 = {f33:e}\n\
-         kx = {kx:e}\ncx = {cx:e}\nky = {ky:e}\ncy = {cy:e}\n\n\
+         kx = {kx:e}\ncx = {cx:e}\nky = {ky:e}\ncy = {cy:e}\n{prior}\n\
          [noise]\n\
          # Tuning on the calibration seed: R[4,4] x {vs:e}, Q[7,7] x {xs:e}{tuned}\n\
          # Discrete process noise covariance for step_size (7x7, state order y, psi, y_f, vy, psi_rate, vy_f, xi)\n\
@@ -169,6 +175,13 @@ pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> S
         cy = p.cy,
         q = matrix_rows(&c.scaled(c.virtual_scale, c.xi_scale).0),
         r = matrix_rows(&c.scaled(c.virtual_scale, c.xi_scale).1),
+        prior = c
+            .prior_sigma_xi
+            .map(|s| format!(
+                "# The 8-state priors' virtual measurement, tuned on the calibration seed (integrated random walk{}).\nprior_sigma_xi = {s:e}\n",
+                c.prior_jrel.map(|j| format!(", whole-band Jrel there {j:.4}")).unwrap_or_default()
+            ))
+            .unwrap_or_default(),
         vs = c.virtual_scale,
         xs = c.xi_scale,
         tuned = c
@@ -176,6 +189,31 @@ pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> S
             .map(|j| format!(" (whole-band Jrel there {j:.4})"))
             .unwrap_or_default(),
     )
+}
+
+/// Chooses the 8-state priors' virtual-measurement sigma (`prior_sigma_xi`) on the calibration
+/// seed, for the integrated random walk with these Q and R and parameters: the vehicle is run
+/// once and the candidates are evaluated offline ([`super::variants::tune_prior_sigma`]).
+pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, String> {
+    use super::variants;
+    let dir = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let path = dir.path().join("candidate.toml");
+    std::fs::write(&path, candidate_file(c, c.virtual_scale, c.xi_scale))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let record = variants::record(fmus, super::runs::seeded(c.seed), super::runs::STOP, None)?;
+    let base: Vec<(String, String)> = parameter_settings(&c.params)
+        .into_iter()
+        .map(|(k, v)| match v {
+            crate::system::Value::Real(x) => Ok((k, format!("{x:e}"))),
+            other => Err(format!("parameter {k}: unexpected value {other:?}")),
+        })
+        .collect::<Result<_, _>>()?;
+    let (s, j) = variants::tune_prior_sigma(&record, 2, &base, Some(&path))?;
+    Ok(Calibration {
+        prior_sigma_xi: Some(s),
+        prior_jrel: Some(j),
+        ..c.clone()
+    })
 }
 
 /// The provenance line `orchestrator study calibrate` writes into the file.

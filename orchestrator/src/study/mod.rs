@@ -9,3 +9,4 @@ pub mod optimize;
 pub mod plot;
 pub mod runs;
 pub mod standard;
+pub mod variants;

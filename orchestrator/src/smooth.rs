@@ -1,0 +1,164 @@
+//! `orchestrator smooth`: the estimator run offline over recorded sensor signals, filtered and
+//! smoothed (Rauch-Tung-Striebel), from a CSV file such as the `results.csv` of a run.
+//!
+//! Input: a CSV with a `time` column at a constant step and the columns `speed` (or
+//! `forward_speed`), `ws_acc_y`, `ws_yaw_rate` and `frame_acc_y`, each optionally prefixed by a
+//! component name (`vehicle.ws_acc_y`). Row `k` holds the samples at the end of the step that
+//! ends at `time[k]`; a first row at the start time with the initial values (as `results.csv`
+//! has) is used only for its time. Output columns: `time`, `distance`, `alignment_filtered`,
+//! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres).
+
+use crate::study::standard::Columns;
+use fmu_estimator::offline::{self, Processed, Sample};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The column named `name`, bare or after any `component.` prefix.
+fn find<'a>(cols: &'a Columns, names: &[&str], file: &Path) -> Result<&'a [f64], String> {
+    for (i, n) in cols.names.iter().enumerate() {
+        let bare = n.rsplit('.').next().unwrap_or(n);
+        if names.contains(&n.as_str()) || names.contains(&bare) {
+            return Ok(&cols.data[i]);
+        }
+    }
+    Err(format!(
+        "{}: no column named {} (columns: {})",
+        file.display(),
+        names.join(" or "),
+        cols.names.join(", ")
+    ))
+}
+
+/// Reads the samples and the step from a CSV file.
+pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String> {
+    let cols = Columns::read(path)?;
+    let time = find(&cols, &["time"], path)?;
+    if time.len() < 3 {
+        return Err(format!("{}: fewer than 3 rows", path.display()));
+    }
+    let h = time[1] - time[0];
+    if !(h > 0.0) {
+        return Err(format!(
+            "{}: time does not increase at line 3",
+            path.display()
+        ));
+    }
+    for (k, w) in time.windows(2).enumerate() {
+        if ((w[1] - w[0]) - h).abs() > 1e-6 * h {
+            return Err(format!(
+                "{}: the time step changes at line {} ({} s instead of {h} s): the filter needs a constant step",
+                path.display(),
+                k + 3,
+                w[1] - w[0]
+            ));
+        }
+    }
+    let speed = find(&cols, &["speed", "forward_speed"], path)?;
+    let acc = find(&cols, &["ws_acc_y"], path)?;
+    let yaw = find(&cols, &["ws_yaw_rate"], path)?;
+    let frame = find(&cols, &["frame_acc_y"], path)?;
+    // A first row at the start time holds initial values, not the end of a step.
+    let samples = (1..time.len())
+        .map(|k| Sample {
+            speed: speed[k],
+            ws_acc_y: acc[k],
+            ws_yaw_rate: yaw[k],
+            frame_acc_y: frame[k],
+        })
+        .collect();
+    Ok((time[1..].to_vec(), h, samples))
+}
+
+/// The output CSV text.
+pub fn to_csv(time: &[f64], out: &Processed) -> String {
+    let mut s = String::from(
+        "time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std\n",
+    );
+    let smoothed = out.smoothed.as_deref();
+    let mut buf = ryu::Buffer::new();
+    for (k, t) in time.iter().enumerate() {
+        let (f, fs) = out.filtered[k];
+        let (m, ms) = smoothed.map_or((f64::NAN, f64::NAN), |v| v[k]);
+        let mut first = true;
+        for x in [*t, out.distance[k], f, fs, m, ms] {
+            if !first {
+                s.push(',');
+            }
+            first = false;
+            if x.is_finite() {
+                s.push_str(buf.format(x));
+            } else {
+                let _ = write!(s, "{x}");
+            }
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end).
+pub fn smooth_file(
+    input: &Path,
+    output: &Path,
+    overrides: &[(String, String)],
+    calibration: Option<&Path>,
+) -> Result<Processed, String> {
+    let (time, h, samples) = read_samples(input)?;
+    let values = offline::settings(overrides)?;
+    let (config, notes) = offline::config(&values, calibration)?;
+    for n in notes {
+        if let fmu_estimator::config::Note::Warning(m) = n {
+            eprintln!("warning: {m}");
+        }
+    }
+    let out = offline::process(&config, h, &samples, true)?;
+    let tmp = output.with_extension("csv.partial");
+    std::fs::write(&tmp, to_csv(&time, &out))
+        .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+    std::fs::rename(&tmp, output).map_err(|e| {
+        format!(
+            "cannot rename {} to {}: {e}",
+            tmp.display(),
+            output.display()
+        )
+    })?;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(name: &str, text: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("orch-smooth-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("in.csv");
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    #[test]
+    fn reads_prefixed_columns_and_drops_the_initial_row() {
+        let p = write(
+            "ok",
+            "time,vehicle.forward_speed,vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y\n0,0,0,0,0\n0.001,20,0.1,0.2,0.3\n0.002,20,0.4,0.5,0.6\n",
+        );
+        let (t, h, s) = read_samples(&p).unwrap();
+        assert_eq!(t, vec![0.001, 0.002]);
+        assert!((h - 0.001).abs() < 1e-15);
+        assert_eq!(s[1].ws_yaw_rate, 0.5);
+    }
+
+    #[test]
+    fn missing_columns_and_uneven_steps_are_named() {
+        let p = write("missing", "time,speed,ws_acc_y\n0,1,2\n1,1,2\n2,1,2\n");
+        let e = read_samples(&p).unwrap_err();
+        assert!(e.contains("ws_yaw_rate") && e.contains("in.csv"), "{e}");
+        let p = write(
+            "uneven",
+            "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n0,1,0,0,0\n0.001,1,0,0,0\n0.003,1,0,0,0\n",
+        );
+        let e = read_samples(&p).unwrap_err();
+        assert!(e.contains("line 4") && e.contains("constant step"), "{e}");
+    }
+}

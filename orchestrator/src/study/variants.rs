@@ -1,0 +1,411 @@
+//! Beyond the paper: the estimator's options (alignment prior, steady-state gain, smoother,
+//! speed following) compared with the paper's filter on the same held-out tracks.
+//!
+//! Each track seed is run once through the vehicle FMU alone (sensor signals, speed and the true
+//! alignment recorded in memory); every filter variant then processes that record offline with
+//! the estimator library ([`fmu_estimator::offline`]), which steps exactly as the FMU does (a
+//! test of that crate checks bit equality), so all variants see the same samples and the
+//! smoother can be included. The virtual measurement's weight of the 8-state priors is chosen on
+//! the calibration seed only ([`tune_prior_sigma`]).
+//!
+//! # Variable speed
+//! The vehicle's `speed` input follows [`profile`]: standing for 1 s, accelerating at 1 m/s² to
+//! 20 m/s, cruising, braking at 1 m/s² to 10 m/s and cruising again (typical service
+//! accelerations of a regional train, 0.5 to 1.2 m/s²). The filters either follow the speed input
+//! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
+
+use super::metrics::{BANDS, BandMetrics, evaluate};
+use super::runs::{Fmus, STEP, Settings, seeded};
+use super::standard::{DS, TRIM};
+use crate::master::{Algorithm, Cosimulation, RunOptions, Table};
+use crate::system::{Component, Endpoint, Experiment, System};
+use fmi_import::LogConfig;
+use fmu_estimator::offline::{self, Sample};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::path::Path;
+
+/// The vehicle variables a record holds.
+const RECORDED: [&str; 6] = [
+    "forward_speed",
+    "ws_acc_y",
+    "ws_yaw_rate",
+    "frame_acc_y",
+    "distance",
+    "alignment",
+];
+
+/// One vehicle run: the estimator's inputs and the truth.
+#[derive(Debug, Clone)]
+pub struct Record {
+    pub samples: Vec<Sample>,
+    pub distance: Vec<f64>,
+    pub alignment: Vec<f64>,
+}
+
+/// The variable-speed profile [m/s] at time `t` [s] (see the module docs); 50 s long.
+pub fn profile(t: f64) -> f64 {
+    match t {
+        t if t < 1.0 => 0.0,
+        t if t < 21.0 => t - 1.0,
+        t if t < 31.0 => 20.0,
+        t if t < 41.0 => 20.0 - (t - 31.0),
+        _ => 10.0,
+    }
+}
+
+/// Duration of [`profile`].
+pub const PROFILE_STOP: f64 = 50.0;
+
+/// Runs the vehicle alone with `settings` for `stop` seconds, its speed input from `speed` (or
+/// its default, 20 m/s), and returns the record.
+pub fn record(
+    fmus: &Fmus,
+    settings: Settings,
+    stop: f64,
+    speed: Option<&(dyn Fn(f64) -> f64 + Sync)>,
+) -> Result<Record, String> {
+    let system = System {
+        name: "vehicle".into(),
+        components: vec![Component {
+            name: "vehicle".into(),
+            source: fmus.vehicle.clone(),
+            parameters: settings,
+        }],
+        connections: vec![],
+        experiment: Experiment::default(),
+    };
+    let cosim = Cosimulation::load(system).map_err(|e| e.to_string())?;
+    let speed_vr = cosim.model_descriptions()[0]
+        .variable("speed")
+        .map(|v| v.value_reference)
+        .ok_or("the vehicle FMU has no 'speed' input")?;
+    let opts = RunOptions {
+        start: 0.0,
+        stop,
+        step: STEP,
+        algorithm: Algorithm::GaussSeidel,
+        out_dir: None,
+        record: Some(
+            RECORDED
+                .iter()
+                .map(|v| Endpoint::new("vehicle", v))
+                .collect(),
+        ),
+        interval: None,
+        progress: false,
+        log: LogConfig {
+            min_status: fmi_import::fmi2Status::Error,
+            ..LogConfig::default()
+        },
+        collect: true,
+    };
+    let summary = match speed {
+        None => cosim.run(&opts),
+        Some(f) => cosim.run_with_inputs(&opts, &|t, out: &mut Vec<(u32, f64)>| {
+            out.clear();
+            out.push((speed_vr, f(t)));
+        }),
+    }
+    .map_err(|e| e.to_string())?;
+    let table = summary.table.ok_or("no table was collected")?;
+    from_table(&table)
+}
+
+/// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row
+/// `k` holds the samples at the end of step `k`).
+fn from_table(table: &Table) -> Result<Record, String> {
+    let c = |n: &str| {
+        table
+            .column(&format!("vehicle.{n}"))
+            .map(|x| x[1..].to_vec())
+            .ok_or_else(|| format!("no column vehicle.{n}"))
+    };
+    let (speed, acc, yaw, frame) = (
+        c("forward_speed")?,
+        c("ws_acc_y")?,
+        c("ws_yaw_rate")?,
+        c("frame_acc_y")?,
+    );
+    let samples = (0..speed.len())
+        .map(|k| Sample {
+            speed: speed[k],
+            ws_acc_y: acc[k],
+            ws_yaw_rate: yaw[k],
+            frame_acc_y: frame[k],
+        })
+        .collect();
+    Ok(Record {
+        samples,
+        distance: c("distance")?,
+        alignment: c("alignment")?,
+    })
+}
+
+/// One way of running the estimator.
+#[derive(Debug, Clone, Serialize)]
+pub struct Variant {
+    pub name: String,
+    /// Estimator parameters (FMI name, value).
+    pub settings: Vec<(String, String)>,
+    /// Evaluate the smoothed estimate instead of the filtered one.
+    pub smooth: bool,
+}
+
+fn variant(name: &str, settings: &[(&str, String)], smooth: bool) -> Variant {
+    Variant {
+        name: name.into(),
+        settings: settings
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect(),
+        smooth,
+    }
+}
+
+/// The prior's virtual-measurement sigma for the 8-state models, chosen on the calibration seed.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Tuned {
+    pub irw_sigma_xi: f64,
+    pub shaping_sigma_xi: f64,
+}
+
+/// The compared variants at constant speed.
+pub fn variants(t: &Tuned) -> Vec<Variant> {
+    let m = |k: &str| ("alignment_model", k.to_string());
+    let irw = ("prior_sigma_xi", t.irw_sigma_xi.to_string());
+    let shaping = ("prior_sigma_xi", t.shaping_sigma_xi.to_string());
+    let steady = ("gain", "2".to_string());
+    vec![
+        variant("paper (random walk)", &[m("1")], false),
+        variant("integrated random walk", &[m("2"), irw.clone()], false),
+        variant("shaping filter", &[m("3"), shaping.clone()], false),
+        variant("paper, steady-state gain", &[m("1"), steady.clone()], false),
+        variant(
+            "integrated random walk, steady-state gain",
+            &[m("2"), irw.clone(), steady],
+            false,
+        ),
+        variant("paper, RTS smoother", &[m("1")], true),
+        variant("integrated random walk, RTS smoother", &[m("2"), irw], true),
+        variant("shaping filter, RTS smoother", &[m("3"), shaping], true),
+    ]
+}
+
+/// The variants compared under the variable-speed profile.
+pub fn speed_variants(t: &Tuned) -> Vec<Variant> {
+    let paper = ("alignment_model", "1".to_string());
+    let irw = [
+        ("alignment_model", "2".to_string()),
+        ("prior_sigma_xi", t.irw_sigma_xi.to_string()),
+    ];
+    let fixed = ("design_speed", "20".to_string());
+    vec![
+        variant(
+            "paper, matrices of 20 m/s",
+            &[paper.clone(), fixed.clone()],
+            false,
+        ),
+        variant("paper, following the speed", &[paper], false),
+        variant(
+            "integrated random walk, matrices of 20 m/s",
+            &[irw[0].clone(), irw[1].clone(), fixed],
+            false,
+        ),
+        variant("integrated random walk, following the speed", &irw, false),
+        variant(
+            "integrated random walk, following the speed, RTS smoother",
+            &irw,
+            true,
+        ),
+    ]
+}
+
+/// Runs `v` over `rec` and evaluates it against the truth, with the estimator's built-in
+/// calibration or the file `calibration`.
+pub fn evaluate_variant(
+    rec: &Record,
+    v: &Variant,
+    calibration: Option<&Path>,
+) -> Result<BandMetrics, String> {
+    let values = offline::settings(&v.settings)?;
+    let (config, _) = offline::config(&values, calibration)?;
+    let out = offline::process(&config, STEP, &rec.samples, v.smooth)?;
+    let est = match &out.smoothed {
+        Some(s) if v.smooth => s,
+        _ => &out.filtered,
+    };
+    let est: Vec<f64> = est.iter().map(|e| e.0).collect();
+    evaluate(&out.distance, &est, &rec.distance, &rec.alignment, DS, TRIM)
+}
+
+/// Chooses the virtual measurement's sigma of `model` (2 or 3) by whole-band Jrel on the
+/// calibration record, from 0.5 mm to 1 m, with the estimator settings `base` and calibration
+/// file `calibration` (the built-in one if `None`). Never 0 (none): inertial sensors do not see a
+/// common lateral shift of wheelset, frame and track, so without the virtual measurement that
+/// shift is unobservable, its variance grows without bound under the integrated random walk
+/// (the PBH test at initialization says so) and no steady-state gain exists.
+pub fn tune_prior_sigma(
+    record: &Record,
+    model: u32,
+    base: &[(String, String)],
+    calibration: Option<&Path>,
+) -> Result<(f64, f64), String> {
+    const GRID: [f64; 11] = [5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.2, 0.5, 1.0];
+    let scores: Vec<Result<(f64, f64), String>> = GRID
+        .par_iter()
+        .map(|&s| {
+            let mut v = variant(
+                "tuning",
+                &[
+                    ("alignment_model", model.to_string()),
+                    ("prior_sigma_xi", s.to_string()),
+                ],
+                false,
+            );
+            v.settings.extend(base.iter().cloned());
+            Ok((s, evaluate_variant(record, &v, calibration)?.whole.jrel))
+        })
+        .collect();
+    let mut best = (f64::NAN, f64::INFINITY);
+    for r in scores {
+        let (s, j) = r?;
+        if j < best.1 {
+            best = (s, j);
+        }
+    }
+    Ok(best)
+}
+
+/// Mean and sample standard deviation.
+fn spread(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let var = if x.len() > 1 {
+        x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
+}
+
+/// One variant's Jrel per band over the seeds.
+#[derive(Debug, Clone, Serialize)]
+pub struct VariantResult {
+    pub name: String,
+    pub settings: Vec<(String, String)>,
+    pub smooth: bool,
+    /// (band, mean Jrel, standard deviation, mean J [mm]).
+    pub bands: Vec<(String, f64, f64, f64)>,
+    pub per_seed: Vec<BandMetrics>,
+}
+
+/// Evaluates every variant on every record.
+pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantResult>, String> {
+    let jobs: Vec<(usize, usize)> = (0..variants.len())
+        .flat_map(|v| (0..records.len()).map(move |r| (v, r)))
+        .collect();
+    let metrics: Vec<Result<BandMetrics, String>> = jobs
+        .par_iter()
+        .map(|&(v, r)| evaluate_variant(&records[r], &variants[v], None))
+        .collect();
+    let mut out = vec![];
+    for (vi, v) in variants.iter().enumerate() {
+        let per_seed: Vec<BandMetrics> = jobs
+            .iter()
+            .zip(&metrics)
+            .filter(|((j, _), _)| *j == vi)
+            .map(|(_, m)| m.clone())
+            .collect::<Result<_, _>>()?;
+        let bands = BANDS
+            .iter()
+            .map(|b| {
+                let r: Vec<f64> = per_seed
+                    .iter()
+                    .map(|m| m.get(b.name).expect("band").jrel)
+                    .collect();
+                let j: Vec<f64> = per_seed
+                    .iter()
+                    .map(|m| m.get(b.name).expect("band").j_mm)
+                    .collect();
+                let (rm, rs) = spread(&r);
+                (b.name.to_string(), rm, rs, spread(&j).0)
+            })
+            .collect();
+        out.push(VariantResult {
+            name: v.name.clone(),
+            settings: v.settings.clone(),
+            smooth: v.smooth,
+            bands,
+            per_seed,
+        });
+    }
+    Ok(out)
+}
+
+/// The track conditions of a record set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Conditions {
+    /// The standard case: 20 m/s, lateral and vertical irregularities.
+    Standard,
+    /// The standard case without vertical irregularities (vertical profile and cross-level).
+    NoVertical,
+    /// The standard track under the variable-speed [`profile`].
+    VariableSpeed,
+}
+
+/// Records the given seeds in parallel.
+pub fn record_seeds(
+    fmus: &Fmus,
+    seeds: &[u32],
+    conditions: Conditions,
+) -> Result<Vec<Record>, String> {
+    seeds
+        .par_iter()
+        .map(|&s| match conditions {
+            Conditions::Standard => record(fmus, seeded(s), super::runs::STOP, None),
+            Conditions::NoVertical => {
+                let mut settings = seeded(s);
+                settings.push((
+                    "vertical_irregularity".into(),
+                    crate::system::Value::Boolean(false),
+                ));
+                record(fmus, settings, super::runs::STOP, None)
+            }
+            Conditions::VariableSpeed => record(fmus, seeded(s), PROFILE_STOP, Some(&profile)),
+        })
+        .collect()
+}
+
+/// A Markdown table of the results.
+pub fn markdown(title: &str, seeds: &[u32], results: &[VariantResult]) -> String {
+    let mut s = format!(
+        "### {title}\n\nJrel per band, mean ± standard deviation over seeds {seeds:?} (whole-band J in mm).\n\n| variant | whole | D1 | D2 | D3 | J whole [mm] |\n|---|---|---|---|---|---|\n"
+    );
+    for r in results {
+        s.push_str(&format!("| {} |", r.name));
+        for (_, m, sd, _) in &r.bands {
+            s.push_str(&format!(" {m:.3} ± {sd:.3} |"));
+        }
+        s.push_str(&format!(" {:.3} |\n", r.bands[0].3));
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_profile_accelerates_cruises_and_brakes() {
+        assert_eq!(profile(0.5), 0.0);
+        assert_eq!(profile(11.0), 10.0);
+        assert_eq!(profile(25.0), 20.0);
+        assert_eq!(profile(36.0), 15.0);
+        assert_eq!(profile(45.0), 10.0);
+        // Continuous at the joints.
+        for t in [1.0, 21.0, 31.0, 41.0] {
+            assert!((profile(t - 1e-9) - profile(t + 1e-9)).abs() < 1e-6, "{t}");
+        }
+    }
+}
