@@ -39,6 +39,11 @@ unsafe extern "C" {
 }
 
 fn instance(scheme: i32) -> fmi2Component {
+    instance_with(scheme, 1, 1)
+}
+
+/// An initialized instance with the given discretization, alignment model and gain.
+fn instance_with(scheme: i32, model: i32, gain: i32) -> fmi2Component {
     let name = CString::new("bench").unwrap();
     let guid = CString::new(<fmu_estimator::Estimator as fmi_abi::Model>::INFO.guid).unwrap();
     let res = CString::new(format!("file://{}/resources", env!("CARGO_MANIFEST_DIR"))).unwrap();
@@ -54,6 +59,8 @@ fn instance(scheme: i32) -> fmi2Component {
         );
         assert!(!c.is_null());
         fmi2SetInteger(c, &vr::DISCRETIZATION, 1, &scheme);
+        fmi2SetInteger(c, &vr::ALIGNMENT_MODEL, 1, &model);
+        fmi2SetInteger(c, &vr::GAIN, 1, &gain);
         fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
         fmi2EnterInitializationMode(c);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2Status::OK);
@@ -98,5 +105,60 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+/// The filter step itself (no FMI layer) for every prior and gain, and the FMI step with the
+/// steady-state gain: the cost the issue bounds at 0.1 us per step is the filter's.
+fn bench_options(c: &mut Criterion) {
+    use fmu_estimator::filter::Vec4;
+    use fmu_estimator::offline;
+    let h = 1e-3;
+    for (model, gain, label) in [
+        ("1", "1", "paper, time-varying"),
+        ("1", "2", "paper, steady-state"),
+        ("2", "1", "integrated random walk, time-varying"),
+        ("2", "2", "integrated random walk, steady-state"),
+        ("3", "1", "shaping filter, time-varying"),
+    ] {
+        let values = offline::settings(&[
+            ("alignment_model".into(), model.into()),
+            ("gain".into(), gain.into()),
+        ])
+        .unwrap();
+        let (config, _) = offline::config(&values, None).unwrap();
+        let mut core = config.core();
+        let mut k = 0u64;
+        c.bench_function(&format!("filter step ({label})"), |b| {
+            b.iter(|| {
+                k += 1;
+                let x = (k as f64 * 1e-3).sin();
+                let z = Vec4::new(0.1 * x, 0.001 * x, 0.02 * x, 0.0);
+                black_box(core.step(20.0, h, &z).unwrap().ok())
+            })
+        });
+    }
+    // A speed that changes at every step: the matrices are rebuilt each time.
+    let values = offline::settings(&[("alignment_model".into(), "2".into())]).unwrap();
+    let (config, _) = offline::config(&values, None).unwrap();
+    let mut core = config.core();
+    let mut k = 0u64;
+    c.bench_function("filter step (integrated random walk, new speed every step)", |b| {
+        b.iter(|| {
+            k += 1;
+            let x = (k as f64 * 1e-3).sin();
+            let z = Vec4::new(0.1 * x, 0.001 * x, 0.02 * x, 0.0);
+            black_box(core.step(15.0 + x, h, &z).unwrap().ok())
+        })
+    });
+    let comp = instance_with(1, 1, 2);
+    let mut t = 0.0;
+    c.bench_function("fmi2DoStep (paper, steady-state gain)", |b| {
+        b.iter(|| {
+            let s = unsafe { fmi2DoStep(comp, t, h, 1) };
+            t += h;
+            black_box(s)
+        })
+    });
+    unsafe { fmi2FreeInstance(comp) };
+}
+
+criterion_group!(benches, bench, bench_options);
 criterion_main!(benches);
