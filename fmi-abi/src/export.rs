@@ -75,6 +75,10 @@ unsafe fn with<M: Model>(
         return fmi2Status::Error;
     };
     let inst: *mut Instance<M> = &mut h.inst;
+    // After fmi2Fatal nothing but fmi2FreeInstance (which does not come through here).
+    if let Err(s) = unsafe { &*inst }.refuse_if_fatal(function) {
+        return s;
+    }
     match catch_unwind(AssertUnwindSafe(|| f(unsafe { &mut *inst }))) {
         Ok(Ok(s)) | Ok(Err(s)) => s,
         Err(payload) => {
@@ -503,6 +507,7 @@ pub unsafe fn unsupported<M: Model>(c: fmi2Component, function: &str, why: &str)
 pub unsafe fn get_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut c_int) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetStatus", |inst| {
+            inst.check_status_query("fmi2GetStatus")?;
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetStatus")?;
             inst.log
                 .call(|| format!("fmi2GetStatus({kind}): no asynchronous step, nothing to report"));
@@ -520,6 +525,7 @@ pub unsafe fn get_real_status<M: Model>(
 ) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetRealStatus", |inst| {
+            inst.check_status_query("fmi2GetRealStatus")?;
             let out = slice_mut(inst, value, 1, "value", "fmi2GetRealStatus")?;
             if kind == FMI2_LAST_SUCCESSFUL_TIME {
                 out[0] = inst.last_successful_time();
@@ -540,6 +546,7 @@ pub unsafe fn get_integer_status<M: Model>(
 ) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetIntegerStatus", |inst| {
+            inst.check_status_query("fmi2GetIntegerStatus")?;
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetIntegerStatus")?;
             Ok(fmi2Status::Discard)
         })
@@ -555,6 +562,7 @@ pub unsafe fn get_boolean_status<M: Model>(
 ) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetBooleanStatus", |inst| {
+            inst.check_status_query("fmi2GetBooleanStatus")?;
             let out = slice_mut(inst, value, 1, "value", "fmi2GetBooleanStatus")?;
             if kind == FMI2_TERMINATED {
                 out[0] = FMI2_FALSE; // the model never asks the master to stop
@@ -575,6 +583,7 @@ pub unsafe fn get_string_status<M: Model>(
 ) -> fmi2Status {
     unsafe {
         with::<M>(c, "fmi2GetStringStatus", |inst| {
+            inst.check_status_query("fmi2GetStringStatus")?;
             let _ = slice_mut(inst, value, 1, "value", "fmi2GetStringStatus")?;
             Ok(fmi2Status::Discard)
         })

@@ -457,6 +457,25 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2GetStatus and fmi2Get*Status are legal once stepping has begun: stepComplete,
+    /// stepFailed and terminated (FMI 2.0 section 4.2.4; stepInProgress is never entered here).
+    pub(crate) fn check_status_query(&self, function: &str) -> Res {
+        self.require(
+            function,
+            &[State::StepComplete, State::StepFailed, State::Terminated],
+        )
+    }
+
+    /// After fmi2Fatal only fmi2FreeInstance is allowed (FMI 2.0 section 2.1.3).
+    pub(crate) fn refuse_if_fatal(&self, function: &str) -> Res {
+        if self.sim.state == State::Fatal {
+            return Err(self.fail(&format!(
+                "{function}: the instance is in the fatal state; only fmi2FreeInstance is allowed"
+            )));
+        }
+        Ok(())
+    }
+
     pub fn last_successful_time(&self) -> f64 {
         self.sim.time
     }
@@ -480,30 +499,66 @@ impl<M: Model> Instance<M> {
     }
 }
 
-/// The serialized FMU state: a header naming the FMU, then the snapshot in postcard format
-/// (little-endian IEEE doubles, so values come back bit for bit). The header lets us refuse a
-/// state from another FMU or another build with a message instead of decoding garbage.
+/// The serialized FMU state: a header naming the FMU, the body's length and FNV-1a checksum,
+/// then the snapshot in postcard format (little-endian IEEE doubles, so values come back bit
+/// for bit). The header lets us refuse a state from another FMU or another build with a
+/// message instead of decoding garbage; the length and checksum refuse a truncated, extended
+/// or damaged copy, which postcard alone would often decode into wrong values (found by the
+/// fmi-fuzz state-machine fuzzer). The checksum guards against accidents, not forgery.
 pub fn serialize<M: Model>(snap: &Snapshot<M>) -> Result<Vec<u8>, String> {
-    let mut out = Vec::with_capacity(256);
-    out.extend_from_slice(b"RTGS1\0");
-    out.extend_from_slice(M::INFO.guid.as_bytes());
-    out.push(0);
-    postcard::to_extend(snap, out).map_err(|e| format!("cannot serialize the FMU state: {e}"))
+    let body =
+        postcard::to_stdvec(snap).map_err(|e| format!("cannot serialize the FMU state: {e}"))?;
+    let mut out = state_header::<M>();
+    out.reserve(16 + body.len());
+    out.extend_from_slice(&(body.len() as u64).to_le_bytes());
+    out.extend_from_slice(&fnv1a(&body).to_le_bytes());
+    out.extend_from_slice(&body);
+    Ok(out)
+}
+
+fn state_header<M: Model>() -> Vec<u8> {
+    let mut header = b"RTGS2\0".to_vec();
+    header.extend_from_slice(M::INFO.guid.as_bytes());
+    header.push(0);
+    header
+}
+
+/// 64-bit FNV-1a.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x0100_0000_01b3)
+    })
 }
 
 pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
-    let mut header = b"RTGS1\0".to_vec();
-    header.extend_from_slice(M::INFO.guid.as_bytes());
-    header.push(0);
-    let Some(body) = bytes.strip_prefix(header.as_slice()) else {
+    let header = state_header::<M>();
+    let Some(rest) = bytes.strip_prefix(header.as_slice()) else {
         return Err(format!(
             "the serialized state was not made by {} (GUID {}) or by this version of it",
             M::INFO.model_name,
             M::INFO.guid
         ));
     };
-    let snap: Snapshot<M> =
-        postcard::from_bytes(body).map_err(|e| format!("the serialized state is corrupt: {e}"))?;
+    let (Some(len), Some(sum)) = (rest.get(..8), rest.get(8..16)) else {
+        return Err("the serialized state is truncated".into());
+    };
+    let len = u64::from_le_bytes(len.try_into().unwrap());
+    let sum = u64::from_le_bytes(sum.try_into().unwrap());
+    let body = &rest[16..];
+    if body.len() as u64 != len {
+        return Err(format!(
+            "the serialized state is {} bytes, its header says {len}: truncated or extended",
+            body.len()
+        ));
+    }
+    if fnv1a(body) != sum {
+        return Err("the serialized state is corrupt (checksum mismatch)".into());
+    }
+    let (snap, left): (Snapshot<M>, _) = postcard::take_from_bytes(body)
+        .map_err(|e| format!("the serialized state is corrupt: {e}"))?;
+    if !left.is_empty() {
+        return Err("the serialized state has trailing bytes".into());
+    }
     let expected = Values::from_table(M::variables());
     let same_shape = snap.values.real.len() == expected.real.len()
         && snap.values.integer.len() == expected.integer.len()

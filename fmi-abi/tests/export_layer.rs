@@ -327,6 +327,130 @@ fn a_panic_is_contained_and_the_instance_becomes_fatal() {
 }
 
 #[test]
+fn after_fatal_only_free_instance_is_accepted() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    f.set(U, 99.0);
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::Fatal);
+    // Reset would otherwise resurrect an instance whose model panicked mid-step.
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    let mut t = 0.0;
+    unsafe {
+        assert_eq!(x::reset::<Toy>(f.c), fmi2Status::Error);
+        assert_eq!(
+            x::set_debug_logging::<Toy>(f.c, 1, 0, std::ptr::null()),
+            fmi2Status::Error
+        );
+        assert_eq!(x::get_fmu_state::<Toy>(f.c, &mut s), fmi2Status::Error);
+        assert_eq!(
+            x::get_real_status::<Toy>(f.c, FMI2_LAST_SUCCESSFUL_TIME, &mut t),
+            fmi2Status::Error
+        );
+    }
+    assert!(s.is_null());
+    assert!(
+        f.last().3.contains("only fmi2FreeInstance"),
+        "{}",
+        f.last().3
+    );
+}
+
+#[test]
+fn status_queries_are_refused_before_stepping_begins() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    let (mut t, mut b, mut i) = (f64::NAN, 7, 7);
+    let query = |t: &mut f64, b: &mut c_int, i: &mut c_int| unsafe {
+        [
+            x::get_real_status::<Toy>(f.c, FMI2_LAST_SUCCESSFUL_TIME, t),
+            x::get_boolean_status::<Toy>(f.c, FMI2_TERMINATED, b),
+            x::get_status::<Toy>(f.c, FMI2_DO_STEP_STATUS, i),
+        ]
+    };
+    // Instantiated and initialization mode: not allowed (FMI 2.0 section 4.2.4).
+    assert_eq!(query(&mut t, &mut b, &mut i), [fmi2Status::Error; 3]);
+    assert!(
+        f.last().3.contains("not allowed in state 'instantiated'"),
+        "{}",
+        f.last().3
+    );
+    unsafe {
+        assert_eq!(
+            x::setup_experiment::<Toy>(f.c, 0, 0.0, 0.0, 0, 0.0),
+            fmi2Status::OK
+        );
+        assert_eq!(x::enter_initialization_mode::<Toy>(f.c), fmi2Status::OK);
+    }
+    assert_eq!(query(&mut t, &mut b, &mut i), [fmi2Status::Error; 3]);
+    unsafe { assert_eq!(x::exit_initialization_mode::<Toy>(f.c), fmi2Status::OK) };
+    assert_eq!(f.step(0.0, 0.25), fmi2Status::OK);
+    assert_eq!(
+        query(&mut t, &mut b, &mut i),
+        [fmi2Status::OK, fmi2Status::OK, fmi2Status::Discard]
+    );
+    assert_eq!((t, b), (0.25, FMI2_FALSE));
+    unsafe { assert_eq!(x::terminate::<Toy>(f.c), fmi2Status::OK) };
+    assert_eq!(query(&mut t, &mut b, &mut i)[0], fmi2Status::OK);
+}
+
+#[test]
+fn every_damaged_copy_of_a_serialized_state_is_refused() {
+    let f = Fmu::new("toy-guid-1").unwrap();
+    f.init();
+    f.set(U, 0.3);
+    assert_eq!(f.step(0.0, 0.1), fmi2Status::OK);
+    let mut s: fmi2FMUstate = std::ptr::null_mut();
+    let mut size = 0usize;
+    unsafe {
+        assert_eq!(x::get_fmu_state::<Toy>(f.c, &mut s), fmi2Status::OK);
+        assert_eq!(
+            x::serialized_fmu_state_size::<Toy>(f.c, s, &mut size),
+            fmi2Status::OK
+        );
+    }
+    let mut good = vec![0 as c_char; size];
+    unsafe {
+        assert_eq!(
+            x::serialize_fmu_state::<Toy>(f.c, s, good.as_mut_ptr(), size),
+            fmi2Status::OK
+        );
+        assert_eq!(x::free_fmu_state::<Toy>(f.c, &mut s), fmi2Status::OK);
+    }
+    let try_bytes = |b: &[c_char]| {
+        let mut st: fmi2FMUstate = std::ptr::null_mut();
+        let status = unsafe { x::deserialize_fmu_state::<Toy>(f.c, b.as_ptr(), b.len(), &mut st) };
+        if !st.is_null() {
+            unsafe { x::free_fmu_state::<Toy>(f.c, &mut st) };
+        }
+        status
+    };
+    assert_eq!(try_bytes(&good), fmi2Status::OK);
+    // Every single-bit flip, every truncation and an extension: all refused. Before the
+    // length and checksum, a flip in a value byte decoded into a different state.
+    for k in 0..size {
+        for bit in 0..8 {
+            let mut bad = good.clone();
+            bad[k] ^= 1 << bit;
+            assert_eq!(
+                try_bytes(&bad),
+                fmi2Status::Error,
+                "bit {bit} of byte {k} of {size}"
+            );
+        }
+    }
+    for n in 0..size {
+        assert_eq!(try_bytes(&good[..n]), fmi2Status::Error, "truncated to {n}");
+    }
+    let mut longer = good.clone();
+    longer.push(0);
+    assert_eq!(try_bytes(&longer), fmi2Status::Error);
+    assert!(
+        f.last().3.contains("truncated or extended"),
+        "{}",
+        f.last().3
+    );
+}
+
+#[test]
 fn reset_gives_a_fresh_instance() {
     let f = Fmu::new("toy-guid-1").unwrap();
     f.set(K, 5.0);
