@@ -3,7 +3,8 @@
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
 //! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo test, packaging, the Python
 //!   harness (tests/, run with pytest in `.venv`, created on demand), and a summary;
-//! - `demo [-- <study args>]`: package the FMUs, run the standard case and the paper's studies
+//! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
+//!   the estimator variants
 //!   through the orchestrator.
 
 mod fmus;
@@ -305,5 +306,20 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg("--out")
         .arg(out.join("study"))
         .args(extra);
-    workspace::run(&mut study)
+    workspace::run(&mut study)?;
+    println!(
+        "\n==> orchestrator study variants (beyond the paper: priors, steady-state gain, RTS smoother, variable speed)"
+    );
+    let mut variants = Command::new(&orchestrator);
+    variants
+        .arg("study")
+        .arg("variants")
+        .arg("--vehicle")
+        .arg(&vehicle)
+        .arg("--estimator")
+        .arg(&estimator)
+        .arg("--out")
+        .arg(out.join("study"))
+        .args(extra);
+    workspace::run(&mut variants)
 }
