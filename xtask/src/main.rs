@@ -305,7 +305,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg(&estimator)
         .arg("--out")
         .arg(out.join("study"))
-        .args(extra);
+        .args(&extra);
     workspace::run(&mut study)?;
     println!(
         "\n==> orchestrator study variants (beyond the paper: priors, steady-state gain, RTS smoother, variable speed)"
