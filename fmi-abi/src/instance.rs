@@ -345,6 +345,19 @@ impl<M: Model> Instance<M> {
         )))
     }
 
+    /// The states in which fmi2Set* may be called at all, whatever the variables (also with
+    /// nvr = 0, which used to pass in any state: found by fmi-fuzz).
+    fn require_set_state(&self, function: &str) -> Res {
+        self.require(
+            function,
+            &[
+                State::Instantiated,
+                State::InitializationMode,
+                State::StepComplete,
+            ],
+        )
+    }
+
     fn after_set(&mut self, v: &VarSpec) {
         if v.causality == Causality::Input {
             self.sim.inputs_dirty = true;
@@ -406,6 +419,7 @@ impl<M: Model> Instance<M> {
         vals: &[T],
         store: fn(&mut Values, usize, T),
     ) -> Res {
+        self.require_set_state(function)?;
         let mut rows = Vec::with_capacity(vr.len());
         for r in vr {
             let v = self.spec(base, *r, function)?;
@@ -444,6 +458,7 @@ impl<M: Model> Instance<M> {
     pub fn set_string(&mut self, vr: &[u32], vals: &[String]) -> Res {
         self.log
             .call(|| format!("fmi2SetString(vr={vr:?}, value={vals:?})"));
+        self.require_set_state("fmi2SetString")?;
         let mut rows = Vec::with_capacity(vr.len());
         for r in vr {
             let v = self.spec(Base::String, *r, "fmi2SetString")?;

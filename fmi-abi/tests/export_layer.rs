@@ -279,6 +279,21 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
     );
     assert_eq!(f.get(U).1, 0.5);
     assert_eq!(unsafe { x::terminate::<Toy>(f.c) }, fmi2Status::OK);
+    // No set after Terminate, even of nothing (nvr = 0).
+    let none: [u32; 0] = [];
+    assert_eq!(
+        unsafe { x::set_real::<Toy>(f.c, none.as_ptr(), 0, std::ptr::null()) },
+        fmi2Status::Error
+    );
+    assert!(
+        f.last()
+            .3
+            .contains("fmi2SetReal is not allowed in state 'terminated'")
+    );
+    assert_eq!(
+        unsafe { x::set_string::<Toy>(f.c, none.as_ptr(), 0, std::ptr::null()) },
+        fmi2Status::Error
+    );
     assert_eq!(
         f.step(0.1, 0.1),
         fmi2Status::Error,
