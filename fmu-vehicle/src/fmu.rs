@@ -421,6 +421,14 @@ pub static VARIABLES: &[VarSpec] = &[
     ),
 ];
 
+/// The most one fmi2DoStep may ask for: the track grid grows to cover the distance (72 bytes
+/// per 5 cm) and the integration takes `h / internal step` Runge-Kutta steps, so a step of 1e9 s
+/// (or a speed of 1e300 m/s) aborted the process on a failed allocation or never returned
+/// (found by fmi-fuzz). 20 km and a million internal steps are far beyond any sensible
+/// communication step and still finish in seconds.
+const MAX_STEP_DISTANCE: f64 = 2e4;
+const MAX_SUBSTEPS: f64 = 1e6;
+
 /// The FMI model state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct RailVehicle {
@@ -519,7 +527,10 @@ pub fn build_simulation(
     }
     let vehicle = Vehicle::new(params, conicity, options);
     let track_file = v.string[vr::TRACK_FILE as usize].trim().to_string();
-    let speed = real(vr::SPEED).abs().max(20.0);
+    // The first 25 s of track at the start speed (the grid grows as the vehicle runs, with
+    // the same nodes a longer first synthesis would have made). Capped: a speed input of
+    // 1e300 made this terabytes (an aborted allocation, found by fmi-fuzz).
+    let speed = real(vr::SPEED).abs().max(20.0).min(100.0);
     let (s_min, s_max) = (-vehicle.wheelset_offset(3) - 5.0, 25.0 * speed + 50.0);
     let track = if track_file.is_empty() {
         let (min_wl, max_wl) = (real(vr::MIN_WAVELENGTH), real(vr::MAX_WAVELENGTH));
@@ -636,6 +647,16 @@ impl Model for RailVehicle {
             ));
             outcome = StepOutcome::Warning;
         }
+        if speed.is_finite() && speed >= sim.config.min_speed {
+            let distance = speed * h;
+            let substeps = h / sim.internal_step(speed);
+            if !(distance <= MAX_STEP_DISTANCE && substeps <= MAX_SUBSTEPS) {
+                return Err(format!(
+                    "a step of {h} s at {speed} m/s would cover {distance:.3e} m in {substeps:.3e} internal steps; \
+                     one fmi2DoStep may cover at most {MAX_STEP_DISTANCE:e} m and {MAX_SUBSTEPS:e} internal steps"
+                ));
+            }
+        }
         sim.step(h, if speed.is_finite() { speed } else { 0.0 });
         let o = &sim.outputs;
         if ![o.ws_acc_y, o.ws_yaw_rate, o.frame_acc_y, o.ws_y]
@@ -654,6 +675,35 @@ impl Model for RailVehicle {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_steps_and_speeds_are_refused_instead_of_attempted() {
+        let ctx = InstantiateContext {
+            instance_name: "t".into(),
+            resources: None,
+        };
+        let log = Logger::silent();
+        let mut m = RailVehicle::instantiate(&ctx, &log).unwrap();
+        let mut v = Values::from_table(VARIABLES);
+        v.boolean[vr::LATERAL_IRREGULARITY as usize] = false;
+        v.boolean[vr::VERTICAL_IRREGULARITY as usize] = false;
+        // A start speed of 1e300 used to ask for a track of 2.5e301 m.
+        v.real[vr::SPEED as usize] = 1e300;
+        m.exit_initialization(&mut v, &log).unwrap();
+        let e = m.do_step(&mut v, 0.0, 1e-3, &log).unwrap_err();
+        assert!(e.contains("at most"), "{e}");
+        // A step of 1e9 s at 20 m/s: an allocation of terabytes before.
+        v.real[vr::SPEED as usize] = 20.0;
+        let e = m.do_step(&mut v, 0.0, 1e9, &log).unwrap_err();
+        assert!(e.contains("at most"), "{e}");
+        // Standing still, any step is harmless and allowed; a normal step still works.
+        v.real[vr::SPEED as usize] = 0.0;
+        assert!(m.do_step(&mut v, 0.0, 1e9, &log).is_ok());
+        v.real[vr::SPEED as usize] = 20.0;
+        assert!(m.do_step(&mut v, 1e9, 1e-3, &log).is_ok());
+    }
+
     #[test]
     fn the_variable_table_is_dense_and_the_model_description_valid() {
         fmi_abi::variables::VarIndex::new(super::VARIABLES).unwrap();
