@@ -1,0 +1,262 @@
+//! An FMU under test: unpacked by `fmi_import`, its library opened again here so that every
+//! one of the 34 functions can be called raw (NULL pointers, unknown references, any state).
+
+use anyhow::{Context, Result, anyhow, bail};
+use fmi_abi::types::{
+    fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2Component, fmi2FMUstate, fmi2Real,
+    fmi2String, fmi2ValueReference,
+};
+use libloading::Library;
+use model_description::{Causality, Initial, Variability, VariableKind};
+use std::ffi::{CString, c_char, c_int, c_void};
+use std::path::{Path, PathBuf};
+
+type C = fmi2Component;
+type Vr = *const fmi2ValueReference;
+
+macro_rules! functions {
+    ($($field:ident : $name:literal = fn($($arg:ty),* $(,)?) $(-> $ret:ty)?;)*) => {
+        /// The 34 FMI 2.0 co-simulation functions as raw pointers. Statuses are read as
+        /// `c_int`, so a value outside the enum is seen as it is.
+        #[derive(Clone, Copy)]
+        pub struct Api {
+            $(pub $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
+        }
+
+        /// The names, in declaration order.
+        pub const NAMES: &[&str] = &[$($name),*];
+
+        impl Api {
+            fn resolve(lib: &Library) -> Result<Api> {
+                Ok(Api {$(
+                    // SAFETY: an exported fmi2 function of this name has this signature
+                    // (fmi2FunctionTypes.h).
+                    $field: unsafe {
+                        *lib.get::<unsafe extern "C" fn($($arg),*) $(-> $ret)?>($name)
+                            .with_context(|| format!("symbol {} missing", $name))?
+                    },
+                )*})
+            }
+        }
+    };
+}
+
+functions! {
+    get_types_platform: "fmi2GetTypesPlatform" = fn() -> *const c_char;
+    get_version: "fmi2GetVersion" = fn() -> *const c_char;
+    set_debug_logging: "fmi2SetDebugLogging" = fn(C, fmi2Boolean, usize, *const fmi2String) -> c_int;
+    instantiate: "fmi2Instantiate" = fn(
+        fmi2String, c_int, fmi2String, fmi2String, *const fmi2CallbackFunctions, fmi2Boolean,
+        fmi2Boolean,
+    ) -> C;
+    free_instance: "fmi2FreeInstance" = fn(C);
+    setup_experiment: "fmi2SetupExperiment" = fn(C, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> c_int;
+    enter_initialization_mode: "fmi2EnterInitializationMode" = fn(C) -> c_int;
+    exit_initialization_mode: "fmi2ExitInitializationMode" = fn(C) -> c_int;
+    terminate: "fmi2Terminate" = fn(C) -> c_int;
+    reset: "fmi2Reset" = fn(C) -> c_int;
+    get_real: "fmi2GetReal" = fn(C, Vr, usize, *mut fmi2Real) -> c_int;
+    get_integer: "fmi2GetInteger" = fn(C, Vr, usize, *mut c_int) -> c_int;
+    get_boolean: "fmi2GetBoolean" = fn(C, Vr, usize, *mut fmi2Boolean) -> c_int;
+    get_string: "fmi2GetString" = fn(C, Vr, usize, *mut fmi2String) -> c_int;
+    set_real: "fmi2SetReal" = fn(C, Vr, usize, *const fmi2Real) -> c_int;
+    set_integer: "fmi2SetInteger" = fn(C, Vr, usize, *const c_int) -> c_int;
+    set_boolean: "fmi2SetBoolean" = fn(C, Vr, usize, *const fmi2Boolean) -> c_int;
+    set_string: "fmi2SetString" = fn(C, Vr, usize, *const fmi2String) -> c_int;
+    get_fmu_state: "fmi2GetFMUstate" = fn(C, *mut fmi2FMUstate) -> c_int;
+    set_fmu_state: "fmi2SetFMUstate" = fn(C, fmi2FMUstate) -> c_int;
+    free_fmu_state: "fmi2FreeFMUstate" = fn(C, *mut fmi2FMUstate) -> c_int;
+    serialized_fmu_state_size: "fmi2SerializedFMUstateSize" = fn(C, fmi2FMUstate, *mut usize) -> c_int;
+    serialize_fmu_state: "fmi2SerializeFMUstate" = fn(C, fmi2FMUstate, *mut fmi2Byte, usize) -> c_int;
+    deserialize_fmu_state: "fmi2DeSerializeFMUstate" = fn(C, *const fmi2Byte, usize, *mut fmi2FMUstate) -> c_int;
+    get_directional_derivative: "fmi2GetDirectionalDerivative" = fn(
+        C, Vr, usize, Vr, usize, *const fmi2Real, *mut fmi2Real,
+    ) -> c_int;
+    set_real_input_derivatives: "fmi2SetRealInputDerivatives" = fn(C, Vr, usize, *const c_int, *const fmi2Real) -> c_int;
+    get_real_output_derivatives: "fmi2GetRealOutputDerivatives" = fn(C, Vr, usize, *const c_int, *mut fmi2Real) -> c_int;
+    do_step: "fmi2DoStep" = fn(C, fmi2Real, fmi2Real, fmi2Boolean) -> c_int;
+    cancel_step: "fmi2CancelStep" = fn(C) -> c_int;
+    get_status: "fmi2GetStatus" = fn(C, c_int, *mut c_int) -> c_int;
+    get_real_status: "fmi2GetRealStatus" = fn(C, c_int, *mut fmi2Real) -> c_int;
+    get_integer_status: "fmi2GetIntegerStatus" = fn(C, c_int, *mut c_int) -> c_int;
+    get_boolean_status: "fmi2GetBooleanStatus" = fn(C, c_int, *mut fmi2Boolean) -> c_int;
+    get_string_status: "fmi2GetStringStatus" = fn(C, c_int, *mut fmi2String) -> c_int;
+}
+
+/// The four FMI base types a value reference can belong to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Base {
+    Real,
+    Integer,
+    Boolean,
+    String,
+}
+
+impl Base {
+    pub const ALL: [Base; 4] = [Base::Real, Base::Integer, Base::Boolean, Base::String];
+}
+
+/// What the fuzzer needs to know about one variable.
+#[derive(Debug, Clone)]
+pub struct Var {
+    pub name: String,
+    pub vr: u32,
+    pub base: Base,
+    pub causality: Causality,
+    pub variability: Variability,
+    /// `initial`, or its default from the spec's table when the attribute is absent.
+    pub initial: Option<Initial>,
+}
+
+impl Var {
+    /// Whether the FMI 2.0 co-simulation state table lets a master set this variable in
+    /// `instantiated` (exact/approx, non-constant), `initializationMode` (exact or input) and
+    /// `stepComplete` (inputs and tunable parameters). Inputs count as settable in
+    /// `instantiated`: importers do it (Compliance Checker) and the spec allows a start value.
+    pub fn settable(&self, state: crate::oracle::State) -> bool {
+        use crate::oracle::State as S;
+        let input = self.causality == Causality::Input;
+        match state {
+            S::Instantiated => {
+                self.variability != Variability::Constant
+                    && (input || matches!(self.initial, Some(Initial::Exact | Initial::Approx)))
+            }
+            S::InitializationMode => {
+                input
+                    || (self.variability != Variability::Constant
+                        && self.initial == Some(Initial::Exact))
+            }
+            S::StepComplete => {
+                input
+                    || (self.causality == Causality::Parameter
+                        && self.variability == Variability::Tunable)
+            }
+            _ => false,
+        }
+    }
+}
+
+/// The default `initial` of FMI 2.0 table 2 (section 2.2.7) for an absent attribute.
+fn default_initial(c: Causality, v: Variability) -> Option<Initial> {
+    match (c, v) {
+        (Causality::Parameter, _) => Some(Initial::Exact),
+        (Causality::CalculatedParameter, _) => Some(Initial::Calculated),
+        (Causality::Input | Causality::Independent, _) => None,
+        (_, Variability::Constant) => Some(Initial::Exact),
+        _ => Some(Initial::Calculated),
+    }
+}
+
+/// An FMU opened for raw calls.
+pub struct Target {
+    /// Keeps the unpacked directory (and the importer's own handle of the library) alive.
+    _fmu: fmi_import::Fmu,
+    pub api: Api,
+    _lib: Library,
+    pub path: PathBuf,
+    pub model_name: String,
+    pub guid: CString,
+    pub resource_uri: CString,
+    pub vars: Vec<Var>,
+    /// The names of the declared log categories.
+    pub log_categories: Vec<String>,
+    /// (providesDirectionalDerivative, canInterpolateInputs, maxOutputDerivativeOrder > 0).
+    pub caps: (bool, bool, bool),
+}
+
+impl Target {
+    pub fn open(path: &Path) -> Result<Target> {
+        let fmu = fmi_import::Fmu::open(path)
+            .map_err(|e| anyhow!("cannot open {}: {e}", path.display()))?;
+        let md = fmu.model_description();
+        let binary = fmi_import::platform_binary(fmu.model_identifier())
+            .ok_or_else(|| anyhow!("FMI 2.0 names no binaries folder for this platform"))?;
+        let lib_path = fmu.unpacked_dir().join(binary);
+        let lib = load(&lib_path)?;
+        let api = Api::resolve(&lib)?;
+        let mut vars = Vec::new();
+        for v in &md.model_variables {
+            let base = match v.kind {
+                VariableKind::Real(_) => Base::Real,
+                VariableKind::Integer(_) | VariableKind::Enumeration(_) => Base::Integer,
+                VariableKind::Boolean { .. } => Base::Boolean,
+                VariableKind::String { .. } => Base::String,
+            };
+            vars.push(Var {
+                name: v.name.clone(),
+                vr: v.value_reference,
+                base,
+                causality: v.causality,
+                variability: v.variability,
+                initial: v
+                    .initial
+                    .or_else(|| default_initial(v.causality, v.variability)),
+            });
+        }
+        if vars.is_empty() {
+            bail!("{} declares no variables", path.display());
+        }
+        let caps = md
+            .co_simulation
+            .as_ref()
+            .map_or((false, false, false), |cs| {
+                (
+                    cs.provides_directional_derivative,
+                    cs.can_interpolate_inputs,
+                    cs.max_output_derivative_order > 0,
+                )
+            });
+        Ok(Target {
+            log_categories: md.log_categories.iter().map(|c| c.name.clone()).collect(),
+            caps,
+            path: path.to_path_buf(),
+            model_name: md.model_name.clone(),
+            guid: CString::new(md.guid.clone())?,
+            resource_uri: CString::new(fmu.resource_uri())?,
+            vars,
+            api,
+            _lib: lib,
+            _fmu: fmu,
+        })
+    }
+
+    pub fn vars_of(&self, base: Base) -> impl Iterator<Item = &Var> {
+        self.vars.iter().filter(move |v| v.base == base)
+    }
+
+    pub fn var(&self, base: Base, vr: u32) -> Option<&Var> {
+        self.vars.iter().find(|v| v.base == base && v.vr == vr)
+    }
+
+    pub fn var_named(&self, name: &str) -> Option<&Var> {
+        self.vars.iter().find(|v| v.name == name)
+    }
+}
+
+fn load(path: &Path) -> Result<Library> {
+    #[cfg(unix)]
+    {
+        use libloading::os::unix::{Library as UnixLibrary, RTLD_LOCAL, RTLD_NOW};
+        // SAFETY: running the library's initializers is inherent in testing an FMU.
+        unsafe { UnixLibrary::open(Some(path), RTLD_NOW | RTLD_LOCAL) }
+            .map(Library::from)
+            .with_context(|| format!("cannot load {}", path.display()))
+    }
+    #[cfg(not(unix))]
+    {
+        // SAFETY: as above.
+        unsafe { Library::new(path) }.with_context(|| format!("cannot load {}", path.display()))
+    }
+}
+
+/// A NUL-terminated byte buffer that is not a C string the FMU made: used as a "pointer to
+/// something that is not an instance/state" argument. 256 zeroed-then-filled bytes, so an FMU
+/// that reads a tag at the start reads owned memory.
+pub fn foreign_block(fill: u8) -> Box<[u64; 32]> {
+    let b = u64::from_ne_bytes([fill; 8]);
+    Box::new([b; 32])
+}
+
+pub fn as_ptr(b: &[u64; 32]) -> *mut c_void {
+    b.as_ptr() as *mut c_void
+}
