@@ -140,14 +140,17 @@ fn bench_options(c: &mut Criterion) {
     let (config, _) = offline::config(&values, None).unwrap();
     let mut core = config.core();
     let mut k = 0u64;
-    c.bench_function("filter step (integrated random walk, new speed every step)", |b| {
-        b.iter(|| {
-            k += 1;
-            let x = (k as f64 * 1e-3).sin();
-            let z = Vec4::new(0.1 * x, 0.001 * x, 0.02 * x, 0.0);
-            black_box(core.step(15.0 + x, h, &z).unwrap().ok())
-        })
-    });
+    c.bench_function(
+        "filter step (integrated random walk, new speed every step)",
+        |b| {
+            b.iter(|| {
+                k += 1;
+                let x = (k as f64 * 1e-3).sin();
+                let z = Vec4::new(0.1 * x, 0.001 * x, 0.02 * x, 0.0);
+                black_box(core.step(15.0 + x, h, &z).unwrap().ok())
+            })
+        },
+    );
     let comp = instance_with(1, 1, 2);
     let mut t = 0.0;
     c.bench_function("fmi2DoStep (paper, steady-state gain)", |b| {
