@@ -256,6 +256,12 @@ impl<M: Model> Instance<M> {
                 "fmi2DoStep: currentCommunicationPoint {t} is not finite"
             )));
         }
+        if !(t + h).is_finite() {
+            // The time would overflow to infinity, and no later step could start from it.
+            return Err(self.fail(&format!(
+                "fmi2DoStep: the step from {t} by {h} ends beyond the largest representable time"
+            )));
+        }
         let tol = 1e-9 * t.abs().max(self.sim.time.abs()).max(1.0);
         if (t - self.sim.time).abs() > tol {
             return Err(self.fail(&format!(

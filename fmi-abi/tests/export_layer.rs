@@ -270,6 +270,27 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
     }
     // Still usable: the state did not change.
     assert_eq!(f.step(0.0, 0.1), fmi2Status::OK);
+    // A step whose end overflows to infinity is refused (the instance could never step again).
+    let g = Fmu::new("toy-guid-1").unwrap();
+    unsafe {
+        assert_eq!(
+            x::setup_experiment::<Toy>(g.c, 0, 0.0, f64::MAX, 0, 0.0),
+            fmi2Status::OK
+        );
+        assert_eq!(x::enter_initialization_mode::<Toy>(g.c), fmi2Status::OK);
+        assert_eq!(x::exit_initialization_mode::<Toy>(g.c), fmi2Status::OK);
+    }
+    assert_eq!(g.step(f64::MAX, f64::MAX), fmi2Status::Error);
+    assert!(
+        g.last().3.contains("largest representable time"),
+        "{}",
+        g.last().3
+    );
+    assert_eq!(
+        g.step(f64::MAX, 1.0),
+        fmi2Status::OK,
+        "MAX + 1 rounds to MAX"
+    );
     // A set with one bad reference among good ones changes nothing.
     let vrs = [U, 9999];
     let vals = [7.0, 8.0];
