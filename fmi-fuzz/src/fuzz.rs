@@ -1203,6 +1203,8 @@ impl<'t> Fuzzer<'t> {
                     Expect::Error("the step size is not a positive finite number".into())
                 } else if !t.is_finite() {
                     Expect::Error("the communication point is not finite".into())
+                } else if !(t + h).is_finite() {
+                    Expect::Error("the step would end beyond the largest finite time".into())
                 } else if off {
                     Expect::Error(format!(
                         "the communication point is not the FMU's time {}",
@@ -2522,6 +2524,7 @@ impl<'t> Fuzzer<'t> {
         if NAMES[fidx] == "fmi2GetRealStatus"
             && kind == 2
             && let Some(t) = self.insts[i].time
+            && real != t
             && !((real - t).abs() <= 1e-9 * t.abs().max(1.0))
         {
             self.fail(format!(

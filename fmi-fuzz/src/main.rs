@@ -41,8 +41,8 @@ struct FuzzArgs {
     /// Longest sequence (calls, not counting the clean-up at its end).
     #[arg(long, default_value_t = 40)]
     max_len: usize,
-    /// Seconds a batch of sequences may run before it counts as hung.
-    #[arg(long, default_value_t = 120.0)]
+    /// Seconds one sequence may run before it counts as hung.
+    #[arg(long, default_value_t = 60.0)]
     timeout: f64,
     /// Child processes at once (default: the number of cores).
     #[arg(long)]

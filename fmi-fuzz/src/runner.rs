@@ -4,8 +4,8 @@
 //! A child (`fmi-fuzz worker ...`) prints `S <seed>` before each sequence, a block
 //! `F <seed>` / `| <line>`... / `E` for every sequence that violated an invariant, then one
 //! `STATS` line per function and `DONE <sequences> <calls>`. A child that dies without `DONE`
-//! crashed in the last sequence it started; one that runs past the timeout is killed and
-//! reported as a hang in that sequence. Either way the sequence is replayed alone with its
+//! crashed in the last sequence it started; one whose current sequence runs past the
+//! timeout is killed and reported as a hang in that sequence. Either way the sequence is replayed alone with its
 //! calls streamed to stderr, so the report ends with the call that crashed or hung, and the
 //! rest of the batch goes on in a new child.
 
@@ -26,6 +26,7 @@ pub struct RunOptions {
     pub sequences: u64,
     pub seed: u64,
     pub max_len: usize,
+    /// How long one sequence may run before it counts as hung.
     pub timeout: Duration,
     pub jobs: usize,
     pub batch: u64,
@@ -169,7 +170,8 @@ fn worker_command(o: &RunOptions, first: u64, count: u64, stream: bool) -> Resul
 struct Running {
     child: Child,
     lines: Receiver<String>,
-    started: Instant,
+    /// When the current sequence (or the worker, before its first) started.
+    seq_started: Instant,
     first: u64,
     count: u64,
     last_seed: Option<u64>,
@@ -195,7 +197,7 @@ fn spawn(o: &RunOptions, first: u64, count: u64) -> Result<Running> {
     Ok(Running {
         child,
         lines: rx,
-        started: Instant::now(),
+        seq_started: Instant::now(),
         first,
         count,
         last_seed: None,
@@ -225,7 +227,10 @@ impl Running {
         }
         let mut parts = line.split_whitespace();
         match parts.next() {
-            Some("S") => self.last_seed = parts.next().and_then(|s| s.parse().ok()),
+            Some("S") => {
+                self.last_seed = parts.next().and_then(|s| s.parse().ok());
+                self.seq_started = Instant::now();
+            }
             Some("F") => {
                 let seed = parts.next().and_then(|s| s.parse().ok()).unwrap_or(0);
                 self.block = Some((seed, String::new()));
@@ -370,7 +375,7 @@ pub fn run(o: &RunOptions, mut progress: impl FnMut(u64, u64)) -> Result<Report>
             let r = &mut running[i];
             r.drain(&mut report);
             let exited = r.child.try_wait()?;
-            let timed_out = exited.is_none() && r.started.elapsed() > o.timeout;
+            let timed_out = exited.is_none() && r.seq_started.elapsed() > o.timeout;
             if exited.is_none() && !timed_out {
                 i += 1;
                 continue;
@@ -407,7 +412,7 @@ pub fn run(o: &RunOptions, mut progress: impl FnMut(u64, u64)) -> Result<Report>
                     finished += done_before + 1;
                     let what = if timed_out {
                         format!(
-                            "hang: the batch did not finish within {:.0} s; sequence {culprit} was running",
+                            "hang: sequence {culprit} did not finish within {:.0} s",
                             o.timeout.as_secs_f64()
                         )
                     } else {

@@ -172,7 +172,7 @@ fn a_hang_is_caught_with_the_call_that_hangs() {
     let t = text(&out);
     assert_eq!(out.status.code(), Some(1), "{t}");
     assert!(
-        t.contains("hang: the batch did not finish within 3 s"),
+        t.contains("hang: sequence ") && t.contains(" did not finish within 3 s"),
         "{t}"
     );
     assert!(t.contains("replay killed after 3 s"), "{t}");
