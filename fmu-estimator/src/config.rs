@@ -9,7 +9,6 @@ use crate::discretize::Scheme;
 use crate::engine::{Engine, Gain};
 use crate::filter::{Mat4, Vec4, Vec7};
 use crate::fmu::vr;
-use crate::observability::pbh_rank;
 use crate::params::Params;
 use crate::prior::{AlignmentModel, Spectrum};
 use crate::statespace::{BodyNoise, StateSpace};
@@ -103,7 +102,7 @@ impl Config {
             r(vr::SIGMA_ACC_FRAME),
             r(vr::SIGMA_XI),
         ];
-        let mut rm = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
+        let rm = Mat4::from_diagonal(&Vec4::from_fn(|i, _| sig[i] * sig[i]));
         let q = [
             0.0,
             0.0,
@@ -113,7 +112,7 @@ impl Config {
             r(vr::Q_ACC_FRAME),
             r(vr::Q_XI),
         ];
-        let mut body_noise = BodyNoise::Rate(SMatrix::from_diagonal(&Vec7::from_fn(|i, _| q[i])));
+        let body_noise = BodyNoise::Rate(SMatrix::from_diagonal(&Vec7::from_fn(|i, _| q[i])));
         let mut calibrated: Option<Calibration> = None;
         if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
             match calibration_path(v, resources) {
@@ -136,9 +135,7 @@ impl Config {
                 )),
             }
         }
-        if let Some(c) = &calibrated {
-            (body_noise, rm) = c.noise();
-        } else if sig.iter().any(|s| !(*s > 0.0)) {
+        if calibrated.is_none() && sig.iter().any(|s| !(*s > 0.0)) {
             return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
         }
         let design_speed = r(vr::DESIGN_SPEED);
@@ -151,39 +148,37 @@ impl Config {
         if prior_sigma_xi.is_nan() {
             return Err("parameter 'prior_sigma_xi' is NaN".into());
         }
+        let config = Config {
+            params,
+            scheme,
+            model,
+            gain,
+            body_noise,
+            r: rm,
+            prior_sigma_xi,
+            p0_xi: r(vr::P0_XI),
+            p0_stationary: v.boolean[vr::P0_STATIONARY as usize],
+            min_speed: r(vr::MIN_SPEED),
+            design_speed,
+            calibration: None,
+        };
         Ok((
-            Config {
-                params,
-                scheme,
-                model,
-                gain,
-                body_noise,
-                r: rm,
-                prior_sigma_xi,
-                p0_xi: r(vr::P0_XI),
-                p0_stationary: v.boolean[vr::P0_STATIONARY as usize],
-                min_speed: r(vr::MIN_SPEED),
-                design_speed: r(vr::DESIGN_SPEED),
-                calibration: calibrated.map(|c| c.status),
+            match calibrated {
+                Some(c) => config.with_calibration(c),
+                None => config,
             },
             notes,
         ))
     }
 
-    /// The PBH observability rank of the filter's model at `speed`: `(rank, states, eigenvalue
-    /// where the rank is smallest)`.
-    pub fn observability(&self, speed: f64) -> (usize, usize, nalgebra::Complex<f64>) {
-        match self.core() {
-            Core::Seven(e) => {
-                let fc = e.space.fc(speed);
-                let (rank, l) = pbh_rank(&fc, &e.space.measurement(&fc));
-                (rank, 7, l)
-            }
-            Core::Eight(e) => {
-                let fc = e.space.fc(speed);
-                let (rank, l) = pbh_rank(&fc, &e.space.measurement(&fc));
-                (rank, 8, l)
-            }
+    /// This configuration with the noise matrices of a calibration file.
+    pub fn with_calibration(self, c: Calibration) -> Config {
+        let (body_noise, r) = c.noise();
+        Config {
+            body_noise,
+            r,
+            calibration: Some(c.status),
+            ..self
         }
     }
 

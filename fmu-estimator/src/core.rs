@@ -3,6 +3,7 @@
 
 use crate::engine::{Engine, Skip};
 use crate::filter::Vec4;
+use crate::observability::pbh_rank;
 use crate::smoother::smooth;
 use crate::statespace::XI;
 use serde::{Deserialize, Serialize};
@@ -49,6 +50,16 @@ impl Core {
     /// A message, once, when the stationary start fell back to the initial covariance.
     pub fn take_start_note(&mut self) -> Option<String> {
         each!(self, e => e.start_note.take())
+    }
+
+    /// The PBH observability rank of the filter's model at `speed`: `(rank, states, eigenvalue
+    /// where the rank is smallest)`.
+    pub fn observability(&self, speed: f64) -> (usize, usize, nalgebra::Complex<f64>) {
+        each!(self, e => {
+            let fc = e.space.fc(speed);
+            let (rank, lambda) = pbh_rank(&fc, &e.space.measurement(&fc));
+            (rank, fc.nrows(), lambda)
+        })
     }
 
     pub fn skipped(&self) -> i32 {

@@ -9,6 +9,7 @@
 //!   any step.
 
 use crate::model::Mat7;
+use nalgebra::SMatrix;
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -34,14 +35,22 @@ impl Scheme {
 pub fn transition(fc: &Mat7, h: f64, scheme: Scheme) -> Mat7 {
     match scheme {
         Scheme::Exact => (fc * h).exp(),
-        Scheme::Taylor2 => {
-            let mut s = Mat7::zeros();
-            for i in 0..3 {
-                s.set_row(i, &fc.row(i + 3));
-            }
-            Mat7::identity() + fc * h + s * (0.5 * h * h)
-        }
+        Scheme::Taylor2 => taylor2(fc, h, &[(0, 3), (1, 4), (2, 5)]),
     }
+}
+
+/// The second-order Taylor scheme for any state whose `(position, velocity)` row pairs are
+/// `pairs`: `F = I + h F_c + h^2/2 S`, `S` holding each velocity row of `F_c` in its position row.
+pub fn taylor2<const N: usize>(
+    fc: &SMatrix<f64, N, N>,
+    h: f64,
+    pairs: &[(usize, usize)],
+) -> SMatrix<f64, N, N> {
+    let mut s = SMatrix::<f64, N, N>::zeros();
+    for &(pos, vel) in pairs {
+        s.set_row(pos, &fc.row(vel));
+    }
+    SMatrix::<f64, N, N>::identity() + fc * h + s * (0.5 * h * h)
 }
 
 #[cfg(test)]

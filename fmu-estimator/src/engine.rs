@@ -257,10 +257,12 @@ impl<const N: usize> Engine<N> {
             None => self.filter.predict(&d.f, &d.q),
             Some(_) => self.filter.x = d.f * self.filter.x,
         }
-        let predicted = self
-            .history
-            .is_some()
-            .then(|| (self.filter.x, self.filter.p_pred_or(&self.steady)));
+        let predicted = self.history.is_some().then(|| {
+            // Under a steady-state gain P is not propagated: the predicted covariance is the
+            // DARE's.
+            let p = self.steady.as_ref().map_or(self.filter.p, |ss| ss.p_pred);
+            (self.filter.x, p)
+        });
         let result = if !z.iter().all(|x| x.is_finite()) {
             Err(Skip::NonFinite)
         } else {
@@ -289,17 +291,6 @@ impl<const N: usize> Engine<N> {
     /// The alignment estimate and its standard deviation.
     pub fn alignment(&self) -> (f64, f64) {
         (self.filter.x[XI], self.filter.p[(XI, XI)].max(0.0).sqrt())
-    }
-}
-
-impl<const N: usize> Kalman<N> {
-    /// The predicted covariance: the propagated one, or the DARE's under a steady-state gain
-    /// (where `P` is not propagated).
-    fn p_pred_or(&self, steady: &Option<SteadyState<N>>) -> SMatrix<f64, N, N> {
-        match steady {
-            None => self.p,
-            Some(ss) => ss.p_pred,
-        }
     }
 }
 

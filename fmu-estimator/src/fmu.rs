@@ -217,9 +217,10 @@ impl Model for Estimator {
                 Note::Warning(m) => log.warning(&m),
             }
         }
+        let core = config.core();
         let speed = v.real[vr::SPEED as usize];
         if speed.is_finite() && speed >= config.min_speed {
-            let (rank, n, lambda) = config.observability(speed);
+            let (rank, n, lambda) = core.observability(speed);
             if rank < n {
                 log.warning(&format!(
                     "the model is not observable at {speed} m/s (PBH rank {rank} < {n} at eigenvalue {lambda}): some states cannot be estimated from the sensors"
@@ -228,7 +229,7 @@ impl Model for Estimator {
         }
         self.min_speed = config.min_speed;
         self.design_speed = config.design_speed;
-        self.core = Some(config.core());
+        self.core = Some(core);
         self.holding = false;
         self.write_outputs(v);
         Ok(())

@@ -90,8 +90,7 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
                 "Q and R from the calibration ({})",
                 c.status
             )));
-            (config.body_noise, config.r) = c.noise();
-            config.calibration = Some(c.status);
+            config = config.with_calibration(c);
         }
     }
     Ok((config, notes))

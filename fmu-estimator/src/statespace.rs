@@ -27,7 +27,7 @@
 //! fourth innovation is always zero and carries no information, exactly as if the row were
 //! absent).
 
-use crate::discretize::Scheme;
+use crate::discretize::{Scheme, taylor2};
 use crate::model::state_matrix_parts;
 use crate::params::Params;
 use crate::prior::AlignmentModel;
@@ -163,13 +163,7 @@ impl<const N: usize> StateSpace<N> {
                 let d = DMatrix::from_iterator(N, N, fc.iter().map(|x| x * h)).exp();
                 SMatrix::<f64, N, N>::from_iterator(d.iter().copied())
             }
-            Scheme::Taylor2 => {
-                let mut s = SMatrix::<f64, N, N>::zeros();
-                for &(pos, vel) in Self::pairs() {
-                    s.set_row(pos, &fc.row(vel));
-                }
-                SMatrix::<f64, N, N>::identity() + fc * h + s * (0.5 * h * h)
-            }
+            Scheme::Taylor2 => taylor2(fc, h, Self::pairs()),
         }
     }
 
