@@ -710,11 +710,7 @@ fn smooth(
 ) -> Result<(), RunError> {
     let overrides = set
         .iter()
-        .map(|s| {
-            s.split_once('=')
-                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-                .ok_or_else(|| RunError::Config(format!("--set {s}: expected name=value")))
-        })
+        .map(|s| split_assignment(s).map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
         .collect::<Result<Vec<_>, _>>()?;
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)

@@ -8,9 +8,9 @@
 //! has) is used only for its time. Output columns: `time`, `distance`, `alignment_filtered`,
 //! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres).
 
+use crate::record::push_f64;
 use crate::study::standard::Columns;
 use fmu_estimator::offline::{self, Processed, Sample};
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// The column named `name`, bare or after any `component.` prefix.
@@ -69,31 +69,23 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
     Ok((time[1..].to_vec(), h, samples))
 }
 
-/// The output CSV text.
+/// The output CSV text, numbers written as in `results.csv` ([`crate::record`]).
 pub fn to_csv(time: &[f64], out: &Processed) -> String {
-    let mut s = String::from(
-        "time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std\n",
-    );
+    let mut s: Vec<u8> = b"time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std\n".to_vec();
     let smoothed = out.smoothed.as_deref();
     let mut buf = ryu::Buffer::new();
     for (k, t) in time.iter().enumerate() {
         let (f, fs) = out.filtered[k];
         let (m, ms) = smoothed.map_or((f64::NAN, f64::NAN), |v| v[k]);
-        let mut first = true;
-        for x in [*t, out.distance[k], f, fs, m, ms] {
-            if !first {
-                s.push(',');
+        for (j, x) in [*t, out.distance[k], f, fs, m, ms].into_iter().enumerate() {
+            if j > 0 {
+                s.push(b',');
             }
-            first = false;
-            if x.is_finite() {
-                s.push_str(buf.format(x));
-            } else {
-                let _ = write!(s, "{x}");
-            }
+            push_f64(&mut s, x, &mut buf);
         }
-        s.push('\n');
+        s.push(b'\n');
     }
-    s
+    String::from_utf8(s).expect("digits, signs and letters only")
 }
 
 /// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end).

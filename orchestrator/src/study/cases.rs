@@ -138,7 +138,8 @@ pub struct CaseResult {
     pub paper: Option<Vec<(String, f64, f64)>>,
 }
 
-fn spread(values: &[f64]) -> (f64, f64) {
+/// Mean and sample standard deviation.
+pub(crate) fn spread(values: &[f64]) -> (f64, f64) {
     let n = values.len() as f64;
     let mean = values.iter().sum::<f64>() / n;
     let var = if values.len() > 1 {

@@ -54,6 +54,21 @@ pub fn vehicle_run(
     variables: &[&str],
     stop: f64,
 ) -> Result<Table, String> {
+    vehicle_run_driven(fmus, settings, variables, stop, None)
+}
+
+/// A speed input as a function of time [s -> m/s].
+pub type SpeedProfile<'a> = &'a (dyn Fn(f64) -> f64 + Sync);
+
+/// [`vehicle_run`] with the vehicle's `speed` input set from `speed` before every step (its
+/// default, 20 m/s, when `None`).
+pub fn vehicle_run_driven(
+    fmus: &Fmus,
+    settings: Settings,
+    variables: &[&str],
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+) -> Result<Table, String> {
     let system = System {
         name: "vehicle".into(),
         components: vec![Component {
@@ -64,14 +79,25 @@ pub fn vehicle_run(
         connections: vec![],
         experiment: Experiment::default(),
     };
-    run(
-        system,
-        stop,
-        variables
-            .iter()
-            .map(|v| Endpoint::new("vehicle", v))
-            .collect(),
-    )
+    let record = variables
+        .iter()
+        .map(|v| Endpoint::new("vehicle", v))
+        .collect();
+    let Some(speed) = speed else {
+        return run(system, stop, record);
+    };
+    let cosim = Cosimulation::load(system).map_err(|e| e.to_string())?;
+    let speed_vr = cosim.model_descriptions()[0]
+        .variable("speed")
+        .map(|v| v.value_reference)
+        .ok_or("the vehicle FMU has no 'speed' input")?;
+    let summary = cosim
+        .run_with_inputs(&options(stop, record), &|t, out: &mut Vec<(u32, f64)>| {
+            out.clear();
+            out.push((speed_vr, speed(t)));
+        })
+        .map_err(|e| e.to_string())?;
+    summary.table.ok_or_else(|| "no table was collected".into())
 }
 
 /// The columns the evaluation reads from a standard-system run.

@@ -14,12 +14,11 @@
 //! accelerations of a regional train, 0.5 to 1.2 m/s²). The filters either follow the speed input
 //! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
 
+use super::cases::spread;
 use super::metrics::{BANDS, BandMetrics, evaluate};
-use super::runs::{Fmus, STEP, Settings, seeded};
+use super::runs::{Fmus, STEP, Settings, SpeedProfile, seeded, vehicle_run_driven};
 use super::standard::{DS, TRIM};
-use crate::master::{Algorithm, Cosimulation, RunOptions, Table};
-use crate::system::{Component, Endpoint, Experiment, System};
-use fmi_import::LogConfig;
+use crate::master::Table;
 use fmu_estimator::offline::{self, Sample};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -63,52 +62,9 @@ pub fn record(
     fmus: &Fmus,
     settings: Settings,
     stop: f64,
-    speed: Option<&(dyn Fn(f64) -> f64 + Sync)>,
+    speed: Option<SpeedProfile<'_>>,
 ) -> Result<Record, String> {
-    let system = System {
-        name: "vehicle".into(),
-        components: vec![Component {
-            name: "vehicle".into(),
-            source: fmus.vehicle.clone(),
-            parameters: settings,
-        }],
-        connections: vec![],
-        experiment: Experiment::default(),
-    };
-    let cosim = Cosimulation::load(system).map_err(|e| e.to_string())?;
-    let speed_vr = cosim.model_descriptions()[0]
-        .variable("speed")
-        .map(|v| v.value_reference)
-        .ok_or("the vehicle FMU has no 'speed' input")?;
-    let opts = RunOptions {
-        start: 0.0,
-        stop,
-        step: STEP,
-        algorithm: Algorithm::GaussSeidel,
-        out_dir: None,
-        record: Some(
-            RECORDED
-                .iter()
-                .map(|v| Endpoint::new("vehicle", v))
-                .collect(),
-        ),
-        interval: None,
-        progress: false,
-        log: LogConfig {
-            min_status: fmi_import::fmi2Status::Error,
-            ..LogConfig::default()
-        },
-        collect: true,
-    };
-    let summary = match speed {
-        None => cosim.run(&opts),
-        Some(f) => cosim.run_with_inputs(&opts, &|t, out: &mut Vec<(u32, f64)>| {
-            out.clear();
-            out.push((speed_vr, f(t)));
-        }),
-    }
-    .map_err(|e| e.to_string())?;
-    let table = summary.table.ok_or("no table was collected")?;
+    let table = vehicle_run_driven(fmus, settings, &RECORDED, stop, speed)?;
     from_table(&table)
 }
 
@@ -275,18 +231,6 @@ pub fn tune_prior_sigma(
         }
     }
     Ok(best)
-}
-
-/// Mean and sample standard deviation.
-fn spread(x: &[f64]) -> (f64, f64) {
-    let n = x.len() as f64;
-    let mean = x.iter().sum::<f64>() / n;
-    let var = if x.len() > 1 {
-        x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)
-    } else {
-        0.0
-    };
-    (mean, var.sqrt())
 }
 
 /// One variant's Jrel per band over the seeds.
