@@ -1,87 +1,15 @@
 //! An FMU under test: unpacked by `fmi_import`, its library opened again here so that every
 //! one of the 34 functions can be called raw (NULL pointers, unknown references, any state).
 
-use anyhow::{Context, Result, anyhow, bail};
-use fmi_abi::types::{
-    fmi2Boolean, fmi2Byte, fmi2CallbackFunctions, fmi2Component, fmi2FMUstate, fmi2Real,
-    fmi2String, fmi2ValueReference,
-};
+use anyhow::{Result, anyhow, bail};
 use libloading::Library;
 use model_description::{Causality, Initial, Variability, VariableKind};
-use std::ffi::{CString, c_char, c_int, c_void};
+use std::ffi::{CString, c_void};
 use std::path::{Path, PathBuf};
 
-type C = fmi2Component;
-type Vr = *const fmi2ValueReference;
-
-macro_rules! functions {
-    ($($field:ident : $name:literal = fn($($arg:ty),* $(,)?) $(-> $ret:ty)?;)*) => {
-        /// The 34 FMI 2.0 co-simulation functions as raw pointers. Statuses are read as
-        /// `c_int`, so a value outside the enum is seen as it is.
-        #[derive(Clone, Copy)]
-        pub struct Api {
-            $(pub $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
-        }
-
-        /// The names, in declaration order.
-        pub const NAMES: &[&str] = &[$($name),*];
-
-        impl Api {
-            fn resolve(lib: &Library) -> Result<Api> {
-                Ok(Api {$(
-                    // SAFETY: an exported fmi2 function of this name has this signature
-                    // (fmi2FunctionTypes.h).
-                    $field: unsafe {
-                        *lib.get::<unsafe extern "C" fn($($arg),*) $(-> $ret)?>($name)
-                            .with_context(|| format!("symbol {} missing", $name))?
-                    },
-                )*})
-            }
-        }
-    };
-}
-
-functions! {
-    get_types_platform: "fmi2GetTypesPlatform" = fn() -> *const c_char;
-    get_version: "fmi2GetVersion" = fn() -> *const c_char;
-    set_debug_logging: "fmi2SetDebugLogging" = fn(C, fmi2Boolean, usize, *const fmi2String) -> c_int;
-    instantiate: "fmi2Instantiate" = fn(
-        fmi2String, c_int, fmi2String, fmi2String, *const fmi2CallbackFunctions, fmi2Boolean,
-        fmi2Boolean,
-    ) -> C;
-    free_instance: "fmi2FreeInstance" = fn(C);
-    setup_experiment: "fmi2SetupExperiment" = fn(C, fmi2Boolean, fmi2Real, fmi2Real, fmi2Boolean, fmi2Real) -> c_int;
-    enter_initialization_mode: "fmi2EnterInitializationMode" = fn(C) -> c_int;
-    exit_initialization_mode: "fmi2ExitInitializationMode" = fn(C) -> c_int;
-    terminate: "fmi2Terminate" = fn(C) -> c_int;
-    reset: "fmi2Reset" = fn(C) -> c_int;
-    get_real: "fmi2GetReal" = fn(C, Vr, usize, *mut fmi2Real) -> c_int;
-    get_integer: "fmi2GetInteger" = fn(C, Vr, usize, *mut c_int) -> c_int;
-    get_boolean: "fmi2GetBoolean" = fn(C, Vr, usize, *mut fmi2Boolean) -> c_int;
-    get_string: "fmi2GetString" = fn(C, Vr, usize, *mut fmi2String) -> c_int;
-    set_real: "fmi2SetReal" = fn(C, Vr, usize, *const fmi2Real) -> c_int;
-    set_integer: "fmi2SetInteger" = fn(C, Vr, usize, *const c_int) -> c_int;
-    set_boolean: "fmi2SetBoolean" = fn(C, Vr, usize, *const fmi2Boolean) -> c_int;
-    set_string: "fmi2SetString" = fn(C, Vr, usize, *const fmi2String) -> c_int;
-    get_fmu_state: "fmi2GetFMUstate" = fn(C, *mut fmi2FMUstate) -> c_int;
-    set_fmu_state: "fmi2SetFMUstate" = fn(C, fmi2FMUstate) -> c_int;
-    free_fmu_state: "fmi2FreeFMUstate" = fn(C, *mut fmi2FMUstate) -> c_int;
-    serialized_fmu_state_size: "fmi2SerializedFMUstateSize" = fn(C, fmi2FMUstate, *mut usize) -> c_int;
-    serialize_fmu_state: "fmi2SerializeFMUstate" = fn(C, fmi2FMUstate, *mut fmi2Byte, usize) -> c_int;
-    deserialize_fmu_state: "fmi2DeSerializeFMUstate" = fn(C, *const fmi2Byte, usize, *mut fmi2FMUstate) -> c_int;
-    get_directional_derivative: "fmi2GetDirectionalDerivative" = fn(
-        C, Vr, usize, Vr, usize, *const fmi2Real, *mut fmi2Real,
-    ) -> c_int;
-    set_real_input_derivatives: "fmi2SetRealInputDerivatives" = fn(C, Vr, usize, *const c_int, *const fmi2Real) -> c_int;
-    get_real_output_derivatives: "fmi2GetRealOutputDerivatives" = fn(C, Vr, usize, *const c_int, *mut fmi2Real) -> c_int;
-    do_step: "fmi2DoStep" = fn(C, fmi2Real, fmi2Real, fmi2Boolean) -> c_int;
-    cancel_step: "fmi2CancelStep" = fn(C) -> c_int;
-    get_status: "fmi2GetStatus" = fn(C, c_int, *mut c_int) -> c_int;
-    get_real_status: "fmi2GetRealStatus" = fn(C, c_int, *mut fmi2Real) -> c_int;
-    get_integer_status: "fmi2GetIntegerStatus" = fn(C, c_int, *mut c_int) -> c_int;
-    get_boolean_status: "fmi2GetBooleanStatus" = fn(C, c_int, *mut fmi2Boolean) -> c_int;
-    get_string_status: "fmi2GetStringStatus" = fn(C, c_int, *mut fmi2String) -> c_int;
-}
+/// The 34 functions as raw pointers (statuses as `c_int`, so a value outside the enum is seen as it
+/// is) and their names: fmi-import's own table.
+pub use fmi_import::raw::{Functions as Api, NAMES};
 
 /// The four FMI base types a value reference can belong to.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -173,7 +101,13 @@ impl Target {
             .ok_or_else(|| anyhow!("FMI 2.0 names no binaries folder for this platform"))?;
         let lib_path = fmu.unpacked_dir().join(binary);
         let lib = load(&lib_path)?;
-        let api = Api::resolve(&lib)?;
+        let api = Api::resolve(&lib).map_err(|missing| {
+            anyhow!(
+                "{}: symbols missing: {}",
+                lib_path.display(),
+                missing.join(", ")
+            )
+        })?;
         let mut vars = Vec::new();
         for v in &md.model_variables {
             let base = match v.kind {
@@ -234,19 +168,7 @@ impl Target {
 }
 
 fn load(path: &Path) -> Result<Library> {
-    #[cfg(unix)]
-    {
-        use libloading::os::unix::{Library as UnixLibrary, RTLD_LOCAL, RTLD_NOW};
-        // SAFETY: running the library's initializers is inherent in testing an FMU.
-        unsafe { UnixLibrary::open(Some(path), RTLD_NOW | RTLD_LOCAL) }
-            .map(Library::from)
-            .with_context(|| format!("cannot load {}", path.display()))
-    }
-    #[cfg(not(unix))]
-    {
-        // SAFETY: as above.
-        unsafe { Library::new(path) }.with_context(|| format!("cannot load {}", path.display()))
-    }
+    fmi_import::raw::load(path).map_err(|e| anyhow!("cannot load {}: {e}", path.display()))
 }
 
 /// A NUL-terminated byte buffer that is not a C string the FMU made: used as a "pointer to

@@ -102,3 +102,10 @@ pub use library::platform_binary;
 pub use logging::{LogConfig, LogRecord, stderr_sink};
 pub use model_description::ModelDescription;
 pub use unpack::UnpackLimits;
+
+/// The FMU's shared library at the level of the C API: the 34 functions as raw pointers (every
+/// status a `c_int`), for tools that must call them with any argument in any state, such as the
+/// `fmi-fuzz` state-machine fuzzer. [`Instance`] is the safe way to drive an FMU.
+pub mod raw {
+    pub use crate::library::{Functions, NAMES, load};
+}

@@ -40,7 +40,7 @@ pub fn platform_binary(model_identifier: &str) -> Option<String> {
 /// Loads the library resolving every symbol now (RTLD_NOW): an undefined symbol is reported
 /// here, with the loader's message, instead of aborting the process at the first call that
 /// needs it. RTLD_LOCAL keeps two FMUs' symbols (all named fmi2...) apart.
-pub(crate) fn load(path: &Path) -> Result<Library, String> {
+pub fn load(path: &Path) -> Result<Library, String> {
     #[cfg(unix)]
     {
         use libloading::os::unix::{Library as UnixLibrary, RTLD_LOCAL, RTLD_NOW};
@@ -76,18 +76,16 @@ macro_rules! functions {
         /// library returning a value outside the enum must not be undefined behaviour.
         /// Some are resolved only to check the FMU is complete (this API does not call them).
         #[derive(Clone, Copy)]
-        #[allow(dead_code)]
-        pub(crate) struct Functions {
-            $(pub(crate) $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
+        pub struct Functions {
+            $(pub $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
         }
 
         /// The names, in declaration order.
-        #[cfg(test)]
-        pub(crate) const NAMES: &[&str] = &[$($name),*];
+        pub const NAMES: &[&str] = &[$($name),*];
 
         impl Functions {
             /// Resolves all functions, or returns every missing name.
-            pub(crate) fn resolve(lib: &Library) -> Result<Functions, Vec<&'static str>> {
+            pub fn resolve(lib: &Library) -> Result<Functions, Vec<&'static str>> {
                 let mut missing = Vec::new();
                 $(
                     let $field = match lookup(lib, $name) {
