@@ -171,19 +171,7 @@ fn one_cycle(
     let api = t.api;
     // SAFETY (whole function): `c` is our live instance; arrays match their lengths.
     unsafe {
-        ctx.ok(
-            "fmi2SetupExperiment",
-            (api.setup_experiment)(c, 0, 0.0, 0.0, 1, 100.0),
-        )?;
-        apply_presets(ctx, c, presets)?;
-        ctx.ok(
-            "fmi2EnterInitializationMode",
-            (api.enter_initialization_mode)(c),
-        )?;
-        ctx.ok(
-            "fmi2ExitInitializationMode",
-            (api.exit_initialization_mode)(c),
-        )?;
+        initialize(ctx, c, presets, Some(100.0))?;
         let (in_vr, in_val): (Vec<u32>, Vec<f64>) = inputs.iter().copied().unzip();
         let mut time = 0.0;
         let mut out = vec![0.0; reals.len()];
@@ -308,19 +296,7 @@ fn one_cycle(
         // Every other cycle: reset and initialize again.
         if cycle % 2 == 1 {
             ctx.ok("fmi2Reset", (api.reset)(c))?;
-            ctx.ok(
-                "fmi2SetupExperiment",
-                (api.setup_experiment)(c, 0, 0.0, 0.0, 0, 0.0),
-            )?;
-            apply_presets(ctx, c, presets)?;
-            ctx.ok(
-                "fmi2EnterInitializationMode",
-                (api.enter_initialization_mode)(c),
-            )?;
-            ctx.ok(
-                "fmi2ExitInitializationMode",
-                (api.exit_initialization_mode)(c),
-            )?;
+            initialize(ctx, c, presets, None)?;
             time = 0.0;
             step(ctx, &mut time)?;
         }
@@ -334,6 +310,36 @@ fn one_cycle(
 }
 
 /// Sets the presets (variable name, value) on a freshly instantiated or reset instance.
+/// SetupExperiment (with a stop time when given), the presets, Enter- and
+/// ExitInitializationMode, each required to return OK.
+///
+/// # Safety
+/// `c` is a live instance of `ctx`'s FMU in the instantiated state.
+unsafe fn initialize(
+    ctx: &mut Ctx,
+    c: fmi2Component,
+    presets: &[(String, String)],
+    stop: Option<f64>,
+) -> Result<()> {
+    let api = ctx.t.api;
+    // SAFETY: the caller's contract.
+    unsafe {
+        ctx.ok(
+            "fmi2SetupExperiment",
+            (api.setup_experiment)(c, 0, 0.0, 0.0, stop.is_some() as i32, stop.unwrap_or(0.0)),
+        )?;
+        apply_presets(ctx, c, presets)?;
+        ctx.ok(
+            "fmi2EnterInitializationMode",
+            (api.enter_initialization_mode)(c),
+        )?;
+        ctx.ok(
+            "fmi2ExitInitializationMode",
+            (api.exit_initialization_mode)(c),
+        )
+    }
+}
+
 fn apply_presets(ctx: &mut Ctx, c: fmi2Component, presets: &[(String, String)]) -> Result<()> {
     let t = ctx.t;
     let api = t.api;
