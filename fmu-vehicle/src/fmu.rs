@@ -529,8 +529,14 @@ pub fn build_simulation(
     let track_file = v.string[vr::TRACK_FILE as usize].trim().to_string();
     // The first 25 s of track at the start speed (the grid grows as the vehicle runs, with
     // the same nodes a longer first synthesis would have made). Capped: a speed input of
-    // 1e300 made this terabytes (an aborted allocation, found by fmi-fuzz).
-    let speed = real(vr::SPEED).abs().max(20.0).min(100.0);
+    // 1e300 made this terabytes (an aborted allocation, found by fmi-fuzz). A NaN speed takes
+    // the lower bound (`clamp` would pass the NaN through).
+    let start = real(vr::SPEED).abs();
+    let speed = if start.is_nan() {
+        20.0
+    } else {
+        start.clamp(20.0, 100.0)
+    };
     let (s_min, s_max) = (-vehicle.wheelset_offset(3) - 5.0, 25.0 * speed + 50.0);
     let track = if track_file.is_empty() {
         let (min_wl, max_wl) = (real(vr::MIN_WAVELENGTH), real(vr::MAX_WAVELENGTH));
