@@ -129,3 +129,15 @@ def test_zero_conicity_is_refused_at_initialization_naming_alpha(make_slave):
     s.fmu.reset()  # Reset recovers from the error
     assert s.initialize() == OK
     assert_still_steps(s, 0.0)
+
+
+@pytest.mark.parametrize("path", ["/dev/zero", "/"])
+def test_a_calibration_file_that_is_not_a_regular_file_is_refused_naming_it(make_slave, path):
+    """/dev/zero would be read forever and a directory is no file: both are refused by name
+    instead of hanging or exhausting the importer, and Reset recovers."""
+    s = make_slave("device")
+    assert s.initialize(strings={"calibration_file": path}) == ERROR
+    assert path in last_error(s) and "not a regular file" in last_error(s)
+    s.fmu.reset()
+    assert s.initialize() == OK
+    assert_still_steps(s, 0.0)

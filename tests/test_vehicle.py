@@ -210,6 +210,8 @@ def test_a_measured_track_is_followed(make_vehicle, tmp_path):
         ({"strings": {"vehicle": "no_such_vehicle.toml"}}, "vehicle"),
         ({"reals": {"min_wavelength": 300.0}}, "wavelength"),
         ({"strings": {"track_file": "/nonexistent/track.csv"}}, "/nonexistent/track.csv"),
+        ({"strings": {"track_file": "/dev/zero"}}, "/dev/zero: the track file is not a regular file"),
+        ({"strings": {"vehicle": "/dev/zero"}}, "/dev/zero: the vehicle file is not a regular file"),
     ],
 )
 def test_impossible_parameters_are_refused_naming_them(make_vehicle, setting, word):

@@ -5,7 +5,39 @@
 //! `file:/abs/path`, four slashes, or `file://localhost/...`. A plain absolute path is accepted
 //! too. Anything else gives `None` and the caller logs what it got.
 
-use std::path::PathBuf;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// Reads a text file a user named in a parameter, refusing what would hang or exhaust the
+/// importer: anything but a regular file (a FIFO blocks on open, `/dev/zero` never ends) and
+/// files above `limit` bytes. Messages start with the file, then say what it was meant to be
+/// (`what`: "track file", "calibration file").
+pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String, String> {
+    let shown = path.display();
+    let cannot = |e: std::io::Error| format!("{shown}: cannot read the {what}: {e}");
+    let meta = std::fs::metadata(path).map_err(cannot)?;
+    if !meta.is_file() {
+        return Err(format!("{shown}: the {what} is not a regular file"));
+    }
+    if meta.len() > limit {
+        return Err(format!(
+            "{shown}: the {what} has {} bytes, more than the limit of {limit}",
+            meta.len()
+        ));
+    }
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    let mut text = String::new();
+    // The length can change after the check (a growing file): read at most one byte past it.
+    file.take(limit + 1)
+        .read_to_string(&mut text)
+        .map_err(cannot)?;
+    if text.len() as u64 > limit {
+        return Err(format!(
+            "{shown}: the {what} grew beyond {limit} bytes while being read"
+        ));
+    }
+    Ok(text)
+}
 
 /// The resources directory the URI names, or `None` when it is not a local file location.
 pub fn resource_dir(location: &str) -> Option<PathBuf> {
@@ -42,7 +74,8 @@ pub fn resource_dir(location: &str) -> Option<PathBuf> {
 
 #[cfg(test)]
 mod tests {
-    use super::resource_dir;
+    use super::{read_text, resource_dir};
+    use std::path::Path;
     use std::path::PathBuf;
 
     #[test]
@@ -72,5 +105,31 @@ mod tests {
         ] {
             assert_eq!(resource_dir(uri), None, "{uri}");
         }
+    }
+
+    #[test]
+    fn read_text_refuses_devices_directories_and_large_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let ok = dir.path().join("a.csv");
+        std::fs::write(&ok, "distance\n1\n").unwrap();
+        assert_eq!(read_text(&ok, "track file", 100).unwrap(), "distance\n1\n");
+        let e = read_text(&ok, "track file", 5).unwrap_err();
+        assert!(
+            e.ends_with("a.csv: the track file has 11 bytes, more than the limit of 5"),
+            "{e}"
+        );
+        let e = read_text(dir.path(), "track file", 100).unwrap_err();
+        assert!(e.ends_with(": the track file is not a regular file"), "{e}");
+        let e = read_text(Path::new("/dev/zero"), "calibration file", 100).unwrap_err();
+        assert_eq!(e, "/dev/zero: the calibration file is not a regular file");
+        let e = read_text(&dir.path().join("missing"), "track file", 100).unwrap_err();
+        assert!(e.contains("missing: cannot read the track file: "), "{e}");
+        let bad = dir.path().join("bad.csv");
+        std::fs::write(&bad, [0xff, 0xfe]).unwrap();
+        assert!(
+            read_text(&bad, "track file", 100)
+                .unwrap_err()
+                .contains("bad.csv")
+        );
     }
 }

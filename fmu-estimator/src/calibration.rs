@@ -119,8 +119,8 @@ pub const SHIPPED: &str = include_str!("../resources/calibration.toml");
 
 /// Reads a calibration file. `Ok(None)`: the file holds no matrices (not yet calibrated).
 pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read calibration file {}: {e}", path.display()))?;
+    // A calibration file is a few kilobytes of TOML.
+    let text = fmi_abi::resource::read_text(path, "calibration file", 1 << 20)?;
     parse(&text, path)
 }
 

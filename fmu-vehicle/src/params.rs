@@ -95,8 +95,8 @@ impl VehicleParams {
     }
 
     pub fn load(path: &Path) -> Result<VehicleParams, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("cannot read vehicle file {}: {e}", path.display()))?;
+        // A vehicle file is a few kilobytes of TOML; 1 MiB leaves room for comments.
+        let text = fmi_abi::resource::read_text(path, "vehicle file", 1 << 20)?;
         Self::parse(&text, &path.display().to_string())
     }
 

@@ -92,7 +92,7 @@ const EXPECTED: &[(&str, &[&str])] = &[
     ),
     (
         "bad_utf8.csv",
-        &["cannot read: stream did not contain valid UTF-8"],
+        &["cannot read the track file: stream did not contain valid UTF-8"],
     ),
 ];
 

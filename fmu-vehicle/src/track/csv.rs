@@ -160,7 +160,7 @@ impl<'a> Spline<'a> {
 
 /// Reads and parses `path`.
 pub(super) fn read(path: &Path) -> Result<Profile, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    // 1 GiB holds the node cap (1e7 rows of four numbers) with room to spare.
+    let text = fmi_abi::resource::read_text(path, "track file", 1 << 30)?;
     parse(path, &text)
 }
