@@ -26,17 +26,19 @@ pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String, String> 
         ));
     }
     let file = std::fs::File::open(path).map_err(cannot)?;
+    // The length can change after the check (a growing file).
+    read_limited(file, limit)
+        .map_err(cannot)?
+        .ok_or_else(|| format!("{shown}: the {what} grew beyond {limit} bytes while being read"))
+}
+
+/// Reads `reader` to its end as UTF-8 text, but never more than `limit` bytes: `Ok(None)` when
+/// there is more. For anything whose size is not known beforehand, or not to be trusted (a zip
+/// entry's declared size, a file that grows, a device).
+pub fn read_limited(reader: impl Read, limit: u64) -> std::io::Result<Option<String>> {
     let mut text = String::new();
-    // The length can change after the check (a growing file): read at most one byte past it.
-    file.take(limit + 1)
-        .read_to_string(&mut text)
-        .map_err(cannot)?;
-    if text.len() as u64 > limit {
-        return Err(format!(
-            "{shown}: the {what} grew beyond {limit} bytes while being read"
-        ));
-    }
-    Ok(text)
+    reader.take(limit + 1).read_to_string(&mut text)?;
+    Ok((text.len() as u64 <= limit).then_some(text))
 }
 
 /// The resources directory the URI names, or `None` when it is not a local file location.
@@ -74,7 +76,7 @@ pub fn resource_dir(location: &str) -> Option<PathBuf> {
 
 #[cfg(test)]
 mod tests {
-    use super::{read_text, resource_dir};
+    use super::{read_limited, read_text, resource_dir};
     use std::path::Path;
     use std::path::PathBuf;
 
@@ -131,5 +133,17 @@ mod tests {
                 .unwrap_err()
                 .contains("bad.csv")
         );
+    }
+
+    #[test]
+    fn read_limited_stops_one_byte_past_the_limit() {
+        assert_eq!(
+            read_limited(&b"abcde"[..], 5).unwrap().as_deref(),
+            Some("abcde")
+        );
+        assert_eq!(read_limited(&b"abcdef"[..], 5).unwrap(), None);
+        // An endless reader ends too.
+        assert_eq!(read_limited(std::io::repeat(b'a'), 1000).unwrap(), None);
+        assert!(read_limited(&[0xffu8, 0xfe][..], 5).is_err());
     }
 }

@@ -3,7 +3,6 @@
 
 use model_description::{ModelDescription, VariableKind};
 use std::fmt::Write;
-use std::io::Read;
 use std::path::Path;
 
 /// What `info` reads: the model description and the archive's entry names. Only the XML is
@@ -26,20 +25,19 @@ pub fn read_archive(path: &Path) -> Result<Archive, String> {
                 .and_then(|f| f.name().ok().map(|n| n.to_string()))
         })
         .collect();
-    let mut xml = String::new();
     // Bounded: a zip bomb's modelDescription.xml must not exhaust the memory.
     let limit = fmi_import::UnpackLimits::DEFAULT.max_model_description_bytes;
-    zip.by_name("modelDescription.xml")
-        .map_err(|_| format!("{} has no modelDescription.xml", path.display()))?
-        .take(limit + 1)
-        .read_to_string(&mut xml)
-        .map_err(|e| format!("{}: cannot read modelDescription.xml: {e}", path.display()))?;
-    if xml.len() as u64 > limit {
-        return Err(format!(
-            "{}: modelDescription.xml is larger than the limit of {limit} bytes",
-            path.display()
-        ));
-    }
+    let entry = zip
+        .by_name("modelDescription.xml")
+        .map_err(|_| format!("{} has no modelDescription.xml", path.display()))?;
+    let xml = fmi_abi::resource::read_limited(entry, limit)
+        .map_err(|e| format!("{}: cannot read modelDescription.xml: {e}", path.display()))?
+        .ok_or_else(|| {
+            format!(
+                "{}: modelDescription.xml is larger than the limit of {limit} bytes",
+                path.display()
+            )
+        })?;
     let model_description = ModelDescription::from_xml(&xml)
         .map_err(|e| format!("{}: modelDescription.xml: {e}", path.display()))?;
     Ok(Archive {

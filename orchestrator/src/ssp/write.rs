@@ -3,7 +3,7 @@
 use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::fs;
-use std::io::{self, Read, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use model_description::xml::escape_attribute;
@@ -102,20 +102,18 @@ fn fmu_model_description(c: &Component) -> Result<ModelDescription, SspError> {
     let file = fs::File::open(&c.source).map_err(|e| fail(e.to_string()))?;
     let mut zip = zip::ZipArchive::new(io::BufReader::new(file))
         .map_err(|e| fail(format!("not a zip archive: {e}")))?;
-    let mut entry = zip
+    let entry = zip
         .by_name("modelDescription.xml")
         .map_err(|e| fail(format!("no modelDescription.xml: {e}")))?;
-    let mut text = String::new();
     // Bounded: a zip bomb's modelDescription.xml must not exhaust the memory.
     let limit = fmi_import::UnpackLimits::DEFAULT.max_model_description_bytes;
-    io::Read::take(&mut entry, limit + 1)
-        .read_to_string(&mut text)
-        .map_err(|e| fail(format!("modelDescription.xml: {e}")))?;
-    if text.len() as u64 > limit {
-        return Err(fail(format!(
-            "modelDescription.xml is larger than the limit of {limit} bytes"
-        )));
-    }
+    let text = fmi_abi::resource::read_limited(entry, limit)
+        .map_err(|e| fail(format!("modelDescription.xml: {e}")))?
+        .ok_or_else(|| {
+            fail(format!(
+                "modelDescription.xml is larger than the limit of {limit} bytes"
+            ))
+        })?;
     ModelDescription::from_xml(&text).map_err(|source| SspError::ModelDescription {
         component: c.name.clone(),
         path: c.source.clone(),
