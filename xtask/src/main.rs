@@ -294,32 +294,25 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg(&out)
         .arg("--quiet");
     workspace::run(&mut run)?;
-    println!("\n==> orchestrator study all (held-out track seeds 1-5; calibration on seed 101)");
-    let mut study = Command::new(&orchestrator);
-    study
-        .arg("study")
-        .arg("all")
-        .arg("--vehicle")
-        .arg(&vehicle)
-        .arg("--estimator")
-        .arg(&estimator)
-        .arg("--out")
-        .arg(out.join("study"))
-        .args(&extra);
-    workspace::run(&mut study)?;
-    println!(
-        "\n==> orchestrator study variants (beyond the paper: priors, steady-state gain, RTS smoother, variable speed)"
-    );
-    let mut variants = Command::new(&orchestrator);
-    variants
-        .arg("study")
-        .arg("variants")
-        .arg("--vehicle")
-        .arg(&vehicle)
-        .arg("--estimator")
-        .arg(&estimator)
-        .arg("--out")
-        .arg(out.join("study"))
-        .args(extra);
-    workspace::run(&mut variants)
+    // The studies share the FMUs, the output directory and the extra arguments.
+    let study = |command: &str, what: &str| {
+        println!("\n==> orchestrator study {command} ({what})");
+        let mut study = Command::new(&orchestrator);
+        study
+            .arg("study")
+            .arg(command)
+            .arg("--vehicle")
+            .arg(&vehicle)
+            .arg("--estimator")
+            .arg(&estimator)
+            .arg("--out")
+            .arg(out.join("study"))
+            .args(&extra);
+        workspace::run(&mut study)
+    };
+    study("all", "held-out track seeds 1-5; calibration on seed 101")?;
+    study(
+        "variants",
+        "beyond the paper: priors, steady-state gain, RTS smoother, variable speed",
+    )
 }
