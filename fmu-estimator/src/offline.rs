@@ -25,6 +25,30 @@ pub struct Sample {
     pub frame_acc_y: f64,
 }
 
+impl Sample {
+    /// One sample per row of a recording's four signal columns (of equal length).
+    pub fn from_columns(
+        speed: &[f64],
+        ws_acc_y: &[f64],
+        ws_yaw_rate: &[f64],
+        frame_acc_y: &[f64],
+    ) -> Vec<Sample> {
+        debug_assert!(
+            [ws_acc_y.len(), ws_yaw_rate.len(), frame_acc_y.len()]
+                .iter()
+                .all(|&n| n == speed.len())
+        );
+        (0..speed.len())
+            .map(|k| Sample {
+                speed: speed[k],
+                ws_acc_y: ws_acc_y[k],
+                ws_yaw_rate: ws_yaw_rate[k],
+                frame_acc_y: frame_acc_y[k],
+            })
+            .collect()
+    }
+}
+
 /// Estimates per sample.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Processed {

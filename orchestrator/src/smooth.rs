@@ -58,14 +58,7 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
     let yaw = find(&cols, &["ws_yaw_rate"], path)?;
     let frame = find(&cols, &["frame_acc_y"], path)?;
     // A first row at the start time holds initial values, not the end of a step.
-    let samples = (1..time.len())
-        .map(|k| Sample {
-            speed: speed[k],
-            ws_acc_y: acc[k],
-            ws_yaw_rate: yaw[k],
-            frame_acc_y: frame[k],
-        })
-        .collect();
+    let samples = Sample::from_columns(&speed[1..], &acc[1..], &yaw[1..], &frame[1..]);
     Ok((time[1..].to_vec(), h, samples))
 }
 

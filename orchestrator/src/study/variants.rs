@@ -83,16 +83,8 @@ fn from_table(table: &Table) -> Result<Record, String> {
         c("ws_yaw_rate")?,
         c("frame_acc_y")?,
     );
-    let samples = (0..speed.len())
-        .map(|k| Sample {
-            speed: speed[k],
-            ws_acc_y: acc[k],
-            ws_yaw_rate: yaw[k],
-            frame_acc_y: frame[k],
-        })
-        .collect();
     Ok(Record {
-        samples,
+        samples: Sample::from_columns(&speed, &acc, &yaw, &frame),
         distance: c("distance")?,
         alignment: c("alignment")?,
     })
