@@ -231,7 +231,7 @@ impl VarSpec {
 }
 
 /// The four value-reference spaces of FMI 2.0.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Base {
     Real,
     Integer,
@@ -240,6 +240,8 @@ pub enum Base {
 }
 
 impl Base {
+    pub const ALL: [Base; 4] = [Base::Real, Base::Integer, Base::Boolean, Base::String];
+
     pub fn name(self) -> &'static str {
         match self {
             Base::Real => "Real",

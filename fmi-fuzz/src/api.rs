@@ -11,18 +11,8 @@ use std::path::{Path, PathBuf};
 /// is) and their names: fmi-import's own table.
 pub use fmi_import::raw::{Functions as Api, NAMES};
 
-/// The four FMI base types a value reference can belong to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Base {
-    Real,
-    Integer,
-    Boolean,
-    String,
-}
-
-impl Base {
-    pub const ALL: [Base; 4] = [Base::Real, Base::Integer, Base::Boolean, Base::String];
-}
+/// The four FMI base types a value reference can belong to: the export layer's own enum.
+pub use fmi_abi::variables::Base;
 
 /// What the fuzzer needs to know about one variable.
 #[derive(Debug, Clone)]
