@@ -647,10 +647,30 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         irw_sigma_xi: irw,
         shaping_sigma_xi: shaping,
     };
+    let training = variants::record(
+        &fmus,
+        orchestrator::study::runs::seeded(a.calibration_seed),
+        variants::LEARNING_STOP,
+        None,
+    )
+    .map_err(cfg)?;
+    let learned = orchestrator::study::learned::LearnedSmoother::train(&training).map_err(cfg)?;
+    println!(
+        "learned FIR smoother fitted on {} s of the calibration seed {}",
+        variants::LEARNING_STOP,
+        a.calibration_seed
+    );
+    let compared = variants::variants(&tuned);
+    let kalman = compared
+        .iter()
+        .find(|v| v.name == "shaping filter, RTS smoother")
+        .ok_or_else(|| cfg("no shaping-filter smoother among the variants".into()))?;
     let constant = variants::record_seeds(&fmus, &a.seeds, Conditions::Standard).map_err(cfg)?;
-    let at_constant = variants::compare(&constant, &variants::variants(&tuned)).map_err(cfg)?;
+    let mut at_constant = variants::compare(&constant, &compared).map_err(cfg)?;
+    at_constant.extend(variants::compare_learned(&constant, &learned, kalman).map_err(cfg)?);
     let flat = variants::record_seeds(&fmus, &a.seeds, Conditions::NoVertical).map_err(cfg)?;
-    let at_flat = variants::compare(&flat, &variants::variants(&tuned)).map_err(cfg)?;
+    let mut at_flat = variants::compare(&flat, &compared).map_err(cfg)?;
+    at_flat.extend(variants::compare_learned(&flat, &learned, kalman).map_err(cfg)?);
     let variable =
         variants::record_seeds(&fmus, &a.seeds, Conditions::VariableSpeed).map_err(cfg)?;
     let at_variable =

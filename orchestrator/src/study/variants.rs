@@ -15,6 +15,7 @@
 //! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
 
 use super::cases::spread;
+use super::learned::LearnedSmoother;
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use super::runs::{Fmus, STEP, Settings, SpeedProfile, seeded, vehicle_run_driven};
 use super::standard::{DS, TRIM};
@@ -245,38 +246,80 @@ pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantRe
         .par_iter()
         .map(|&(v, r)| evaluate_variant(&records[r], &variants[v], None))
         .collect();
-    let mut out = vec![];
-    for (vi, v) in variants.iter().enumerate() {
-        let per_seed: Vec<BandMetrics> = jobs
-            .iter()
-            .zip(&metrics)
-            .filter(|((j, _), _)| *j == vi)
-            .map(|(_, m)| m.clone())
-            .collect::<Result<_, _>>()?;
-        let bands = BANDS
-            .iter()
-            .map(|b| {
-                let r: Vec<f64> = per_seed
-                    .iter()
-                    .map(|m| m.get(b.name).expect("band").jrel)
-                    .collect();
-                let j: Vec<f64> = per_seed
-                    .iter()
-                    .map(|m| m.get(b.name).expect("band").j_mm)
-                    .collect();
-                let (rm, rs) = spread(&r);
-                (b.name.to_string(), rm, rs, spread(&j).0)
-            })
-            .collect();
-        out.push(VariantResult {
-            name: v.name.clone(),
-            settings: v.settings.clone(),
-            smooth: v.smooth,
-            bands,
-            per_seed,
-        });
+    variants
+        .iter()
+        .enumerate()
+        .map(|(vi, v)| {
+            let per_seed: Vec<BandMetrics> = jobs
+                .iter()
+                .zip(&metrics)
+                .filter(|((j, _), _)| *j == vi)
+                .map(|(_, m)| m.clone())
+                .collect::<Result<_, _>>()?;
+            Ok(summarize(v, per_seed))
+        })
+        .collect()
+}
+
+/// Mean and spread over the seeds of one variant's metrics.
+fn summarize(v: &Variant, per_seed: Vec<BandMetrics>) -> VariantResult {
+    let bands = BANDS
+        .iter()
+        .map(|b| {
+            let r: Vec<f64> = per_seed
+                .iter()
+                .map(|m| m.get(b.name).expect("band").jrel)
+                .collect();
+            let j: Vec<f64> = per_seed
+                .iter()
+                .map(|m| m.get(b.name).expect("band").j_mm)
+                .collect();
+            let (rm, rs) = spread(&r);
+            (b.name.to_string(), rm, rs, spread(&j).0)
+        })
+        .collect();
+    VariantResult {
+        name: v.name.clone(),
+        settings: v.settings.clone(),
+        smooth: v.smooth,
+        bands,
+        per_seed,
     }
-    Ok(out)
+}
+
+/// Length of the calibration seed's run the learned smoother is trained on [s] (8 km).
+pub const LEARNING_STOP: f64 = 1000.0;
+
+/// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with the
+/// Kalman smoother of `kalman` (a smoothing variant) below [`super::learned::SPLIT`].
+pub fn compare_learned(
+    records: &[Record],
+    smoother: &LearnedSmoother,
+    kalman: &Variant,
+) -> Result<Vec<VariantResult>, String> {
+    let metrics: Vec<(BandMetrics, BandMetrics)> = records
+        .par_iter()
+        .map(|rec| {
+            let k = super::learned::kalman_smoothed(rec, &kalman.settings)?;
+            smoother.evaluate(rec, &k)
+        })
+        .collect::<Result<_, String>>()?;
+    let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
+    let learned = variant(
+        "learned FIR smoother (fitted on the calibration seed)",
+        &[],
+        true,
+    );
+    let mut combined = kalman.clone();
+    combined.name = format!(
+        "learned FIR smoother for waves under {} m + {}",
+        super::learned::SPLIT,
+        kalman.name
+    );
+    Ok(vec![
+        summarize(&learned, alone),
+        summarize(&combined, hybrid),
+    ])
 }
 
 /// The track conditions of a record set.

@@ -1,0 +1,513 @@
+//! A learned linear smoother: the alignment estimated from the three sensors by a multichannel,
+//! two-sided FIR (Wiener) filter whose taps are fitted on the calibration seed's run, and its
+//! combination with the Kalman (RTS) smoother, which keeps the long waves.
+//!
+//! # Why
+//! `docs/cross-level.md`: the Kalman filter's D1 error on our vehicle comes from the track's
+//! cross-level, whose effect on the axle box and on the car body the paper's three-mass model
+//! cannot represent. A linear estimator that is not bound to that model measures how much of the
+//! alignment the three sensors carry; fitted on one seed and judged on others, it is also an
+//! offline estimator in its own right. It is a black box of the vehicle it was trained on, at
+//! the speed it was trained at: it needs a training run of that vehicle (here, the vehicle FMU on
+//! the calibration seed), which the model-based filter does not.
+//!
+//! # Method
+//! 1. Grid: the sensors are low-passed (Butterworth, order 8, zero phase, cut-off at 0.4 of the
+//!    decimated sampling rate, i.e. a 2.5 m wavelength at the default 1 m grid) and every `D`-th
+//!    sample is kept, `D = round(ds / (V h))`, so the samples are `ds` apart along the track.
+//!    Each channel is scaled to unit variance on the training run (conditioning only).
+//! 2. Estimate at grid point `m`: `e[m] = sum_c sum_{l = -f}^{p} w[c, l] x_c[m - l]`, a window of
+//!    up to `P` points behind (`l > 0`) and ahead (`l < 0`).
+//! 3. Taps: least squares against the target `t` (the true alignment band-passed to
+//!    [`TARGET`], the band the window can resolve). With the correlations
+//!    `rho_cd(tau) = (1/N) sum_n x_c[n] x_d[n + tau]` (biased, so the matrix below is a Gram
+//!    matrix and positive semi-definite), `E[x_c[n - l] x_d[n - k]] = rho_cd(l - k)` and
+//!    `E[x_c[n - l] t[n]] = rho_ct(l)`: the Wiener-Hopf equations `R w = r`, solved by
+//!    Cholesky with a ridge of `RIDGE` times the mean diagonal.
+//! 4. Edges: where the window would leave the record, it is cut to the samples that exist and
+//!    the taps for the cut window solve the same equations restricted to its lags (the best
+//!    linear estimate from the data there, not the full filter with zeros). The first and last
+//!    `P` points use such one-sided windows.
+//! 5. Hybrid: `e_h = k + HP(e - k)`, `k` the Kalman smoother's estimate on the same grid and
+//!    `HP` a zero-phase Butterworth high-pass (order 4) at [`SPLIT`] m: the learned filter above
+//!    that wavelength, the Kalman smoother below it (the complementary low-pass is `1 - HP`
+//!    exactly, since both act on the difference).
+
+use super::metrics::{BandMetrics, bandpass, evaluate};
+use super::runs::STEP;
+use super::standard::{DS, TRIM};
+use super::variants::Record;
+use fmu_estimator::offline::{self, Sample};
+use nalgebra::{DMatrix, DVector};
+use sci_rs::signal::filter::design::{
+    DigitalFilter, FilterBandType, FilterOutputType, Sos, butter_dyn,
+};
+use sci_rs::signal::filter::sosfiltfilt_dyn;
+
+/// Grid step along the track [m] (20 Hz at 20 m/s).
+pub const GRID: f64 = 1.0;
+/// Half window `P` in grid points (60 m each way).
+pub const HALF_WINDOW: usize = 60;
+/// The band the taps are fitted to: D1 and D2, which a 120 m window resolves.
+pub const TARGET: super::metrics::Band = super::metrics::Band {
+    name: "3-70 m",
+    short: 3.0,
+    long: 70.0,
+};
+/// Wavelength [m] above which the hybrid takes the Kalman smoother.
+pub const SPLIT: f64 = 40.0;
+/// Ridge, relative to the mean diagonal of the normal equations.
+pub const RIDGE: f64 = 1e-6;
+/// Training samples skipped at the start of the run (the vehicle's start transient) [s].
+const SKIP: f64 = 2.0;
+
+fn butter(
+    order: usize,
+    cutoff: f64,
+    band: FilterBandType,
+    fs: f64,
+) -> Result<Vec<Sos<f64>>, String> {
+    match butter_dyn(
+        order,
+        vec![cutoff],
+        Some(band),
+        Some(false),
+        Some(FilterOutputType::Sos),
+        Some(fs),
+    ) {
+        DigitalFilter::Sos(s) => Ok(s.sos),
+        _ => Err("the Butterworth design did not return second-order sections".into()),
+    }
+}
+
+/// Zero-phase filtering, refusing signals too short for the padding (`sosfiltfilt` panics).
+fn filtfilt(x: &[f64], sos: &[Sos<f64>], what: &str) -> Result<Vec<f64>, String> {
+    let needed = 3 * (2 * sos.len() + 1) + 1;
+    if x.len() < needed {
+        return Err(format!(
+            "{} samples are too few for the {what} (at least {needed})",
+            x.len()
+        ));
+    }
+    Ok(sosfiltfilt_dyn(x.iter(), sos))
+}
+
+/// Zero-phase high-pass of a signal on a grid of step `ds` [m], cut-off wavelength `split` [m].
+pub fn highpass(x: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
+    let sos = butter(4, 1.0 / split, FilterBandType::Highpass, 1.0 / ds)?;
+    filtfilt(x, &sos, "hybrid's high-pass")
+}
+
+/// The hybrid estimate `kalman + HP(learned - kalman)` (module docs, step 5).
+pub fn hybrid(learned: &[f64], kalman: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
+    let d: Vec<f64> = learned.iter().zip(kalman).map(|(a, b)| a - b).collect();
+    let hp = highpass(&d, ds, split)?;
+    Ok(kalman.iter().zip(hp).map(|(k, h)| k + h).collect())
+}
+
+/// The taps for one window of lags `-future..=past`, channel after channel.
+#[derive(Debug, Clone)]
+struct Window {
+    past: usize,
+    future: usize,
+    taps: Vec<f64>,
+}
+
+/// A multichannel two-sided FIR estimator fitted by the Wiener-Hopf equations (module docs,
+/// steps 2-4), on samples already on the grid.
+#[derive(Debug, Clone)]
+pub struct Fir {
+    half: usize,
+    scale: Vec<f64>,
+    /// `start[p]`: past `p < P`, future `P` (the first points); `end[f]`: past `P`, future
+    /// `f < P` (the last points); `full`: `P` both ways.
+    start: Vec<Window>,
+    end: Vec<Window>,
+    full: Window,
+}
+
+impl Fir {
+    /// Fits the taps of half window `half` so that the channels estimate `target`.
+    pub fn fit(
+        channels: &[Vec<f64>],
+        target: &[f64],
+        half: usize,
+        ridge: f64,
+    ) -> Result<Fir, String> {
+        let n = target.len();
+        if channels.is_empty() || channels.iter().any(|c| c.len() != n) {
+            return Err("the learned smoother needs channels as long as the target".into());
+        }
+        if n < 4 * half + 1 {
+            return Err(format!(
+                "{n} training samples are too few for a window of {} (at least {})",
+                2 * half + 1,
+                4 * half + 1
+            ));
+        }
+        let mut scale = Vec::with_capacity(channels.len());
+        for (i, c) in channels.iter().enumerate() {
+            let mean = c.iter().sum::<f64>() / n as f64;
+            let sd = (c.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64).sqrt();
+            if !(sd.is_finite() && sd > 0.0) {
+                return Err(format!("training channel {i} is constant or not finite"));
+            }
+            scale.push(sd);
+        }
+        let x: Vec<Vec<f64>> = channels
+            .iter()
+            .zip(&scale)
+            .map(|(c, s)| c.iter().map(|v| v / s).collect())
+            .collect();
+        // rho(a, b, tau) = (1/N) sum_n a[n] b[n + tau], for |tau| <= 2 half.
+        let corr = |a: &[f64], b: &[f64], tau: isize| -> f64 {
+            let (lo, hi) = if tau >= 0 {
+                (0, n - tau as usize)
+            } else {
+                ((-tau) as usize, n)
+            };
+            (lo..hi)
+                .map(|i| a[i] * b[(i as isize + tau) as usize])
+                .sum::<f64>()
+                / n as f64
+        };
+        let span = 2 * half as isize;
+        let nc = x.len();
+        // rho_cd[c][d][tau + span]
+        let mut rho = vec![vec![vec![0.0; (2 * span + 1) as usize]; nc]; nc];
+        for c in 0..nc {
+            for d in 0..nc {
+                for tau in -span..=span {
+                    rho[c][d][(tau + span) as usize] = corr(&x[c], &x[d], tau);
+                }
+            }
+        }
+        // r[c][l + half] = rho_ct(l) = (1/N) sum_n x_c[n] t[n + l]
+        let r: Vec<Vec<f64>> = (0..nc)
+            .map(|c| {
+                (-(half as isize)..=half as isize)
+                    .map(|l| corr(&x[c], target, l))
+                    .collect()
+            })
+            .collect();
+        let solve = |past: usize, future: usize| -> Result<Window, String> {
+            let lags: Vec<isize> = (-(future as isize)..=past as isize).collect();
+            let k = nc * lags.len();
+            let at = |i: usize| (i / lags.len(), lags[i % lags.len()]);
+            let mut m = DMatrix::<f64>::from_fn(k, k, |i, j| {
+                let ((c, l), (d, q)) = (at(i), at(j));
+                rho[c][d][(l - q + span) as usize]
+            });
+            let mean_diag = m.diagonal().mean();
+            for i in 0..k {
+                m[(i, i)] += ridge * mean_diag;
+            }
+            let rhs = DVector::<f64>::from_fn(k, |i, _| {
+                let (c, l) = at(i);
+                r[c][(l + half as isize) as usize]
+            });
+            let taps = m
+                .cholesky()
+                .ok_or("the learned smoother's normal equations are not positive definite")?
+                .solve(&rhs);
+            Ok(Window {
+                past,
+                future,
+                taps: taps.iter().copied().collect(),
+            })
+        };
+        Ok(Fir {
+            half,
+            scale,
+            start: (0..half)
+                .map(|p| solve(p, half))
+                .collect::<Result<_, _>>()?,
+            end: (0..half)
+                .map(|f| solve(half, f))
+                .collect::<Result<_, _>>()?,
+            full: solve(half, half)?,
+        })
+    }
+
+    /// The estimate at every sample of `channels` (scaled as in training).
+    pub fn apply(&self, channels: &[Vec<f64>]) -> Result<Vec<f64>, String> {
+        let n = channels.first().map_or(0, Vec::len);
+        if channels.len() != self.scale.len() || channels.iter().any(|c| c.len() != n) {
+            return Err(format!(
+                "the learned smoother takes {} channels of equal length",
+                self.scale.len()
+            ));
+        }
+        if n < 2 * self.half + 1 {
+            return Err(format!(
+                "{n} samples are fewer than the learned smoother's window ({})",
+                2 * self.half + 1
+            ));
+        }
+        Ok((0..n)
+            .map(|m| {
+                let w = if m < self.half {
+                    &self.start[m]
+                } else if m + self.half >= n {
+                    &self.end[n - 1 - m]
+                } else {
+                    &self.full
+                };
+                let len = w.past + w.future + 1;
+                let mut e = 0.0;
+                for (c, x) in channels.iter().enumerate() {
+                    let taps = &w.taps[c * len..(c + 1) * len];
+                    // lag l = i - future; sample m - l.
+                    for (i, tap) in taps.iter().enumerate() {
+                        let s = m + w.future - i;
+                        e += tap * x[s] / self.scale[c];
+                    }
+                }
+                e
+            })
+            .collect())
+    }
+}
+
+/// The learned smoother of a vehicle at one speed: grid, anti-alias filter and taps.
+#[derive(Debug, Clone)]
+pub struct LearnedSmoother {
+    pub speed: f64,
+    pub decimation: usize,
+    fir: Fir,
+}
+
+/// The sensor channels of `samples` low-passed and decimated by `decimation`.
+fn channels(samples: &[Sample], decimation: usize) -> Result<Vec<Vec<f64>>, String> {
+    let cols: [fn(&Sample) -> f64; 3] = [|s| s.ws_acc_y, |s| s.ws_yaw_rate, |s| s.frame_acc_y];
+    cols.iter()
+        .map(|f| {
+            let x: Vec<f64> = samples.iter().map(f).collect();
+            decimate(&x, decimation)
+        })
+        .collect()
+}
+
+/// Anti-alias low-pass (module docs, step 1) and every `decimation`-th sample.
+fn decimate(x: &[f64], decimation: usize) -> Result<Vec<f64>, String> {
+    let fs = 1.0 / STEP;
+    let sos = butter(8, 0.4 * fs / decimation as f64, FilterBandType::Lowpass, fs)?;
+    Ok(filtfilt(x, &sos, "anti-alias filter")?
+        .into_iter()
+        .step_by(decimation)
+        .collect())
+}
+
+impl LearnedSmoother {
+    /// Fits the smoother on a constant-speed run `rec` with its true alignment.
+    pub fn train(rec: &Record) -> Result<LearnedSmoother, String> {
+        let speed = constant_speed(&rec.samples, None)?;
+        let decimation = ((GRID / (speed * STEP)).round() as usize).max(1);
+        let skip = (SKIP / STEP) as usize;
+        if rec.samples.len() <= skip {
+            return Err("the training run is shorter than its start transient".into());
+        }
+        let x = channels(&rec.samples[skip..], decimation)?;
+        let truth: Vec<f64> = rec.alignment[skip..]
+            .iter()
+            .step_by(decimation)
+            .copied()
+            .collect();
+        let target = bandpass(&truth, speed * STEP * decimation as f64, &TARGET)?;
+        Ok(LearnedSmoother {
+            speed,
+            decimation,
+            fir: Fir::fit(&x, &target, HALF_WINDOW, RIDGE)?,
+        })
+    }
+
+    /// The estimate on the grid of `rec` (every `decimation`-th sample), with its distances.
+    pub fn estimate(&self, rec: &Record) -> Result<(Vec<f64>, Vec<f64>), String> {
+        constant_speed(&rec.samples, Some(self.speed))?;
+        let est = self.fir.apply(&channels(&rec.samples, self.decimation)?)?;
+        let distance = rec
+            .distance
+            .iter()
+            .step_by(self.decimation)
+            .copied()
+            .collect();
+        Ok((distance, est))
+    }
+
+    /// The learned estimate and the hybrid with the Kalman smoother's estimate `kalman` (one
+    /// value per sample of `rec`), each evaluated against the truth.
+    pub fn evaluate(
+        &self,
+        rec: &Record,
+        kalman: &[f64],
+    ) -> Result<(BandMetrics, BandMetrics), String> {
+        let (distance, est) = self.estimate(rec)?;
+        let k = decimate(kalman, self.decimation)?;
+        let ds = self.speed * STEP * self.decimation as f64;
+        let h = hybrid(&est, &k, ds, SPLIT)?;
+        Ok((
+            evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?,
+            evaluate(&distance, &h, &rec.distance, &rec.alignment, DS, TRIM)?,
+        ))
+    }
+}
+
+/// The record's speed, refusing records whose speed varies by more than 1 % or differs from
+/// `expected` by more than 1 %: the taps hold the vehicle's dynamics at one speed.
+fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, String> {
+    let (lo, hi) = samples
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+            (lo.min(s.speed), hi.max(s.speed))
+        });
+    if !(lo > 0.0 && hi.is_finite() && hi <= 1.01 * lo) {
+        return Err(format!(
+            "the learned smoother needs a constant speed; the record's speed ranges from {lo} to {hi} m/s"
+        ));
+    }
+    let v = 0.5 * (lo + hi);
+    if let Some(e) = expected
+        && (v - e).abs() > 0.01 * e
+    {
+        return Err(format!(
+            "the learned smoother was trained at {e} m/s; the record runs at {v} m/s"
+        ));
+    }
+    Ok(v)
+}
+
+/// The Kalman smoother's estimate per sample for `settings` (estimator parameters).
+pub fn kalman_smoothed(rec: &Record, settings: &[(String, String)]) -> Result<Vec<f64>, String> {
+    let values = offline::settings(settings)?;
+    let (config, _) = offline::config(&values, None)?;
+    let out = offline::process(&config, STEP, &rec.samples, true)?;
+    let s = out
+        .smoothed
+        .ok_or("the estimator returned no smoothed estimate")?;
+    Ok(s.into_iter().map(|e| e.0).collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reproducible band-limited random signal (sum of sinusoids with LCG phases).
+    fn signal(n: usize, seed: u64) -> Vec<f64> {
+        let mut state = seed;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let comps: Vec<(f64, f64)> = (0..40)
+            .map(|k| (0.01 + 0.3 * k as f64 / 40.0, std::f64::consts::TAU * next()))
+            .collect();
+        (0..n)
+            .map(|i| comps.iter().map(|(f, p)| (f * i as f64 + p).sin()).sum())
+            .collect()
+    }
+
+    fn rms(x: &[f64]) -> f64 {
+        (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
+    }
+
+    fn shifted(t: &[f64], by: isize) -> Vec<f64> {
+        (0..t.len() as isize)
+            .map(|i| t[(i - by).clamp(0, t.len() as isize - 1) as usize])
+            .collect()
+    }
+
+    #[test]
+    fn a_delayed_copy_is_undone_even_at_the_edges_when_an_advanced_copy_exists() {
+        // Oracle: channel 0 is the target 3 samples late, channel 1 the target 2 samples early,
+        // so t[m] = x0[m + 3] = x1[m - 2]: an exact inverse exists inside the window; at the
+        // first points only the delayed copy's future and at the last only the advanced copy's
+        // past are available, and each still contains t[m].
+        let t = signal(4000, 7);
+        let x = vec![shifted(&t, 3), shifted(&t, -2)];
+        let fir = Fir::fit(&x, &t, 10, 1e-9).unwrap();
+        let test = signal(500, 11);
+        let e = fir.apply(&[shifted(&test, 3), shifted(&test, -2)]).unwrap();
+        let err: Vec<f64> = e.iter().zip(&test).map(|(a, b)| a - b).collect();
+        // The clamped ends of the shifted copies are not shifts; leave those 3 points out.
+        let inner = &err[3..err.len() - 3];
+        assert!(
+            rms(inner) < 1e-3 * rms(&test),
+            "{}",
+            rms(inner) / rms(&test)
+        );
+        // The very first and last points, one-sided windows.
+        assert!(err[3].abs() < 1e-2 * rms(&test), "{}", err[3]);
+        assert!(err[err.len() - 4].abs() < 1e-2 * rms(&test));
+    }
+
+    #[test]
+    fn an_unrelated_channel_gives_almost_nothing() {
+        let t = signal(8000, 1);
+        let noise = signal(8000, 99);
+        let fir = Fir::fit(&[noise], &t, 20, 1e-6).unwrap();
+        let e = fir.apply(&[signal(2000, 5)]).unwrap();
+        // Two independent sums of 40 sinusoids at the same frequencies but random phases are
+        // not orthogonal over a finite record; the fit is small, not zero.
+        assert!(rms(&e) < 0.35 * rms(&t), "{}", rms(&e) / rms(&t));
+    }
+
+    #[test]
+    fn the_hybrid_takes_short_waves_from_one_and_long_waves_from_the_other() {
+        let n = 2000;
+        let wave =
+            |l: f64, a: f64| (0..n).map(move |i| a * (std::f64::consts::TAU * i as f64 / l).sin());
+        let short: Vec<f64> = wave(8.0, 1.0).collect();
+        let long: Vec<f64> = wave(200.0, 1.0).collect();
+        // `learned` is right on the short wave, wrong on the long one; `kalman` the reverse.
+        let learned: Vec<f64> = short
+            .iter()
+            .zip(wave(200.0, -0.5))
+            .map(|(a, b)| a + b)
+            .collect();
+        let kalman: Vec<f64> = long
+            .iter()
+            .zip(wave(8.0, 0.3))
+            .map(|(a, b)| a + b)
+            .collect();
+        let h = hybrid(&learned, &kalman, 1.0, 40.0).unwrap();
+        let err: Vec<f64> = (200..n - 200).map(|i| h[i] - short[i] - long[i]).collect();
+        assert!(rms(&err) < 0.02, "{}", rms(&err));
+        // Equal inputs come back unchanged.
+        assert_eq!(hybrid(&kalman, &kalman, 1.0, 40.0).unwrap(), kalman);
+    }
+
+    #[test]
+    fn records_at_another_or_a_varying_speed_are_refused() {
+        let s = |v: f64| Sample::from_columns(&[v], &[0.0], &[0.0], &[0.0])[0];
+        let varying = vec![s(10.0), s(20.0)];
+        let e = constant_speed(&varying, None).unwrap_err();
+        assert!(e.contains("from 10 to 20 m/s"), "{e}");
+        let e = constant_speed(&[s(15.0)], Some(20.0)).unwrap_err();
+        assert!(
+            e.contains("trained at 20 m/s") && e.contains("15 m/s"),
+            "{e}"
+        );
+        assert_eq!(
+            constant_speed(&[s(20.0), s(20.1)], Some(20.0)).unwrap(),
+            20.05
+        );
+    }
+
+    #[test]
+    fn too_short_inputs_are_refused_by_name() {
+        let t = signal(30, 1);
+        assert!(
+            Fir::fit(std::slice::from_ref(&t), &t, 10, 1e-6)
+                .unwrap_err()
+                .contains("too few")
+        );
+        let fir = Fir::fit(&[signal(400, 2)], &signal(400, 3), 10, 1e-6).unwrap();
+        assert!(
+            fir.apply(&[signal(15, 2)])
+                .unwrap_err()
+                .contains("fewer than")
+        );
+    }
+}
