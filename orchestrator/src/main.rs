@@ -654,23 +654,43 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         None,
     )
     .map_err(cfg)?;
-    let learned = orchestrator::study::learned::LearnedSmoother::train(&training).map_err(cfg)?;
+    use orchestrator::study::learned::{LearnedSmoother, Lookahead};
+    let lookaheads = [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)];
+    let learned: Vec<LearnedSmoother> = lookaheads
+        .iter()
+        .map(|&l| LearnedSmoother::train(&training, l))
+        .collect::<Result<_, _>>()
+        .map_err(cfg)?;
     println!(
-        "learned FIR smoother fitted on {} s of the calibration seed {}",
+        "learned FIR smoothers fitted on {} s of the calibration seed {}",
         variants::LEARNING_STOP,
         a.calibration_seed
     );
     let compared = variants::variants(&tuned);
-    let kalman = compared
-        .iter()
-        .find(|v| v.name == "shaping filter, RTS smoother")
-        .ok_or_else(|| cfg("no shaping-filter smoother among the variants".into()))?;
+    let by_name = |name: &str| {
+        compared
+            .iter()
+            .find(|v| v.name == name)
+            .ok_or_else(|| cfg(format!("no variant '{name}'")))
+    };
+    // The Kalman partner of each: the shaping filter's RTS smoother offline, the paper's
+    // causal filter on board.
+    let partners = [
+        by_name("shaping filter, RTS smoother")?,
+        by_name("paper (random walk)")?,
+    ];
+    let with_learned =
+        |records: &[variants::Record]| -> Result<Vec<variants::VariantResult>, RunError> {
+            let mut out = variants::compare(records, &compared).map_err(cfg)?;
+            for (l, k) in learned.iter().zip(partners) {
+                out.extend(variants::compare_learned(records, l, k).map_err(cfg)?);
+            }
+            Ok(out)
+        };
     let constant = variants::record_seeds(&fmus, &a.seeds, Conditions::Standard).map_err(cfg)?;
-    let mut at_constant = variants::compare(&constant, &compared).map_err(cfg)?;
-    at_constant.extend(variants::compare_learned(&constant, &learned, kalman).map_err(cfg)?);
+    let at_constant = with_learned(&constant)?;
     let flat = variants::record_seeds(&fmus, &a.seeds, Conditions::NoVertical).map_err(cfg)?;
-    let mut at_flat = variants::compare(&flat, &compared).map_err(cfg)?;
-    at_flat.extend(variants::compare_learned(&flat, &learned, kalman).map_err(cfg)?);
+    let at_flat = with_learned(&flat)?;
     let variable =
         variants::record_seeds(&fmus, &a.seeds, Conditions::VariableSpeed).map_err(cfg)?;
     let at_variable =

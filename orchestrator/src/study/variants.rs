@@ -15,7 +15,7 @@
 //! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
 
 use super::cases::spread;
-use super::learned::LearnedSmoother;
+use super::learned::{LearnedSmoother, Lookahead};
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use super::runs::{Fmus, STEP, Settings, SpeedProfile, seeded, vehicle_run_driven};
 use super::standard::{DS, TRIM};
@@ -290,8 +290,12 @@ fn summarize(v: &Variant, per_seed: Vec<BandMetrics>) -> VariantResult {
 /// Length of the calibration seed's run the learned smoother is trained on [s] (8 km).
 pub const LEARNING_STOP: f64 = 1000.0;
 
-/// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with the
-/// Kalman smoother of `kalman` (a smoothing variant) below [`super::learned::SPLIT`].
+/// The on-board learned filter's look-ahead in grid points (20 m, 1 s at 20 m/s).
+pub const LAG: usize = 20;
+
+/// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with
+/// the Kalman estimate of `kalman` (the RTS smoother's or the causal filter's, as `kalman.smooth`
+/// says) for waves longer than [`super::learned::SPLIT`].
 pub fn compare_learned(
     records: &[Record],
     smoother: &LearnedSmoother,
@@ -300,22 +304,31 @@ pub fn compare_learned(
     let metrics: Vec<(BandMetrics, BandMetrics)> = records
         .par_iter()
         .map(|rec| {
-            let k = super::learned::kalman_smoothed(rec, &kalman.settings)?;
+            let k = super::learned::kalman_estimate(rec, &kalman.settings, kalman.smooth)?;
             smoother.evaluate(rec, &k)
         })
         .collect::<Result<_, String>>()?;
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
+    let name = match smoother.lookahead {
+        Lookahead::Smoother => "learned FIR smoother".to_string(),
+        Lookahead::FixedLag(n) => format!(
+            "learned FIR, fixed lag of {} m",
+            n as f64 * smoother.speed * super::runs::STEP * smoother.decimation as f64
+        ),
+    };
+    let smooth = smoother.lookahead == Lookahead::Smoother;
     let learned = variant(
-        "learned FIR smoother (fitted on the calibration seed)",
+        &format!("{name} (fitted on the calibration seed)"),
         &[],
-        true,
+        smooth,
     );
     let mut combined = kalman.clone();
     combined.name = format!(
-        "learned FIR smoother for waves under {} m + {}",
+        "{name} for waves under {} m + {}",
         super::learned::SPLIT,
         kalman.name
     );
+    combined.smooth = smooth;
     Ok(vec![
         summarize(&learned, alone),
         summarize(&combined, hybrid),
