@@ -47,16 +47,14 @@
 //! - hybrid with the shaping filter's RTS smoother 0.091 / 0.091 / 0.042 / 0.094;
 //! - fixed lag of 20 m, hybrid with the paper's causal filter 0.172 / 0.337 / 0.105 / 0.156.
 
-use super::metrics::{BandMetrics, bandpass, evaluate};
+use super::metrics::{BandMetrics, bandpass, butter, evaluate, filtfilt};
 use super::runs::STEP;
 use super::standard::{DS, TRIM};
 use super::variants::Record;
 use fmu_estimator::offline::{self, Sample};
 use nalgebra::{DMatrix, DVector};
-use sci_rs::signal::filter::design::{
-    DigitalFilter, FilterBandType, FilterOutputType, Sos, butter_dyn,
-};
-use sci_rs::signal::filter::{sosfilt_dyn, sosfiltfilt_dyn};
+use sci_rs::signal::filter::design::FilterBandType;
+use sci_rs::signal::filter::sosfilt_dyn;
 use serde::Serialize;
 
 /// Grid step along the track [m] (20 Hz at 20 m/s).
@@ -76,40 +74,9 @@ pub const RIDGE: f64 = 1e-6;
 /// Training samples skipped at the start of the run (the vehicle's start transient) [s].
 const SKIP: f64 = 2.0;
 
-fn butter(
-    order: usize,
-    cutoff: f64,
-    band: FilterBandType,
-    fs: f64,
-) -> Result<Vec<Sos<f64>>, String> {
-    match butter_dyn(
-        order,
-        vec![cutoff],
-        Some(band),
-        Some(false),
-        Some(FilterOutputType::Sos),
-        Some(fs),
-    ) {
-        DigitalFilter::Sos(s) => Ok(s.sos),
-        _ => Err("the Butterworth design did not return second-order sections".into()),
-    }
-}
-
-/// Zero-phase filtering, refusing signals too short for the padding (`sosfiltfilt` panics).
-fn filtfilt(x: &[f64], sos: &[Sos<f64>], what: &str) -> Result<Vec<f64>, String> {
-    let needed = 3 * (2 * sos.len() + 1) + 1;
-    if x.len() < needed {
-        return Err(format!(
-            "{} samples are too few for the {what} (at least {needed})",
-            x.len()
-        ));
-    }
-    Ok(sosfiltfilt_dyn(x.iter(), sos))
-}
-
 /// Zero-phase high-pass of a signal on a grid of step `ds` [m], cut-off wavelength `split` [m].
 pub fn highpass(x: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
-    let sos = butter(4, 1.0 / split, FilterBandType::Highpass, 1.0 / ds)?;
+    let sos = butter(4, vec![1.0 / split], FilterBandType::Highpass, 1.0 / ds)?;
     filtfilt(x, &sos, "hybrid's high-pass")
 }
 
@@ -130,7 +97,7 @@ pub fn causal_hybrid(
     ds: f64,
     split: f64,
 ) -> Result<Vec<f64>, String> {
-    let mut sos = butter(2, 1.0 / split, FilterBandType::Highpass, 1.0 / ds)?;
+    let mut sos = butter(2, vec![1.0 / split], FilterBandType::Highpass, 1.0 / ds)?;
     let d: Vec<f64> = learned.iter().zip(kalman).map(|(a, b)| a - b).collect();
     let hp = sosfilt_dyn(d.iter(), &mut sos);
     Ok(kalman.iter().zip(hp).map(|(k, h)| k + h).collect())
@@ -335,7 +302,12 @@ fn channels(samples: &[Sample], decimation: usize, causal: bool) -> Result<Vec<V
 /// `decimation`-th sample.
 fn decimate(x: &[f64], decimation: usize, causal: bool) -> Result<Vec<f64>, String> {
     let fs = 1.0 / STEP;
-    let mut sos = butter(8, 0.4 * fs / decimation as f64, FilterBandType::Lowpass, fs)?;
+    let mut sos = butter(
+        8,
+        vec![0.4 * fs / decimation as f64],
+        FilterBandType::Lowpass,
+        fs,
+    )?;
     let y = if causal {
         sosfilt_dyn(x.iter(), &mut sos)
     } else {

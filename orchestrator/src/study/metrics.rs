@@ -91,6 +91,40 @@ pub fn common_grid(a: &[f64], b: &[f64], ds: f64) -> Vec<f64> {
     (0..n).map(|k| start + k as f64 * ds).collect()
 }
 
+/// A Butterworth design in second-order sections (`cutoffs` in the units of `fs`).
+pub fn butter(
+    order: usize,
+    cutoffs: Vec<f64>,
+    kind: FilterBandType,
+    fs: f64,
+) -> Result<Vec<Sos<f64>>, String> {
+    match butter_dyn(
+        order,
+        cutoffs,
+        Some(kind),
+        Some(false),
+        Some(FilterOutputType::Sos),
+        Some(fs),
+    ) {
+        DigitalFilter::Sos(s) => Ok(s.sos),
+        _ => Err("the Butterworth design did not return second-order sections".into()),
+    }
+}
+
+/// Zero-phase filtering (`sosfiltfilt`, odd padding), refusing signals too short for its padding
+/// (`sosfiltfilt` would panic); `what` names the filter in the message.
+pub fn filtfilt(x: &[f64], sos: &[Sos<f64>], what: &str) -> Result<Vec<f64>, String> {
+    // sosfiltfilt pads with 3 (2 sections + 1) samples at each end.
+    let needed = 3 * (2 * sos.len() + 1) + 1;
+    if x.len() < needed {
+        return Err(format!(
+            "{} samples are too few for the {what} (at least {needed})",
+            x.len()
+        ));
+    }
+    Ok(sosfiltfilt_dyn(x.iter(), sos))
+}
+
 fn sections(band: &Band, ds: f64) -> Result<Vec<Sos<f64>>, String> {
     let fs = 1.0 / ds;
     let (lo, hi) = (1.0 / band.long, 1.0 / band.short);
@@ -101,32 +135,12 @@ fn sections(band: &Band, ds: f64) -> Result<Vec<Sos<f64>>, String> {
             2.0 * ds
         ));
     }
-    match butter_dyn(
-        ORDER,
-        vec![lo, hi],
-        Some(FilterBandType::Bandpass),
-        Some(false),
-        Some(FilterOutputType::Sos),
-        Some(fs),
-    ) {
-        DigitalFilter::Sos(s) => Ok(s.sos),
-        _ => Err("the Butterworth design did not return second-order sections".into()),
-    }
+    butter(ORDER, vec![lo, hi], FilterBandType::Bandpass, fs)
 }
 
 /// Zero-phase band-pass of a signal sampled every `ds` metres.
 pub fn bandpass(x: &[f64], ds: f64, band: &Band) -> Result<Vec<f64>, String> {
-    let sos = sections(band, ds)?;
-    // sosfiltfilt pads with 3 (2 sections + 1) samples at each end and panics on shorter input.
-    let needed = 3 * (2 * sos.len() + 1) + 1;
-    if x.len() < needed {
-        return Err(format!(
-            "{} samples are too few for the {} band-pass (at least {needed})",
-            x.len(),
-            band.name
-        ));
-    }
-    Ok(sosfiltfilt_dyn(x.iter(), &sos))
+    filtfilt(x, &sections(band, ds)?, &format!("{} band-pass", band.name))
 }
 
 fn rms(x: &[f64]) -> f64 {
