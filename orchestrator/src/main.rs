@@ -654,18 +654,8 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         None,
     )
     .map_err(cfg)?;
-    use orchestrator::study::learned::{LearnedSmoother, Lookahead};
-    let lookaheads = [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)];
-    let learned: Vec<LearnedSmoother> = lookaheads
-        .iter()
-        .map(|&l| LearnedSmoother::train(&training, l))
-        .collect::<Result<_, _>>()
-        .map_err(cfg)?;
-    println!(
-        "learned FIR smoothers fitted on {} s of the calibration seed {}",
-        variants::LEARNING_STOP,
-        a.calibration_seed
-    );
+    use orchestrator::study::learned::{LearnedSmoother, Lookahead, kalman_estimate};
+    use orchestrator::study::runs::{STEP, STOP};
     let compared = variants::variants(&tuned);
     let by_name = |name: &str| {
         compared
@@ -673,16 +663,38 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
             .find(|v| v.name == name)
             .ok_or_else(|| cfg(format!("no variant '{name}'")))
     };
-    // The Kalman partner of each: the shaping filter's RTS smoother offline, the paper's
-    // causal filter on board.
-    let partners = [
-        by_name("shaping filter, RTS smoother")?,
-        by_name("paper (random walk)")?,
+    // Each learned filter and its Kalman partner: the shaping filter's RTS smoother offline,
+    // the paper's causal filter on board. The taps are fitted on the calibration run after its
+    // first 20 s, the split chosen on those 20 s (the calibration record, the same track).
+    let fit_part = training.tail((STOP / STEP) as usize);
+    let pairs = [
+        (
+            Lookahead::Smoother,
+            by_name("shaping filter, RTS smoother")?,
+        ),
+        (
+            Lookahead::FixedLag(variants::LAG),
+            by_name("paper (random walk)")?,
+        ),
     ];
+    let mut learned = Vec::with_capacity(pairs.len());
+    for (lookahead, partner) in pairs {
+        let mut l = LearnedSmoother::train(&fit_part, lookahead).map_err(cfg)?;
+        let k = kalman_estimate(&calibration[0], &partner.settings, partner.smooth).map_err(cfg)?;
+        let j = l.tune_split(&calibration[0], &k).map_err(cfg)?;
+        println!(
+            "learned FIR ({lookahead:?}) fitted on {} s of the calibration seed {} after its first {STOP} s; split chosen on those: {} m (whole Jrel there {j:.3}) with {}",
+            variants::LEARNING_STOP - STOP,
+            a.calibration_seed,
+            l.split,
+            partner.name
+        );
+        learned.push((l, partner));
+    }
     let with_learned =
         |records: &[variants::Record]| -> Result<Vec<variants::VariantResult>, RunError> {
             let mut out = variants::compare(records, &compared).map_err(cfg)?;
-            for (l, k) in learned.iter().zip(partners) {
+            for (l, k) in &learned {
                 out.extend(variants::compare_learned(records, l, k).map_err(cfg)?);
             }
             Ok(out)

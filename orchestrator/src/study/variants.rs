@@ -43,6 +43,18 @@ pub struct Record {
     pub alignment: Vec<f64>,
 }
 
+impl Record {
+    /// The record from sample `from` on.
+    pub fn tail(&self, from: usize) -> Record {
+        let from = from.min(self.samples.len());
+        Record {
+            samples: self.samples[from..].to_vec(),
+            distance: self.distance[from..].to_vec(),
+            alignment: self.alignment[from..].to_vec(),
+        }
+    }
+}
+
 /// The variable-speed profile [m/s] at time `t` [s] (see the module docs); 50 s long.
 pub fn profile(t: f64) -> f64 {
     match t {
@@ -295,7 +307,7 @@ pub const LAG: usize = 20;
 
 /// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with
 /// the Kalman estimate of `kalman` (the RTS smoother's or the causal filter's, as `kalman.smooth`
-/// says) for waves longer than [`super::learned::SPLIT`].
+/// says) for waves longer than the smoother's split.
 pub fn compare_learned(
     records: &[Record],
     smoother: &LearnedSmoother,
@@ -325,8 +337,7 @@ pub fn compare_learned(
     let mut combined = kalman.clone();
     combined.name = format!(
         "{name} for waves under {} m + {}",
-        super::learned::SPLIT,
-        kalman.name
+        smoother.split, kalman.name
     );
     combined.smooth = smooth;
     Ok(vec![
