@@ -58,6 +58,10 @@ enum Command {
         /// A calibration file instead of the one built into the estimator.
         #[arg(long)]
         calibration: Option<PathBuf>,
+        /// A learned smoother (from `study learn`): adds the columns alignment_learned and
+        /// alignment_hybrid.
+        #[arg(long)]
+        learned: Option<PathBuf>,
     },
     /// Write a system (by default the standard case) as an .ssp archive that other masters
     /// (libcosim, OMSimulator, fmpy) can run.
@@ -104,6 +108,26 @@ enum StudyCommand {
     /// Beyond the paper: the estimator's options (alignment prior, steady-state gain, RTS
     /// smoother, speed following) against the paper's filter, at constant and variable speed.
     Variants(StudyArgs),
+    /// Fit the learned FIR smoother on one track seed and save it (JSON) for `orchestrator
+    /// smooth --learned`: taps from the run after its first 20 s, the split chosen on those.
+    Learn {
+        #[command(flatten)]
+        fmus: StandardFmus,
+        /// Track seed of the training run.
+        #[arg(long, default_value_t = CALIBRATION_SEED)]
+        seed: u32,
+        /// Length of the training run [s], more than 40.
+        #[arg(long, default_value_t = 1000.0)]
+        stop: f64,
+        /// Look-ahead in grid points (1 m each) for an on-board filter combined with the paper's
+        /// causal filter; absent: the offline smoother (60 m each way) with the shaping filter's
+        /// RTS smoother.
+        #[arg(long)]
+        lag: Option<usize>,
+        /// The file to write.
+        #[arg(long, default_value = "out/learned.json")]
+        out: PathBuf,
+    },
 }
 
 #[derive(Args, Clone)]
@@ -496,6 +520,13 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         StudyCommand::Resonance(a) => (a, vec!["resonance"]),
         StudyCommand::All(a) => (a, vec!["standard", "robustness", "resonance"]),
         StudyCommand::Variants(a) => return study_variants(&a),
+        StudyCommand::Learn {
+            fmus,
+            seed,
+            stop,
+            lag,
+            out,
+        } => return study_learn(&study_fmus(&fmus), seed, stop, lag, &out),
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -647,55 +678,27 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         irw_sigma_xi: irw,
         shaping_sigma_xi: shaping,
     };
-    let training = variants::record(
-        &fmus,
-        orchestrator::study::runs::seeded(a.calibration_seed),
-        variants::LEARNING_STOP,
-        None,
-    )
-    .map_err(cfg)?;
-    use orchestrator::study::learned::{LearnedSmoother, Lookahead, kalman_estimate};
-    use orchestrator::study::runs::{STEP, STOP};
+    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_run};
     let compared = variants::variants(&tuned);
-    let by_name = |name: &str| {
-        compared
-            .iter()
-            .find(|v| v.name == name)
-            .ok_or_else(|| cfg(format!("no variant '{name}'")))
-    };
-    // Each learned filter and its Kalman partner: the shaping filter's RTS smoother offline,
-    // the paper's causal filter on board. The taps are fitted on the calibration run after its
-    // first 20 s, the split chosen on those 20 s (the calibration record, the same track).
-    let fit_part = training.tail((STOP / STEP) as usize);
-    let pairs = [
-        (
-            Lookahead::Smoother,
-            by_name("shaping filter, RTS smoother")?,
-        ),
-        (
-            Lookahead::FixedLag(variants::LAG),
-            by_name("paper (random walk)")?,
-        ),
-    ];
-    let mut learned = Vec::with_capacity(pairs.len());
-    for (lookahead, partner) in pairs {
-        let mut l = LearnedSmoother::train(&fit_part, lookahead).map_err(cfg)?;
-        let k = kalman_estimate(&calibration[0], &partner.settings, partner.smooth).map_err(cfg)?;
-        let j = l.tune_split(&calibration[0], &k).map_err(cfg)?;
+    // The learned filters, each with its Kalman partner (the shaping filter's RTS smoother
+    // offline, the paper's causal filter on board), fitted on the calibration seed.
+    let (run, provenance) =
+        training_run(&fmus, a.calibration_seed, variants::LEARNING_STOP).map_err(cfg)?;
+    let mut learned = vec![];
+    for lookahead in [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)] {
+        let partner = default_partner(lookahead, shaping);
+        let (l, j) = learn(&run, &provenance, lookahead, partner).map_err(cfg)?;
         println!(
-            "learned FIR ({lookahead:?}) fitted on {} s of the calibration seed {} after its first {STOP} s; split chosen on those: {} m (whole Jrel there {j:.3}) with {}",
-            variants::LEARNING_STOP - STOP,
-            a.calibration_seed,
-            l.split,
-            partner.name
+            "learned FIR ({lookahead:?}) from {provenance}: split {} m (whole Jrel there {j:.3}) with {}",
+            l.split, l.partner.name
         );
-        learned.push((l, partner));
+        learned.push(l);
     }
     let with_learned =
         |records: &[variants::Record]| -> Result<Vec<variants::VariantResult>, RunError> {
             let mut out = variants::compare(records, &compared).map_err(cfg)?;
-            for (l, k) in &learned {
-                out.extend(variants::compare_learned(records, l, k).map_err(cfg)?);
+            for l in &learned {
+                out.extend(variants::compare_learned(records, l).map_err(cfg)?);
             }
             Ok(out)
         };
@@ -754,11 +757,52 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
     Ok(())
 }
 
+fn study_learn(
+    fmus: &orchestrator::study::runs::Fmus,
+    seed: u32,
+    stop: f64,
+    lag: Option<usize>,
+    out: &Path,
+) -> Result<(), RunError> {
+    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_run};
+    use orchestrator::study::variants::{self, Conditions};
+    let cfg = |e: String| RunError::Config(e);
+    let lookahead = lag.map_or(Lookahead::Smoother, Lookahead::FixedLag);
+    // The shaping filter's virtual-measurement sigma, chosen on the same seed as the study does.
+    let first = variants::record_seeds(fmus, &[seed], Conditions::Standard).map_err(cfg)?;
+    let (sigma, _) = variants::tune_prior_sigma(&first[0], 3, &[], None).map_err(cfg)?;
+    let (run, provenance) = training_run(fmus, seed, stop).map_err(cfg)?;
+    let (l, j) = learn(
+        &run,
+        &provenance,
+        lookahead,
+        default_partner(lookahead, sigma),
+    )
+    .map_err(cfg)?;
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    std::fs::write(out, l.to_json())
+        .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
+    println!(
+        "learned FIR ({lookahead:?}) at {} m/s: {}; split {} m with {} (whole Jrel on the first {} s: {j:.3}); wrote {}",
+        l.speed,
+        l.provenance,
+        l.split,
+        l.partner.name,
+        orchestrator::study::runs::STOP,
+        out.display()
+    );
+    Ok(())
+}
+
 fn smooth(
     input: &Path,
     out: &Path,
     set: &[String],
     calibration: Option<&Path>,
+    learned: Option<&Path>,
 ) -> Result<(), RunError> {
     let overrides = set
         .iter()
@@ -768,7 +812,7 @@ fn smooth(
         std::fs::create_dir_all(dir)
             .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display())))?;
     }
-    let processed = orchestrator::smooth::smooth_file(input, out, &overrides, calibration)
+    let processed = orchestrator::smooth::smooth_file(input, out, &overrides, calibration, learned)
         .map_err(RunError::Config)?;
     eprintln!(
         "{} samples filtered and smoothed ({} updates skipped); wrote {}",
@@ -814,7 +858,14 @@ fn main() -> ExitCode {
             out,
             set,
             calibration,
-        } => smooth(&input, &out, &set, calibration.as_deref()),
+            learned,
+        } => smooth(
+            &input,
+            &out,
+            &set,
+            calibration.as_deref(),
+            learned.as_deref(),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

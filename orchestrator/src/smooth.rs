@@ -6,9 +6,12 @@
 //! component name (`vehicle.ws_acc_y`). Row `k` holds the samples at the end of the step that
 //! ends at `time[k]`; a first row at the start time with the initial values (as `results.csv`
 //! has) is used only for its time. Output columns: `time`, `distance`, `alignment_filtered`,
-//! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres).
+//! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres); with a
+//! learned smoother (`--learned FILE`, from `orchestrator study learn`) also `alignment_learned`
+//! and `alignment_hybrid`, computed on its 1 m grid and interpolated linearly to every row.
 
 use crate::record::push_f64;
+use crate::study::learned::LearnedSmoother;
 use crate::study::standard::Columns;
 use fmu_estimator::offline::{self, Processed, Sample};
 use std::path::Path;
@@ -62,15 +65,26 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
     Ok((time[1..].to_vec(), h, samples))
 }
 
-/// The output CSV text, numbers written as in `results.csv` ([`crate::record`]).
-pub fn to_csv(time: &[f64], out: &Processed) -> String {
-    let mut s: Vec<u8> = b"time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std\n".to_vec();
+/// The output CSV text, numbers written as in `results.csv` ([`crate::record`]); `learned`, if
+/// given, adds the learned and hybrid estimates per sample.
+pub fn to_csv(time: &[f64], out: &Processed, learned: Option<&(Vec<f64>, Vec<f64>)>) -> String {
+    let mut s: Vec<u8> = b"time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std".to_vec();
+    if learned.is_some() {
+        s.extend_from_slice(b",alignment_learned,alignment_hybrid");
+    }
+    s.push(b'\n');
     let smoothed = out.smoothed.as_deref();
     let mut buf = ryu::Buffer::new();
     for (k, t) in time.iter().enumerate() {
         let (f, fs) = out.filtered[k];
         let (m, ms) = smoothed.map_or((f64::NAN, f64::NAN), |v| v[k]);
-        for (j, x) in [*t, out.distance[k], f, fs, m, ms].into_iter().enumerate() {
+        let extra = learned.map(|(a, b)| [a[k], b[k]]);
+        let row = [*t, out.distance[k], f, fs, m, ms];
+        for (j, x) in row
+            .into_iter()
+            .chain(extra.into_iter().flatten())
+            .enumerate()
+        {
             if j > 0 {
                 s.push(b',');
             }
@@ -81,12 +95,49 @@ pub fn to_csv(time: &[f64], out: &Processed) -> String {
     String::from_utf8(s).expect("digits, signs and letters only")
 }
 
-/// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end).
+/// Values on a grid of every `d`-th sample, linearly interpolated to each of `n` samples.
+fn to_samples(grid: &[f64], d: usize, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| {
+            let (m, r) = (k / d, k % d);
+            match (grid.get(m), grid.get(m + 1)) {
+                (Some(a), Some(b)) => a + (b - a) * r as f64 / d as f64,
+                (Some(a), None) => *a,
+                _ => f64::NAN,
+            }
+        })
+        .collect()
+}
+
+/// The learned smoother saved in `file` applied to `samples` (step `h`): its learned and hybrid
+/// estimates per sample.
+fn learned_columns(
+    file: &Path,
+    samples: &[Sample],
+    h: f64,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let text = std::fs::read_to_string(file)
+        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    let l = LearnedSmoother::from_json(&text, file)?;
+    let kalman = l.kalman(samples, h)?;
+    let (learned, hybrid) = l
+        .apply(samples, h, &kalman)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    let n = samples.len();
+    Ok((
+        to_samples(&learned, l.decimation, n),
+        to_samples(&hybrid, l.decimation, n),
+    ))
+}
+
+/// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end);
+/// with `learned`, also the learned smoother saved in that file.
 pub fn smooth_file(
     input: &Path,
     output: &Path,
     overrides: &[(String, String)],
     calibration: Option<&Path>,
+    learned: Option<&Path>,
 ) -> Result<Processed, String> {
     let (time, h, samples) = read_samples(input)?;
     let values = offline::settings(overrides)?;
@@ -97,8 +148,11 @@ pub fn smooth_file(
         }
     }
     let out = offline::process(&config, h, &samples, true)?;
+    let learned = learned
+        .map(|f| learned_columns(f, &samples, h))
+        .transpose()?;
     let tmp = output.with_extension("csv.partial");
-    std::fs::write(&tmp, to_csv(&time, &out))
+    std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
         .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
     std::fs::rename(&tmp, output).map_err(|e| {
         format!(

@@ -44,6 +44,16 @@ pub struct Record {
 }
 
 impl Record {
+    /// The first `n` samples.
+    pub fn head(&self, n: usize) -> Record {
+        let n = n.min(self.samples.len());
+        Record {
+            samples: self.samples[..n].to_vec(),
+            distance: self.distance[..n].to_vec(),
+            alignment: self.alignment[..n].to_vec(),
+        }
+    }
+
     /// The record from sample `from` on.
     pub fn tail(&self, from: usize) -> Record {
         let from = from.min(self.samples.len());
@@ -305,28 +315,22 @@ pub const LEARNING_STOP: f64 = 1000.0;
 /// The on-board learned filter's look-ahead in grid points (20 m, 1 s at 20 m/s).
 pub const LAG: usize = 20;
 
-/// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with
-/// the Kalman estimate of `kalman` (the RTS smoother's or the causal filter's, as `kalman.smooth`
-/// says) for waves longer than the smoother's split.
+/// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with its
+/// Kalman partner for the waves longer than its split.
 pub fn compare_learned(
     records: &[Record],
     smoother: &LearnedSmoother,
-    kalman: &Variant,
 ) -> Result<Vec<VariantResult>, String> {
     let metrics: Vec<(BandMetrics, BandMetrics)> = records
         .par_iter()
-        .map(|rec| {
-            let k = super::learned::kalman_estimate(rec, &kalman.settings, kalman.smooth)?;
-            smoother.evaluate(rec, &k)
-        })
+        .map(|rec| smoother.evaluate(rec))
         .collect::<Result<_, String>>()?;
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
     let name = match smoother.lookahead {
         Lookahead::Smoother => "learned FIR smoother".to_string(),
-        Lookahead::FixedLag(n) => format!(
-            "learned FIR, fixed lag of {} m",
-            n as f64 * smoother.speed * super::runs::STEP * smoother.decimation as f64
-        ),
+        Lookahead::FixedLag(n) => {
+            format!("learned FIR, fixed lag of {} m", n as f64 * smoother.grid())
+        }
     };
     let smooth = smoother.lookahead == Lookahead::Smoother;
     let learned = variant(
@@ -334,12 +338,14 @@ pub fn compare_learned(
         &[],
         smooth,
     );
-    let mut combined = kalman.clone();
-    combined.name = format!(
-        "{name} for waves under {} m + {}",
-        smoother.split, kalman.name
-    );
-    combined.smooth = smooth;
+    let combined = Variant {
+        name: format!(
+            "{name} for waves under {} m + {}",
+            smoother.split, smoother.partner.name
+        ),
+        settings: smoother.partner.settings.clone(),
+        smooth,
+    };
     Ok(vec![
         summarize(&learned, alone),
         summarize(&combined, hybrid),

@@ -1,0 +1,53 @@
+"""The learned FIR smoother through the command line: `orchestrator study learn` fits it on the
+calibration seed, `orchestrator smooth --learned` applies it to a recorded run of another seed,
+and the accuracy is measured here with scipy's Butterworth filters (tests/evaluation.py), a
+second implementation of the study's metrics."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import evaluation as ev
+import orchestrator_cli as oc
+
+
+def test_learned_smoother_from_the_command_line_beats_the_paper_in_d1(tmp_path):
+    learned = tmp_path / "learned.json"
+    # A shorter training run than the default 1000 s keeps the test quick.
+    oc.run("study", "learn", "--stop", "200", "--out", learned, *oc.standard_fmu_args())
+    run_dir = tmp_path / "run"
+    oc.run(
+        "run", "--out", run_dir, "--quiet", *oc.standard_fmu_args(),
+        "--record", "vehicle.forward_speed,vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y,vehicle.distance,vehicle.alignment",
+    )
+    smoothed = tmp_path / "smoothed.csv"
+    oc.run("smooth", run_dir / "results.csv", "--learned", learned, "--out", smoothed)
+    run = oc.read_results(run_dir)
+    out = oc.read_results(smoothed)
+    assert out.columns[-2:] == ["alignment_learned", "alignment_hybrid"]
+    # Row k of smoothed.csv is row k + 1 of results.csv (the initial row is dropped).
+    distance, truth = run["vehicle.distance"][1:], run["vehicle.alignment"][1:]
+    ds = 0.05
+    grid = np.arange(distance[0], distance[-1], ds)
+
+    def jrel(column: str, band: str) -> float:
+        est = np.interp(grid, distance, out[column])
+        return ev.accuracy(est, np.interp(grid, distance, truth), ds, ev.BANDS[band]).Jrel
+
+    # The paper's D1 Jrel is 0.48; the Kalman smoother (the paper's model, this command's
+    # default) misses it on our vehicle (docs/cross-level.md), the learned one does not.
+    assert jrel("alignment_learned", "D1") < 0.48
+    assert jrel("alignment_hybrid", "D1") < 0.48
+    assert jrel("alignment_hybrid", "whole") < 0.5 * jrel("alignment_smoothed", "whole")
+
+
+def test_a_corrupt_learned_file_is_named(tmp_path):
+    csv = tmp_path / "recorded.csv"
+    rows = ["time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y"] + [f"{k * 1e-3},20,0,0,0" for k in range(3000)]
+    csv.write_text("\n".join(rows) + "\n")
+    bad = tmp_path / "learned.json"
+    bad.write_text('{"format": 1, "speed": 20}')
+    p = oc.run("smooth", csv, "--learned", bad, "--out", tmp_path / "out.csv", check=None)
+    assert p.returncode != 0
+    assert str(bad) in p.stderr and "not a learned smoother file" in p.stderr, p.stderr
+    assert not (tmp_path / "out.csv").exists()
