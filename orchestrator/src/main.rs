@@ -124,6 +124,10 @@ enum StudyCommand {
         /// RTS smoother.
         #[arg(long)]
         lag: Option<usize>,
+        /// Kalker-coefficient scales of the vehicle to train on, one run each (e.g. 1,0.5 for a
+        /// filter robust to the wheel-rail contact; 1: the vehicle as it is).
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        kalker_scales: Vec<f64>,
         /// The file to write.
         #[arg(long, default_value = "out/learned.json")]
         out: PathBuf,
@@ -525,8 +529,9 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
             seed,
             stop,
             lag,
+            kalker_scales,
             out,
-        } => return study_learn(&study_fmus(&fmus), seed, stop, lag, &out),
+        } => return study_learn(&study_fmus(&fmus), seed, stop, lag, &kalker_scales, &out),
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -678,27 +683,42 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         irw_sigma_xi: irw,
         shaping_sigma_xi: shaping,
     };
-    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_run};
+    use orchestrator::study::learned::{
+        Lookahead, default_partner, kalker_label, learn, provenance, training_runs,
+    };
     let compared = variants::variants(&tuned);
     // The learned filters, each with its Kalman partner (the shaping filter's RTS smoother
-    // offline, the paper's causal filter on board), fitted on the calibration seed.
-    let (run, provenance) =
-        training_run(&fmus, a.calibration_seed, variants::LEARNING_STOP).map_err(cfg)?;
+    // offline, the paper's causal filter on board), fitted on the calibration seed: on the
+    // vehicle as it is, and on it and the same with its Kalker coefficients halved (robust).
+    let (runs, _) = training_runs(
+        &fmus,
+        a.calibration_seed,
+        variants::LEARNING_STOP,
+        &[1.0, 0.5],
+    )
+    .map_err(cfg)?;
     let mut learned = vec![];
-    for lookahead in [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)] {
-        let partner = default_partner(lookahead, shaping);
-        let (l, j) = learn(&run, &provenance, lookahead, partner).map_err(cfg)?;
-        println!(
-            "learned FIR ({lookahead:?}) from {provenance}: split {} m (whole Jrel there {j:.3}) with {}",
-            l.split, l.partner.name
+    for scales in [&[1.0][..], &[1.0, 0.5][..]] {
+        let from = provenance(&fmus, a.calibration_seed, variants::LEARNING_STOP, scales);
+        let trained = format!(
+            "fitted on the calibration seed, Kalker {} %",
+            kalker_label(scales)
         );
-        learned.push(l);
+        for lookahead in [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)] {
+            let partner = default_partner(lookahead, shaping);
+            let (l, j) = learn(&runs[..scales.len()], &from, lookahead, partner).map_err(cfg)?;
+            println!(
+                "learned FIR ({lookahead:?}) from {from}: split {} m (mean whole Jrel there {j:.3}) with {}",
+                l.split, l.partner.name
+            );
+            learned.push((l, trained.clone()));
+        }
     }
     let with_learned =
         |records: &[variants::Record]| -> Result<Vec<variants::VariantResult>, RunError> {
             let mut out = variants::compare(records, &compared).map_err(cfg)?;
-            for l in &learned {
-                out.extend(variants::compare_learned(records, l).map_err(cfg)?);
+            for (l, trained) in &learned {
+                out.extend(variants::compare_learned(records, l, trained).map_err(cfg)?);
             }
             Ok(out)
         };
@@ -706,6 +726,8 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
     let at_constant = with_learned(&constant)?;
     let flat = variants::record_seeds(&fmus, &a.seeds, Conditions::NoVertical).map_err(cfg)?;
     let at_flat = with_learned(&flat)?;
+    let kalker = variants::record_seeds(&fmus, &a.seeds, Conditions::KalkerHalf).map_err(cfg)?;
+    let at_kalker = with_learned(&kalker)?;
     let variable =
         variants::record_seeds(&fmus, &a.seeds, Conditions::VariableSpeed).map_err(cfg)?;
     let at_variable =
@@ -724,6 +746,12 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
     ));
     md.push('\n');
     md.push_str(&variants::markdown(
+        "Kalker coefficients -50 % in the vehicle (robustness: calibration and taps unchanged)",
+        &a.seeds,
+        &at_kalker,
+    ));
+    md.push('\n');
+    md.push_str(&variants::markdown(
         "Variable speed (0 -> 20 -> 10 m/s, 50 s)",
         &a.seeds,
         &at_variable,
@@ -736,6 +764,7 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         "tuned": tuned,
         "constant_speed": at_constant,
         "no_vertical_irregularity": at_flat,
+        "kalker_half": at_kalker,
         "variable_speed": at_variable,
     });
     for (name, text) in [
@@ -762,18 +791,19 @@ fn study_learn(
     seed: u32,
     stop: f64,
     lag: Option<usize>,
+    kalker_scales: &[f64],
     out: &Path,
 ) -> Result<(), RunError> {
-    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_run};
+    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_runs};
     use orchestrator::study::variants::{self, Conditions};
     let cfg = |e: String| RunError::Config(e);
     let lookahead = lag.map_or(Lookahead::Smoother, Lookahead::FixedLag);
     // The shaping filter's virtual-measurement sigma, chosen on the same seed as the study does.
     let first = variants::record_seeds(fmus, &[seed], Conditions::Standard).map_err(cfg)?;
     let (sigma, _) = variants::tune_prior_sigma(&first[0], 3, &[], None).map_err(cfg)?;
-    let (run, provenance) = training_run(fmus, seed, stop).map_err(cfg)?;
+    let (runs, provenance) = training_runs(fmus, seed, stop, kalker_scales).map_err(cfg)?;
     let (l, j) = learn(
-        &run,
+        &runs,
         &provenance,
         lookahead,
         default_partner(lookahead, sigma),

@@ -5,7 +5,7 @@
 mod common;
 
 use orchestrator::study::learned::{
-    LearnedSmoother, Lookahead, SPLITS, default_partner, kalman_estimate, learn, training_run,
+    LearnedSmoother, Lookahead, SPLITS, default_partner, kalman_estimate, learn, training_runs,
 };
 use orchestrator::study::{runs, variants};
 
@@ -17,9 +17,9 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     };
     // As the study does, with a shorter training run (200 s against 1000 s) to keep it quick.
     let smoother_partner = default_partner(Lookahead::Smoother, 1.0);
-    let (run, provenance) = training_run(&fmus, 101, 200.0).unwrap();
+    let (runs, provenance) = training_runs(&fmus, 101, 200.0, &[1.0]).unwrap();
     let (smoother, j) = learn(
-        &run,
+        &runs,
         &provenance,
         Lookahead::Smoother,
         smoother_partner.clone(),
@@ -74,7 +74,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     // the long waves. Its D1 is still below the paper's; the causal split lets some of the
     // Kalman filter's D1 error through, so the hybrid's D1 is worse than the learned filter's.
     let lag = Lookahead::FixedLag(20);
-    let (lagged, _) = learn(&run, &provenance, lag, default_partner(lag, 1.0)).unwrap();
+    let (lagged, _) = learn(&runs, &provenance, lag, default_partner(lag, 1.0)).unwrap();
     let (lag_alone, lag_hybrid) = lagged.evaluate(&held_out).unwrap();
     assert!(
         jrel(&lag_alone, "D1") < 0.48,
@@ -107,6 +107,13 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
         smoother.apply(&held_out.samples, runs::STEP, &k).unwrap()
     );
 
+    // Bad training requests are refused before any run.
+    let e = training_runs(&fmus, 101, 30.0, &[1.0]).unwrap_err();
+    assert!(e.contains("longer than 40 s"), "{e}");
+    let e = training_runs(&fmus, 101, 200.0, &[]).unwrap_err();
+    assert!(e.contains("Kalker scales"), "{e}");
+    let e = training_runs(&fmus, 101, 200.0, &[1.0, -0.5]).unwrap_err();
+    assert!(e.contains("-0.5"), "{e}");
     // A record at another speed or step is refused by name.
     let mut slow = held_out.samples.clone();
     for s in &mut slow {

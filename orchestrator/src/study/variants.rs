@@ -316,10 +316,11 @@ pub const LEARNING_STOP: f64 = 1000.0;
 pub const LAG: usize = 20;
 
 /// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with its
-/// Kalman partner for the waves longer than its split.
+/// Kalman partner for the waves longer than its split; `trained` says on what, in the names.
 pub fn compare_learned(
     records: &[Record],
     smoother: &LearnedSmoother,
+    trained: &str,
 ) -> Result<Vec<VariantResult>, String> {
     let metrics: Vec<(BandMetrics, BandMetrics)> = records
         .par_iter()
@@ -333,11 +334,8 @@ pub fn compare_learned(
         }
     };
     let smooth = smoother.lookahead == Lookahead::Smoother;
-    let learned = variant(
-        &format!("{name} (fitted on the calibration seed)"),
-        &[],
-        smooth,
-    );
+    let name = format!("{name} ({trained})");
+    let learned = variant(&name, &[], smooth);
     let combined = Variant {
         name: format!(
             "{name} for waves under {} m + {}",
@@ -361,6 +359,9 @@ pub enum Conditions {
     NoVertical,
     /// The standard track under the variable-speed [`profile`].
     VariableSpeed,
+    /// The standard case with the vehicle's Kalker coefficients halved (the paper's robustness
+    /// case): the filters keep their calibration, the learned one its taps.
+    KalkerHalf,
 }
 
 /// Records the given seeds in parallel.
@@ -382,6 +383,11 @@ pub fn record_seeds(
                 record(fmus, settings, super::runs::STOP, None)
             }
             Conditions::VariableSpeed => record(fmus, seeded(s), PROFILE_STOP, Some(&profile)),
+            Conditions::KalkerHalf => {
+                let mut settings = seeded(s);
+                settings.push(("kalker_scale".into(), crate::system::Value::Real(0.5)));
+                record(fmus, settings, super::runs::STOP, None)
+            }
         })
         .collect()
 }
