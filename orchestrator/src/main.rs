@@ -128,6 +128,10 @@ enum StudyCommand {
         /// filter robust to the wheel-rail contact; 1: the vehicle as it is).
         #[arg(long, value_delimiter = ',', default_value = "1")]
         kalker_scales: Vec<f64>,
+        /// Constant speed of the training runs [m/s] (default: the vehicle's, 20); the filter
+        /// applies to records at this speed only.
+        #[arg(long)]
+        speed: Option<f64>,
         /// The file to write.
         #[arg(long, default_value = "out/learned.json")]
         out: PathBuf,
@@ -530,8 +534,19 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
             stop,
             lag,
             kalker_scales,
+            speed,
             out,
-        } => return study_learn(&study_fmus(&fmus), seed, stop, lag, &kalker_scales, &out),
+        } => {
+            return study_learn(
+                &study_fmus(&fmus),
+                seed,
+                stop,
+                lag,
+                &kalker_scales,
+                speed,
+                &out,
+            );
+        }
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -695,6 +710,7 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         a.calibration_seed,
         variants::LEARNING_STOP,
         &[1.0, 0.5],
+        None,
     )
     .map_err(cfg)?;
     let mut learned = vec![];
@@ -792,16 +808,19 @@ fn study_learn(
     stop: f64,
     lag: Option<usize>,
     kalker_scales: &[f64],
+    speed: Option<f64>,
     out: &Path,
 ) -> Result<(), RunError> {
     use orchestrator::study::learned::{Lookahead, default_partner, learn, training_runs};
-    use orchestrator::study::variants::{self, Conditions};
+    use orchestrator::study::runs::{STEP, STOP};
+    use orchestrator::study::variants;
     let cfg = |e: String| RunError::Config(e);
     let lookahead = lag.map_or(Lookahead::Smoother, Lookahead::FixedLag);
-    // The shaping filter's virtual-measurement sigma, chosen on the same seed as the study does.
-    let first = variants::record_seeds(fmus, &[seed], Conditions::Standard).map_err(cfg)?;
-    let (sigma, _) = variants::tune_prior_sigma(&first[0], 3, &[], None).map_err(cfg)?;
-    let (runs, provenance) = training_runs(fmus, seed, stop, kalker_scales).map_err(cfg)?;
+    let (runs, provenance) = training_runs(fmus, seed, stop, kalker_scales, speed).map_err(cfg)?;
+    // The shaping filter's virtual-measurement sigma, chosen as the study does, on the first
+    // 20 s of the (first) training run.
+    let head = (STOP / STEP).round() as usize;
+    let (sigma, _) = variants::tune_prior_sigma(&runs[0].head(head), 3, &[], None).map_err(cfg)?;
     let (l, j) = learn(
         &runs,
         &provenance,

@@ -620,8 +620,8 @@ fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, Stri
     Ok(v)
 }
 
-/// The training runs of [`learn`]: `stop` s of the vehicle on track `seed` at its default speed,
-/// once per Kalker-coefficient scale in `kalker_scales` (1: the vehicle as it is; training on
+/// The training runs of [`learn`]: `stop` s of the vehicle on track `seed` at `speed` (its
+/// default, 20 m/s, if `None`), once per Kalker-coefficient scale in `kalker_scales` (1: the vehicle as it is; training on
 /// several makes the taps robust to the wheel-rail contact, at some cost in accuracy on the
 /// nominal vehicle), and a description of them.
 pub fn training_runs(
@@ -629,7 +629,15 @@ pub fn training_runs(
     seed: u32,
     stop: f64,
     kalker_scales: &[f64],
+    speed: Option<f64>,
 ) -> Result<(Vec<Record>, String), String> {
+    if let Some(v) = speed
+        && !(v.is_finite() && v > 0.0)
+    {
+        return Err(format!(
+            "the training speed must be a positive number of m/s; got {v}"
+        ));
+    }
     if !(stop > 2.0 * STOP) {
         return Err(format!(
             "the training run must be longer than {} s (the first {STOP} s choose the split); got {stop} s",
@@ -646,7 +654,10 @@ pub fn training_runs(
         .map(|&k| {
             let mut settings = seeded(seed);
             settings.push(("kalker_scale".into(), crate::system::Value::Real(k)));
-            record(fmus, settings, stop, None)
+            match speed {
+                Some(v) => record(fmus, settings, stop, Some(&move |_| v)),
+                None => record(fmus, settings, stop, None),
+            }
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok((runs, provenance(fmus, seed, stop, kalker_scales)))
