@@ -309,7 +309,6 @@ fn one_cycle(
     }
 }
 
-/// Sets the presets (variable name, value) on a freshly instantiated or reset instance.
 /// SetupExperiment (with a stop time when given), the presets, Enter- and
 /// ExitInitializationMode, each required to return OK.
 ///
@@ -340,6 +339,7 @@ unsafe fn initialize(
     }
 }
 
+/// Sets the presets (variable name, value) on a freshly instantiated or reset instance.
 fn apply_presets(ctx: &mut Ctx, c: fmi2Component, presets: &[(String, String)]) -> Result<()> {
     let t = ctx.t;
     let api = t.api;
