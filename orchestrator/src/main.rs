@@ -811,16 +811,18 @@ fn study_learn(
     speed: Option<f64>,
     out: &Path,
 ) -> Result<(), RunError> {
-    use orchestrator::study::learned::{Lookahead, default_partner, learn, training_runs};
-    use orchestrator::study::runs::{STEP, STOP};
+    use orchestrator::study::learned::{
+        Lookahead, default_partner, learn, training_runs, validation,
+    };
+    use orchestrator::study::runs::STOP;
     use orchestrator::study::variants;
     let cfg = |e: String| RunError::Config(e);
     let lookahead = lag.map_or(Lookahead::Smoother, Lookahead::FixedLag);
     let (runs, provenance) = training_runs(fmus, seed, stop, kalker_scales, speed).map_err(cfg)?;
     // The shaping filter's virtual-measurement sigma, chosen as the study does, on the first
     // 20 s of the (first) training run.
-    let head = (STOP / STEP).round() as usize;
-    let (sigma, _) = variants::tune_prior_sigma(&runs[0].head(head), 3, &[], None).map_err(cfg)?;
+    let (sigma, _) =
+        variants::tune_prior_sigma(&validation(&runs[0]), 3, &[], None).map_err(cfg)?;
     let (l, j) = learn(
         &runs,
         &provenance,
@@ -828,10 +830,7 @@ fn study_learn(
         default_partner(lookahead, sigma),
     )
     .map_err(cfg)?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display())))?;
-    }
+    create_parent(out)?;
     std::fs::write(out, l.to_json())
         .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
     println!(
@@ -840,10 +839,19 @@ fn study_learn(
         l.provenance,
         l.split,
         l.partner.name,
-        orchestrator::study::runs::STOP,
+        STOP,
         out.display()
     );
     Ok(())
+}
+
+/// Creates the directory a file is to be written in, if it names one.
+fn create_parent(file: &Path) -> Result<(), RunError> {
+    match file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => std::fs::create_dir_all(dir)
+            .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display()))),
+        None => Ok(()),
+    }
 }
 
 fn smooth(
@@ -857,10 +865,7 @@ fn smooth(
         .iter()
         .map(|s| split_assignment(s).map(|(k, v)| (k.trim().to_string(), v.trim().to_string())))
         .collect::<Result<Vec<_>, _>>()?;
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| RunError::Io(format!("cannot create {}: {e}", dir.display())))?;
-    }
+    create_parent(out)?;
     let processed = orchestrator::smooth::smooth_file(input, out, &overrides, calibration, learned)
         .map_err(RunError::Config)?;
     eprintln!(

@@ -63,7 +63,7 @@ mod training;
 
 pub use fir::Fir;
 pub use split::{causal_hybrid, highpass, hybrid};
-pub use training::{kalker_label, learn, provenance, training_runs};
+pub use training::{kalker_label, learn, provenance, training_runs, validation};
 
 use super::metrics::{BandMetrics, bandpass, butter, evaluate, filtfilt};
 use super::runs::STEP;

@@ -75,7 +75,7 @@ pub fn learn(
     lookahead: Lookahead,
     partner: Partner,
 ) -> Result<(LearnedSmoother, f64), String> {
-    let head = (STOP / STEP).round() as usize;
+    let head = validation_len();
     let mut fit = runs.first().ok_or("no training run")?.tail(head);
     for r in &runs[1..] {
         // The joints are a handful of samples in hundreds of thousands: left as they are.
@@ -87,7 +87,18 @@ pub fn learn(
         fit.alignment.extend_from_slice(&t.alignment);
     }
     let mut l = LearnedSmoother::train(&fit, lookahead, partner, provenance)?;
-    let heads: Vec<Record> = runs.iter().map(|r| r.head(head)).collect();
+    let heads: Vec<Record> = runs.iter().map(validation).collect();
     let j = l.tune_split(&heads)?;
     Ok((l, j))
+}
+
+/// Samples in the first [`STOP`] s of a training run.
+fn validation_len() -> usize {
+    (STOP / STEP).round() as usize
+}
+
+/// The first [`STOP`] s of a training run, which the taps are not fitted on: where [`learn`]
+/// chooses the split (and `study learn` the shaping filter's virtual measurement).
+pub fn validation(run: &Record) -> Record {
+    run.head(validation_len())
 }
