@@ -12,6 +12,7 @@
 
 use crate::record::push_f64;
 use crate::study::learned::LearnedSmoother;
+use crate::study::metrics::resample;
 use crate::study::standard::Columns;
 use fmu_estimator::offline::{self, Processed, Sample};
 use std::path::Path;
@@ -95,38 +96,27 @@ pub fn to_csv(time: &[f64], out: &Processed, learned: Option<&(Vec<f64>, Vec<f64
     String::from_utf8(s).expect("digits, signs and letters only")
 }
 
-/// Values on a grid of every `d`-th sample, linearly interpolated to each of `n` samples.
-fn to_samples(grid: &[f64], d: usize, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|k| {
-            let (m, r) = (k / d, k % d);
-            match (grid.get(m), grid.get(m + 1)) {
-                (Some(a), Some(b)) => a + (b - a) * r as f64 / d as f64,
-                (Some(a), None) => *a,
-                _ => f64::NAN,
-            }
-        })
-        .collect()
-}
-
 /// The learned smoother saved in `file` applied to `samples` (step `h`): its learned and hybrid
 /// estimates per sample.
 fn learned_columns(
     file: &Path,
     samples: &[Sample],
     h: f64,
+    distance: &[f64],
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
-    let text = std::fs::read_to_string(file)
-        .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+    // A saved learned smoother is about a megabyte of JSON; the bound only stops a device or a
+    // runaway file.
+    let text = fmi_abi::resource::read_text(file, "learned smoother file", 1 << 30)?;
     let l = LearnedSmoother::from_json(&text, file)?;
     let kalman = l.kalman(samples, h)?;
     let (learned, hybrid) = l
         .apply(samples, h, &kalman)
         .map_err(|e| format!("{}: {e}", file.display()))?;
-    let n = samples.len();
+    // From its grid (every `decimation`-th sample) to every sample, linearly in distance.
+    let grid: Vec<f64> = distance.iter().step_by(l.decimation).copied().collect();
     Ok((
-        to_samples(&learned, l.decimation, n),
-        to_samples(&hybrid, l.decimation, n),
+        resample(&grid, &learned, distance),
+        resample(&grid, &hybrid, distance),
     ))
 }
 
@@ -149,7 +139,7 @@ pub fn smooth_file(
     }
     let out = offline::process(&config, h, &samples, true)?;
     let learned = learned
-        .map(|f| learned_columns(f, &samples, h))
+        .map(|f| learned_columns(f, &samples, h, &out.distance))
         .transpose()?;
     let tmp = output.with_extension("csv.partial");
     std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
