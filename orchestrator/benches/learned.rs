@@ -8,39 +8,11 @@
 //!   part;
 //! - the paper's Kalman filter over the same samples (`fmu_estimator::offline`), per sample.
 
-use fmu_estimator::offline::{self, Sample};
+use fmu_estimator::offline;
+use orchestrator::study::learned::synthetic::noise_record;
 use orchestrator::study::learned::{LearnedSmoother, Lookahead, default_partner};
 use orchestrator::study::runs::STEP;
-use orchestrator::study::variants::Record;
 use std::time::Instant;
-
-fn noise(n: usize, seed: u64) -> Vec<f64> {
-    let mut state = seed
-        .wrapping_mul(2862933555777941757)
-        .wrapping_add(3037000493);
-    (0..n)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
-}
-
-fn record(seconds: f64, seed: u64) -> Record {
-    let n = (seconds / STEP) as usize;
-    Record {
-        samples: Sample::from_columns(
-            &vec![20.0; n],
-            &noise(n, seed),
-            &noise(n, seed + 1),
-            &noise(n, seed + 2),
-        ),
-        distance: (1..=n).map(|k| 20.0 * STEP * k as f64).collect(),
-        alignment: noise(n, seed + 3),
-    }
-}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -60,8 +32,8 @@ fn time(mut f: impl FnMut()) -> f64 {
 }
 
 fn main() {
-    let train = record(200.0, 1);
-    let rec = record(200.0, 11);
+    let train = noise_record(200.0, 1);
+    let rec = noise_record(200.0, 11);
     let n = rec.samples.len() as f64;
     let kalman = vec![0.0; rec.samples.len()];
     let mut costs = vec![];

@@ -220,7 +220,7 @@ impl Fir {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study::learned::test_signals::{noise, rms};
+    use crate::study::learned::synthetic::{noise, rms};
 
     /// A target of `n` points and two channels cut from one longer noise: the target 3 points
     /// late (`x0[m] = t[m - 3]`) and 2 points early (`x1[m] = t[m + 2]`), true shifts at every

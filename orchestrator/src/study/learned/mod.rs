@@ -406,9 +406,13 @@ pub fn kalman_estimate(
     Ok(est.into_iter().map(|e| e.0).collect())
 }
 
-/// Reproducible test signals shared by the submodules' tests.
-#[cfg(test)]
-pub(crate) mod test_signals {
+/// Reproducible synthetic signals for the tests and the benchmark: the learned filter's cost and
+/// its structural properties (causality, exact inverses) do not depend on the values.
+pub mod synthetic {
+    use super::Record;
+    use crate::study::runs::STEP;
+    use fmu_estimator::offline::Sample;
+
     /// Reproducible uniform noise in [-0.5, 0.5) (an LCG).
     pub fn noise(n: usize, seed: u64) -> Vec<f64> {
         let mut state = seed
@@ -424,6 +428,23 @@ pub(crate) mod test_signals {
             .collect()
     }
 
+    /// A constant-speed record of noise (20 m/s, the study's step): sensors from seeds `seed`
+    /// to `seed + 2`, the alignment from `seed + 3`.
+    pub fn noise_record(seconds: f64, seed: u64) -> Record {
+        let n = (seconds / STEP) as usize;
+        Record {
+            samples: Sample::from_columns(
+                &vec![20.0; n],
+                &noise(n, seed),
+                &noise(n, seed + 1),
+                &noise(n, seed + 2),
+            ),
+            distance: (1..=n).map(|k| 20.0 * STEP * k as f64).collect(),
+            alignment: noise(n, seed + 3),
+        }
+    }
+
+    /// Root mean square.
     pub fn rms(x: &[f64]) -> f64 {
         (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
     }
@@ -431,7 +452,7 @@ pub(crate) mod test_signals {
 
 #[cfg(test)]
 mod tests {
-    use super::test_signals::noise;
+    use super::synthetic::{noise, noise_record};
     use super::*;
 
     #[test]
@@ -447,22 +468,6 @@ mod tests {
         );
         assert_eq!(d0[..60], d1[..60]);
         assert_ne!(d0[60], d1[60]);
-    }
-
-    /// A constant-speed record of noise (20 m/s, the study's step).
-    fn noise_record(seconds: f64, seed: u64) -> Record {
-        let n = (seconds / STEP) as usize;
-        let (a, y, f, t) = (
-            noise(n, seed),
-            noise(n, seed + 1),
-            noise(n, seed + 2),
-            noise(n, seed + 3),
-        );
-        Record {
-            samples: Sample::from_columns(&vec![20.0; n], &a, &y, &f),
-            distance: (1..=n).map(|k| 20.0 * STEP * k as f64).collect(),
-            alignment: t,
-        }
     }
 
     #[test]

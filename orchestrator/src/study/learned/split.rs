@@ -37,7 +37,7 @@ pub fn causal_hybrid(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study::learned::test_signals::rms;
+    use crate::study::learned::synthetic::rms;
 
     #[test]
     fn the_hybrid_takes_short_waves_from_one_and_long_waves_from_the_other() {
