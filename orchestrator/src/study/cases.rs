@@ -138,8 +138,35 @@ pub struct CaseResult {
     pub paper: Option<Vec<(String, f64, f64)>>,
 }
 
+/// Per band, the mean and spread over the seeds of J and Jrel.
+pub(crate) fn band_spreads(per_seed: &[BandMetrics]) -> Vec<(String, Spread)> {
+    BANDS
+        .iter()
+        .map(|b| {
+            let j: Vec<f64> = per_seed
+                .iter()
+                .map(|m| m.get(b.name).expect("band").j_mm)
+                .collect();
+            let r: Vec<f64> = per_seed
+                .iter()
+                .map(|m| m.get(b.name).expect("band").jrel)
+                .collect();
+            let ((jm, js), (rm, rs)) = (spread(&j), spread(&r));
+            (
+                b.name.to_string(),
+                Spread {
+                    j_mean: jm,
+                    j_std: js,
+                    jrel_mean: rm,
+                    jrel_std: rs,
+                },
+            )
+        })
+        .collect()
+}
+
 /// Mean and sample standard deviation.
-pub(crate) fn spread(values: &[f64]) -> (f64, f64) {
+fn spread(values: &[f64]) -> (f64, f64) {
     let n = values.len() as f64;
     let mean = values.iter().sum::<f64>() / n;
     let var = if values.len() > 1 {
@@ -214,29 +241,7 @@ pub fn run_cases(
             .filter(|((c, _), _)| *c == ci)
             .map(|(_, r)| r.clone())
             .collect::<Result<_, _>>()?;
-        let bands = BANDS
-            .iter()
-            .map(|b| {
-                let j: Vec<f64> = per_seed
-                    .iter()
-                    .map(|m| m.get(b.name).expect("band").j_mm)
-                    .collect();
-                let r: Vec<f64> = per_seed
-                    .iter()
-                    .map(|m| m.get(b.name).expect("band").jrel)
-                    .collect();
-                let ((jm, js), (rm, rs)) = (spread(&j), spread(&r));
-                (
-                    b.name.to_string(),
-                    Spread {
-                        j_mean: jm,
-                        j_std: js,
-                        jrel_mean: rm,
-                        jrel_std: rs,
-                    },
-                )
-            })
-            .collect();
+        let bands = band_spreads(&per_seed);
         out.push(CaseResult {
             name: case.name.clone(),
             seeds: seeds.to_vec(),

@@ -14,9 +14,9 @@
 //! accelerations of a regional train, 0.5 to 1.2 m/s²). The filters either follow the speed input
 //! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
 
-use super::cases::spread;
+use super::cases::band_spreads;
 use super::learned::{LearnedSmoother, Lookahead};
-use super::metrics::{BANDS, BandMetrics, evaluate};
+use super::metrics::{BandMetrics, evaluate};
 use super::runs::{Fmus, STEP, Settings, SpeedProfile, seeded, vehicle_run_driven};
 use super::standard::{DS, TRIM};
 use crate::master::Table;
@@ -285,20 +285,9 @@ pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantRe
 
 /// Mean and spread over the seeds of one variant's metrics.
 fn summarize(v: &Variant, per_seed: Vec<BandMetrics>) -> VariantResult {
-    let bands = BANDS
-        .iter()
-        .map(|b| {
-            let r: Vec<f64> = per_seed
-                .iter()
-                .map(|m| m.get(b.name).expect("band").jrel)
-                .collect();
-            let j: Vec<f64> = per_seed
-                .iter()
-                .map(|m| m.get(b.name).expect("band").j_mm)
-                .collect();
-            let (rm, rs) = spread(&r);
-            (b.name.to_string(), rm, rs, spread(&j).0)
-        })
+    let bands = band_spreads(&per_seed)
+        .into_iter()
+        .map(|(name, s)| (name, s.jrel_mean, s.jrel_std, s.j_mean))
         .collect();
     VariantResult {
         name: v.name.clone(),
