@@ -5,7 +5,7 @@
 mod common;
 
 use orchestrator::study::learned::{
-    LearnedSmoother, Lookahead, SPLITS, default_partner, kalman_estimate, learn, training_runs,
+    LearnedSmoother, Lookahead, SPLITS, default_partner, learn, training_runs,
 };
 use orchestrator::study::{runs, variants};
 
@@ -95,13 +95,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     // Saved and read back, it gives the same estimates to the bit.
     let path = std::path::Path::new("learned.json");
     let back = LearnedSmoother::from_json(&smoother.to_json(), path).unwrap();
-    let k = kalman_estimate(
-        &held_out.samples,
-        runs::STEP,
-        &smoother.partner.settings,
-        true,
-    )
-    .unwrap();
+    let k = smoother.kalman(&held_out.samples, runs::STEP).unwrap();
     assert_eq!(
         back.apply(&held_out.samples, runs::STEP, &k).unwrap(),
         smoother.apply(&held_out.samples, runs::STEP, &k).unwrap()

@@ -199,15 +199,30 @@ pub fn evaluate_variant(
     v: &Variant,
     calibration: Option<&Path>,
 ) -> Result<BandMetrics, String> {
-    let values = offline::settings(&v.settings)?;
+    let (distance, est) = estimate(&rec.samples, STEP, &v.settings, calibration, v.smooth)?;
+    evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)
+}
+
+/// The estimator with `settings` (and the calibration file `calibration`, else its built-in one)
+/// over `samples` at step `h`: the distance it integrates and its alignment estimate per sample,
+/// the RTS smoother's if `smooth`, else the causal filter's.
+pub fn estimate(
+    samples: &[Sample],
+    h: f64,
+    settings: &[(String, String)],
+    calibration: Option<&Path>,
+    smooth: bool,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, calibration)?;
-    let out = offline::process(&config, STEP, &rec.samples, v.smooth)?;
-    let est = match &out.smoothed {
-        Some(s) if v.smooth => s,
-        _ => &out.filtered,
+    let out = offline::process(&config, h, samples, smooth)?;
+    let est = if smooth {
+        out.smoothed
+            .ok_or("the estimator returned no smoothed estimate")?
+    } else {
+        out.filtered
     };
-    let est: Vec<f64> = est.iter().map(|e| e.0).collect();
-    evaluate(&out.distance, &est, &rec.distance, &rec.alignment, DS, TRIM)
+    Ok((out.distance, est.into_iter().map(|e| e.0).collect()))
 }
 
 /// Chooses the virtual measurement's sigma of `model` (2 or 3) by whole-band Jrel on the

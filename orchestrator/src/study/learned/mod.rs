@@ -68,8 +68,8 @@ pub use training::{kalker_label, learn, provenance, training_runs, validation};
 use super::metrics::{BandMetrics, bandpass, butter, evaluate, filtfilt};
 use super::runs::STEP;
 use super::standard::{DS, TRIM};
-use super::variants::Record;
-use fmu_estimator::offline::{self, Sample};
+use super::variants::{Record, estimate};
+use fmu_estimator::offline::Sample;
 use sci_rs::signal::filter::design::FilterBandType;
 use sci_rs::signal::filter::sosfilt_dyn;
 use serde::{Deserialize, Serialize};
@@ -277,7 +277,8 @@ impl LearnedSmoother {
 
     /// The partner's Kalman estimate of `samples` (step `h`), one per sample.
     pub fn kalman(&self, samples: &[Sample], h: f64) -> Result<Vec<f64>, String> {
-        kalman_estimate(samples, h, &self.partner.settings, self.partner.smooth)
+        let p = &self.partner;
+        Ok(estimate(samples, h, &p.settings, None, p.smooth)?.1)
     }
 
     /// The learned estimate and the hybrid on `rec`, each evaluated against the truth.
@@ -384,26 +385,6 @@ fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, Stri
         ));
     }
     Ok(v)
-}
-
-/// The Kalman estimate per sample of `samples` (step `h`) for estimator `settings`: the RTS
-/// smoother's if `smooth`, else the causal filter's.
-pub fn kalman_estimate(
-    samples: &[Sample],
-    h: f64,
-    settings: &[(String, String)],
-    smooth: bool,
-) -> Result<Vec<f64>, String> {
-    let values = offline::settings(settings)?;
-    let (config, _) = offline::config(&values, None)?;
-    let out = offline::process(&config, h, samples, smooth)?;
-    let est = if smooth {
-        out.smoothed
-            .ok_or("the estimator returned no smoothed estimate")?
-    } else {
-        out.filtered
-    };
-    Ok(est.into_iter().map(|e| e.0).collect())
 }
 
 /// Reproducible synthetic signals for the tests and the benchmark: the learned filter's cost and
