@@ -10,7 +10,7 @@
 
 use fmu_estimator::offline;
 use orchestrator::study::learned::synthetic::noise_record;
-use orchestrator::study::learned::{LearnedSmoother, Lookahead, default_partner};
+use orchestrator::study::learned::{GRID, LearnedSmoother, Lookahead, default_partner};
 use orchestrator::study::runs::STEP;
 use std::time::Instant;
 
@@ -38,8 +38,14 @@ fn main() {
     let kalman = vec![0.0; rec.samples.len()];
     let mut costs = vec![];
     for lookahead in [Lookahead::Smoother, Lookahead::FixedLag(20)] {
-        let l = LearnedSmoother::train(&train, lookahead, default_partner(lookahead, 1.0), "bench")
-            .expect("training on noise");
+        let l = LearnedSmoother::train(
+            &train,
+            lookahead,
+            GRID,
+            default_partner(lookahead, 1.0),
+            "bench",
+        )
+        .expect("training on noise");
         let points = n / l.decimation as f64;
         let t = time(|| {
             std::hint::black_box(l.apply(&rec.samples, STEP, &kalman).expect("apply"));

@@ -110,32 +110,40 @@ enum StudyCommand {
     Variants(StudyArgs),
     /// Fit the learned FIR smoother on one track seed and save it (JSON) for `orchestrator
     /// smooth --learned`: taps from the run after its first 20 s, the split chosen on those.
-    Learn {
-        #[command(flatten)]
-        fmus: StandardFmus,
-        /// Track seed of the training run.
-        #[arg(long, default_value_t = CALIBRATION_SEED)]
-        seed: u32,
-        /// Length of the training run [s], more than 40.
-        #[arg(long, default_value_t = 1000.0)]
-        stop: f64,
-        /// Look-ahead in grid points (1 m each) for an on-board filter combined with the paper's
-        /// causal filter; absent: the offline smoother (60 m each way) with the shaping filter's
-        /// RTS smoother.
-        #[arg(long)]
-        lag: Option<usize>,
-        /// Kalker-coefficient scales of the vehicle to train on, one run each (e.g. 1,0.5 for a
-        /// filter robust to the wheel-rail contact; 1: the vehicle as it is).
-        #[arg(long, value_delimiter = ',', default_value = "1")]
-        kalker_scales: Vec<f64>,
-        /// Constant speed of the training runs [m/s] (default: the vehicle's, 20); the filter
-        /// applies to records at this speed only.
-        #[arg(long)]
-        speed: Option<f64>,
-        /// The file to write.
-        #[arg(long, default_value = "out/learned.json")]
-        out: PathBuf,
-    },
+    Learn(LearnArgs),
+}
+
+/// `study learn`'s options.
+#[derive(Args, Clone)]
+struct LearnArgs {
+    #[command(flatten)]
+    fmus: StandardFmus,
+    /// Track seed of the training run.
+    #[arg(long, default_value_t = CALIBRATION_SEED)]
+    seed: u32,
+    /// Length of the training run [s], more than 40.
+    #[arg(long, default_value_t = 1000.0)]
+    stop: f64,
+    /// Look-ahead [m] (rounded to grid points) for an on-board filter combined with the
+    /// paper's causal filter, 0 for a causal one; absent: the offline smoother (60 m each
+    /// way) with the shaping filter's RTS smoother.
+    #[arg(long)]
+    lag: Option<f64>,
+    /// Grid step along the track [m] the sensors are decimated to (finer costs more: the
+    /// window is 60 m whatever the step).
+    #[arg(long, default_value_t = orchestrator::study::learned::GRID)]
+    grid: f64,
+    /// Kalker-coefficient scales of the vehicle to train on, one run each (e.g. 1,0.5 for a
+    /// filter robust to the wheel-rail contact; 1: the vehicle as it is).
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    kalker_scales: Vec<f64>,
+    /// Constant speed of the training runs [m/s] (default: the vehicle's, 20); the filter
+    /// applies to records at this speed only.
+    #[arg(long)]
+    speed: Option<f64>,
+    /// The file to write.
+    #[arg(long, default_value = "out/learned.json")]
+    out: PathBuf,
 }
 
 #[derive(Args, Clone)]
@@ -528,25 +536,7 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         StudyCommand::Resonance(a) => (a, vec!["resonance"]),
         StudyCommand::All(a) => (a, vec!["standard", "robustness", "resonance"]),
         StudyCommand::Variants(a) => return study_variants(&a),
-        StudyCommand::Learn {
-            fmus,
-            seed,
-            stop,
-            lag,
-            kalker_scales,
-            speed,
-            out,
-        } => {
-            return study_learn(
-                &study_fmus(&fmus),
-                seed,
-                stop,
-                lag,
-                &kalker_scales,
-                speed,
-                &out,
-            );
-        }
+        StudyCommand::Learn(a) => return study_learn(&a),
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -699,7 +689,7 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         shaping_sigma_xi: shaping,
     };
     use orchestrator::study::learned::{
-        Lookahead, default_partner, kalker_label, learn, provenance, training_runs,
+        GRID, Lookahead, default_partner, kalker_label, learn, provenance, training_runs,
     };
     let compared = variants::variants(&tuned);
     // The learned filters, each with its Kalman partner (the shaping filter's RTS smoother
@@ -720,9 +710,24 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
             "fitted on the calibration seed, Kalker {} %",
             kalker_label(scales)
         );
-        for lookahead in [Lookahead::Smoother, Lookahead::FixedLag(variants::LAG)] {
+        let forms = [
+            (Lookahead::Smoother, GRID),
+            (Lookahead::FixedLag(variants::LAG), GRID),
+        ];
+        // On the nominal vehicle only, the causal form and the shortest look-ahead, on a finer
+        // grid (their anti-alias filter's delay is a fraction of a metre): what a causal linear
+        // estimator of the three sensors reaches (docs/cross-level.md section 6).
+        let near_causal =
+            variants::NEAR_CAUSAL.map(|lag| (Lookahead::FixedLag(lag), variants::FINE_GRID));
+        let extra = if scales.len() == 1 {
+            &near_causal[..]
+        } else {
+            &[]
+        };
+        for &(lookahead, grid) in forms.iter().chain(extra) {
             let partner = default_partner(lookahead, shaping);
-            let (l, j) = learn(&runs[..scales.len()], &from, lookahead, partner).map_err(cfg)?;
+            let (l, j) =
+                learn(&runs[..scales.len()], &from, lookahead, grid, partner).map_err(cfg)?;
             println!(
                 "learned FIR ({lookahead:?}) from {from}: split {} m (mean whole Jrel there {j:.3}) with {}",
                 l.split, l.partner.name
@@ -802,23 +807,32 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
     Ok(())
 }
 
-fn study_learn(
-    fmus: &orchestrator::study::runs::Fmus,
-    seed: u32,
-    stop: f64,
-    lag: Option<usize>,
-    kalker_scales: &[f64],
-    speed: Option<f64>,
-    out: &Path,
-) -> Result<(), RunError> {
+fn study_learn(a: &LearnArgs) -> Result<(), RunError> {
     use orchestrator::study::learned::{
         Lookahead, default_partner, learn, training_runs, validation,
     };
     use orchestrator::study::runs::STOP;
     use orchestrator::study::variants;
     let cfg = |e: String| RunError::Config(e);
-    let lookahead = lag.map_or(Lookahead::Smoother, Lookahead::FixedLag);
-    let (runs, provenance) = training_runs(fmus, seed, stop, kalker_scales, speed).map_err(cfg)?;
+    let (grid, out) = (a.grid, &a.out);
+    if !(grid.is_finite() && grid > 0.0) {
+        return Err(cfg(format!(
+            "--grid must be a positive step in metres, not {grid}"
+        )));
+    }
+    let lookahead = match a.lag {
+        None => Lookahead::Smoother,
+        Some(m) if m.is_finite() && m >= 0.0 => Lookahead::FixedLag((m / grid).round() as usize),
+        Some(m) => return Err(cfg(format!("--lag must be 0 or more metres, not {m}"))),
+    };
+    let (runs, provenance) = training_runs(
+        &study_fmus(&a.fmus),
+        a.seed,
+        a.stop,
+        &a.kalker_scales,
+        a.speed,
+    )
+    .map_err(cfg)?;
     // The shaping filter's virtual-measurement sigma, chosen as the study does, on the first
     // 20 s of the (first) training run.
     let (sigma, _) =
@@ -827,6 +841,7 @@ fn study_learn(
         &runs,
         &provenance,
         lookahead,
+        grid,
         default_partner(lookahead, sigma),
     )
     .map_err(cfg)?;

@@ -5,7 +5,7 @@
 mod common;
 
 use orchestrator::study::learned::{
-    LearnedSmoother, Lookahead, SPLITS, default_partner, learn, training_runs,
+    GRID, LearnedSmoother, Lookahead, SPLITS, default_partner, learn, training_runs,
 };
 use orchestrator::study::{runs, variants};
 
@@ -22,6 +22,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
         &runs,
         &provenance,
         Lookahead::Smoother,
+        GRID,
         smoother_partner.clone(),
     )
     .unwrap();
@@ -74,7 +75,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     // the long waves. Its D1 is still below the paper's; the causal split lets some of the
     // Kalman filter's D1 error through, so the hybrid's D1 is worse than the learned filter's.
     let lag = Lookahead::FixedLag(20);
-    let (lagged, _) = learn(&runs, &provenance, lag, default_partner(lag, 1.0)).unwrap();
+    let (lagged, _) = learn(&runs, &provenance, lag, GRID, default_partner(lag, 1.0)).unwrap();
     let (lag_alone, lag_hybrid) = lagged.evaluate(&held_out).unwrap();
     assert!(
         jrel(&lag_alone, "D1") < 0.48,

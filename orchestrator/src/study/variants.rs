@@ -319,6 +319,12 @@ pub const LEARNING_STOP: f64 = 1000.0;
 /// The on-board learned filter's look-ahead in grid points (20 m, 1 s at 20 m/s).
 pub const LAG: usize = 20;
 
+/// The grid step of the causal and near-causal learned filters \[m\] (10 samples at 20 m/s).
+pub const FINE_GRID: f64 = 0.2;
+
+/// Their look-aheads in [`FINE_GRID`] points: none (causal) and 3 m (0.15 s at 20 m/s).
+pub const NEAR_CAUSAL: [usize; 2] = [0, 15];
+
 /// The learned smoother ([`super::learned`]) on every record: alone, and as the hybrid with its
 /// Kalman partner for the waves longer than its split; `trained` says on what, in the names.
 pub fn compare_learned(
@@ -333,8 +339,20 @@ pub fn compare_learned(
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
     let name = match smoother.lookahead {
         Lookahead::Smoother => "learned FIR smoother".to_string(),
+        Lookahead::FixedLag(0) => format!(
+            "learned FIR, causal (no look-ahead, {} m grid)",
+            metres(smoother.grid())
+        ),
+        Lookahead::FixedLag(n) if smoother.grid() < 1.0 => format!(
+            "learned FIR, fixed lag of {} m ({} m grid)",
+            metres(n as f64 * smoother.grid()),
+            metres(smoother.grid())
+        ),
         Lookahead::FixedLag(n) => {
-            format!("learned FIR, fixed lag of {} m", n as f64 * smoother.grid())
+            format!(
+                "learned FIR, fixed lag of {} m",
+                metres(n as f64 * smoother.grid())
+            )
         }
     };
     let smooth = smoother.lookahead == Lookahead::Smoother;
@@ -352,6 +370,11 @@ pub fn compare_learned(
         summarize(&learned, alone),
         summarize(&combined, hybrid),
     ])
+}
+
+/// A length for a row name, to the centimetre (`15 * 0.2` prints as 3, not 3.0000000000000004).
+fn metres(x: f64) -> f64 {
+    (x * 100.0).round() / 100.0
 }
 
 /// The track conditions of a record set.

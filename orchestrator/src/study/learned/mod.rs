@@ -15,6 +15,7 @@
 //! 1. Grid: the sensors are low-passed (Butterworth, order 8, zero phase, cut-off at 0.4 of the
 //!    decimated sampling rate, i.e. a 2.5 m wavelength at the default 1 m grid) and every `D`-th
 //!    sample is kept, `D = round(ds / (V h))`, so the samples are `ds` apart along the track.
+//!    The window is [`WINDOW`] each way whatever `ds`, i.e. `P = WINDOW / ds` points.
 //!    Each channel is scaled to unit variance on the training run (conditioning only).
 //! 2. Estimate at grid point `m`: `e[m] = sum_c sum_{l = -f}^{p} w[c, l] x_c[m - l]`, a window of
 //!    up to `P` points behind (`l > 0`) and ahead (`l < 0`).
@@ -51,7 +52,11 @@
 //! - hybrid with the shaping filter's RTS smoother (split chosen: 30 m) 0.089 / 0.085 / 0.047 /
 //!   0.093;
 //! - fixed lag of 20 m alone 0.62 / 0.10 / 0.22 / 0.82; hybrid with the paper's causal filter
-//!   (split chosen: 40 m) 0.171 / 0.337 / 0.104 / 0.156.
+//!   (split chosen: 40 m) 0.171 / 0.337 / 0.104 / 0.156;
+//! - causal (no look-ahead; 0.2 m grid, since on the 1 m grid the causal anti-alias filter's
+//!   delay of a few metres costs D1: 0.71) alone 0.88 / 0.63 / 0.62 / 1.05, hybrid (split 20 m)
+//!   0.32 / 0.82 / 0.16 / 0.13; with 3 m of look-ahead D1 0.51, hybrid whole 0.27
+//!   (docs/cross-level.md section 6: what this says about causal estimators).
 //!
 //! With the vehicle's Kalker coefficients halved, the taps fitted on the nominal vehicle lose
 //! D1 (0.085 -> 1.08); fitted on both ([`training_runs`] with scales 1 and 0.5) they give D1
@@ -75,10 +80,10 @@ use sci_rs::signal::filter::sosfilt_dyn;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Grid step along the track \[m\] (20 Hz at 20 m/s).
+/// The default grid step along the track \[m\] (20 Hz at 20 m/s).
 pub const GRID: f64 = 1.0;
-/// Half window `P` in grid points (60 m each way).
-pub const HALF_WINDOW: usize = 60;
+/// Half window \[m\]: `P = WINDOW / grid` points each way.
+pub const WINDOW: f64 = 60.0;
 /// The band the taps are fitted to: D1 and D2, which a 120 m window resolves.
 pub const TARGET: super::metrics::Band = super::metrics::Band {
     name: "3-70 m",
@@ -95,9 +100,9 @@ const SKIP: f64 = 2.0;
 /// How far ahead of the estimated position the learned filter may look.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Lookahead {
-    /// [`HALF_WINDOW`] points each way, zero-phase anti-alias filter and split: offline.
+    /// [`WINDOW`] each way, zero-phase anti-alias filter and split: offline.
     Smoother,
-    /// At most this many grid points ahead, with a causal anti-alias filter and a causal split
+    /// At most this many grid points ahead (0: causal), with a causal anti-alias filter and a causal split
     /// (the estimate for a position is complete once the train is that far past it): on board.
     FixedLag(usize),
 }
@@ -189,20 +194,27 @@ pub fn default_partner(lookahead: Lookahead, shaping_sigma_xi: f64) -> Partner {
 impl LearnedSmoother {
     /// Fits the taps on a constant-speed run `rec` with its true alignment; the hybrid will
     /// use `partner` with a 40 m split until [`Self::tune_split`].
+    /// `grid` is the step along the track \[m\] the sensors are decimated to (rounded to a
+    /// whole number of samples at the run's speed).
     pub fn train(
         rec: &Record,
         lookahead: Lookahead,
+        grid: f64,
         partner: Partner,
         provenance: &str,
     ) -> Result<LearnedSmoother, String> {
         let speed = constant_speed(&rec.samples, None)?;
-        let decimation = ((GRID / (speed * STEP)).round() as usize).max(1);
+        if !(grid.is_finite() && grid > 0.0) {
+            return Err(format!("the grid step must be positive, not {grid} m"));
+        }
+        let decimation = ((grid / (speed * STEP)).round() as usize).max(1);
+        let half_window = (WINDOW / (speed * STEP * decimation as f64)).round() as usize;
         let skip = (SKIP / STEP) as usize;
         if rec.samples.len() <= skip {
             return Err("the training run is shorter than its start transient".into());
         }
         let (future, causal) = match lookahead {
-            Lookahead::Smoother => (HALF_WINDOW, false),
+            Lookahead::Smoother => (half_window, false),
             Lookahead::FixedLag(n) => (n, true),
         };
         let x = channels(&rec.samples[skip..], STEP, decimation, causal)?;
@@ -221,7 +233,7 @@ impl LearnedSmoother {
             lookahead,
             split: 40.0,
             partner,
-            fir: Fir::fit(&x, &target, HALF_WINDOW, future, RIDGE)?,
+            fir: Fir::fit(&x, &target, half_window, future, RIDGE)?,
         })
     }
 
@@ -455,34 +467,42 @@ mod tests {
     fn the_on_board_pipeline_is_causal_up_to_its_lag() {
         // Oracle: causality. The whole fixed-lag path (anti-alias filter, taps, the Kalman
         // estimate's sampling, the causal split) must give the same estimates before the
-        // position a change reaches minus the look-ahead.
-        let lag = 20;
-        let partner = default_partner(Lookahead::FixedLag(lag), 1.0);
-        let l = LearnedSmoother::train(
-            &noise_record(60.0, 1),
-            Lookahead::FixedLag(lag),
-            partner,
-            "test",
-        )
-        .unwrap();
-        let rec = noise_record(20.0, 9);
-        let kalman = noise(rec.samples.len(), 13);
-        let (est, hybrid) = l.apply(&rec.samples, STEP, &kalman).unwrap();
-        let k = 12_345;
-        let mut samples = rec.samples.clone();
-        let mut kalman2 = kalman.clone();
-        for s in &mut samples[k..] {
-            s.ws_acc_y += 1.0;
-            s.frame_acc_y -= 1.0;
+        // position a change reaches minus the look-ahead: for the study's 20 m on the 1 m grid
+        // and for its causal and 3 m forms on the 0.2 m grid.
+        for (lag, grid) in [(20, GRID), (0, 0.2), (15, 0.2)] {
+            let partner = default_partner(Lookahead::FixedLag(lag), 1.0);
+            let l = LearnedSmoother::train(
+                &noise_record(60.0, 1),
+                Lookahead::FixedLag(lag),
+                grid,
+                partner,
+                "test",
+            )
+            .unwrap();
+            assert!((l.grid() - grid).abs() < 1e-12, "grid {}", l.grid());
+            let rec = noise_record(20.0, 9);
+            let kalman = noise(rec.samples.len(), 13);
+            let (est, hybrid) = l.apply(&rec.samples, STEP, &kalman).unwrap();
+            let k = 12_345;
+            let mut samples = rec.samples.clone();
+            let mut kalman2 = kalman.clone();
+            for s in &mut samples[k..] {
+                s.ws_acc_y += 1.0;
+                s.frame_acc_y -= 1.0;
+            }
+            for v in &mut kalman2[k..] {
+                *v += 1.0;
+            }
+            let (est2, hybrid2) = l.apply(&samples, STEP, &kalman2).unwrap();
+            let first = k.div_ceil(l.decimation) - lag;
+            assert_eq!(est[..first], est2[..first], "lag {lag}, grid {grid}");
+            assert_eq!(hybrid[..first], hybrid2[..first], "lag {lag}, grid {grid}");
+            assert_ne!(
+                hybrid[first + lag],
+                hybrid2[first + lag],
+                "lag {lag}, grid {grid}"
+            );
         }
-        for v in &mut kalman2[k..] {
-            *v += 1.0;
-        }
-        let (est2, hybrid2) = l.apply(&samples, STEP, &kalman2).unwrap();
-        let first = k.div_ceil(l.decimation) - lag;
-        assert_eq!(est[..first], est2[..first]);
-        assert_eq!(hybrid[..first], hybrid2[..first]);
-        assert_ne!(hybrid[first + lag], hybrid2[first + lag]);
     }
 
     #[test]

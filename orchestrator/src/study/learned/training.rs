@@ -73,6 +73,7 @@ pub fn learn(
     runs: &[Record],
     provenance: &str,
     lookahead: Lookahead,
+    grid: f64,
     partner: Partner,
 ) -> Result<(LearnedSmoother, f64), String> {
     let head = validation_len();
@@ -86,7 +87,7 @@ pub fn learn(
         fit.distance.extend(t.distance.iter().map(|d| d + d0));
         fit.alignment.extend_from_slice(&t.alignment);
     }
-    let mut l = LearnedSmoother::train(&fit, lookahead, partner, provenance)?;
+    let mut l = LearnedSmoother::train(&fit, lookahead, grid, partner, provenance)?;
     let heads: Vec<Record> = runs.iter().map(validation).collect();
     let j = l.tune_split(&heads)?;
     Ok((l, j))
