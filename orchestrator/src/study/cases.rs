@@ -77,9 +77,24 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
             name: "all together".into(),
             // The paper's worst case keeps noise and vertical irregularities and combines the two
             // parameter errors.
-            vehicle: vec![kalker],
-            estimator: vec![conicity],
+            vehicle: vec![kalker.clone()],
+            estimator: vec![conicity.clone()],
             paper: Some([(0.47, 0.32), (0.30, 0.68), (0.27, 0.32), (0.21, 0.18)]),
+        },
+        // Not in the paper: the two parameter errors on the track without vertical
+        // irregularities, which separates their effect from the cross-level's (our vehicle's D1
+        // error; docs/cross-level.md). To compare with "no vertical irregularity".
+        Case {
+            name: "conicity -10 % in the filter, no vertical irregularity".into(),
+            vehicle: vec![no_vertical.clone()],
+            estimator: vec![conicity],
+            paper: None,
+        },
+        Case {
+            name: "Kalker -50 % in the vehicle, no vertical irregularity".into(),
+            vehicle: vec![kalker, no_vertical],
+            estimator: vec![],
+            paper: None,
         },
     ]
 }
