@@ -780,8 +780,9 @@ pub unsafe fn deserialize_fmu_state<M: Model>(
     }
 }
 
-/// Exports the 34 FMI 2.0 co-simulation functions for `$model`. Use once, in the FMU crate's
-/// root, with the crate built as a `cdylib`.
+/// Exports the 34 FMI 2.0 co-simulation functions for `$model`. Use once, in a crate of its own
+/// built as a `cdylib` (the FMU's `export/` crate), not in the model crate: two crates that both
+/// export them cannot be linked into one program.
 #[macro_export]
 macro_rules! export_fmu {
     ($model:ty) => {

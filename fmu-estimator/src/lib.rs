@@ -33,8 +33,6 @@ pub mod statespace;
 
 pub use fmu::Estimator;
 
-fmi_abi::export_fmu!(crate::fmu::Estimator);
-
 /// The method, for documentation/index.html.
 pub const METHOD_HTML: &str = include_str!("../doc/method.html");
 

@@ -23,8 +23,6 @@ pub mod track;
 
 pub use fmu::RailVehicle;
 
-fmi_abi::export_fmu!(crate::fmu::RailVehicle);
-
 /// The method, for documentation/index.html.
 pub const METHOD_HTML: &str = include_str!("../doc/method.html");
 

@@ -23,8 +23,8 @@ pub struct FmuSpec {
 
 pub const FMUS: &[FmuSpec] = &[
     FmuSpec {
-        package: "fmu-estimator",
-        lib_name: "fmu_estimator",
+        package: "fmu-estimator-export",
+        lib_name: "fmu_estimator_export",
         model_identifier: "AlignmentEstimator",
         model_description: fmu_estimator::model_description,
         documentation: fmi_abi::description::documentation_html::<fmu_estimator::Estimator>,
@@ -32,8 +32,8 @@ pub const FMUS: &[FmuSpec] = &[
         resources: Some("fmu-estimator/resources"),
     },
     FmuSpec {
-        package: "fmu-vehicle",
-        lib_name: "fmu_vehicle",
+        package: "fmu-vehicle-export",
+        lib_name: "fmu_vehicle_export",
         model_identifier: "RailVehicle",
         model_description: fmu_vehicle::model_description,
         documentation: fmi_abi::description::documentation_html::<fmu_vehicle::RailVehicle>,
@@ -42,8 +42,8 @@ pub const FMUS: &[FmuSpec] = &[
     },
     // Trivial FMUs for testing and benchmarking the orchestrator.
     FmuSpec {
-        package: "fmu-dahlquist",
-        lib_name: "fmu_dahlquist",
+        package: "fmu-dahlquist-export",
+        lib_name: "fmu_dahlquist_export",
         model_identifier: "Dahlquist",
         model_description: fmu_dahlquist::model_description,
         documentation: fmi_abi::description::documentation_html::<fmu_dahlquist::Dahlquist>,
@@ -51,8 +51,8 @@ pub const FMUS: &[FmuSpec] = &[
         resources: None,
     },
     FmuSpec {
-        package: "fmu-feedthrough",
-        lib_name: "fmu_feedthrough",
+        package: "fmu-feedthrough-export",
+        lib_name: "fmu_feedthrough_export",
         model_identifier: "Feedthrough",
         model_description: fmu_feedthrough::model_description,
         documentation: fmi_abi::description::documentation_html::<fmu_feedthrough::Feedthrough>,

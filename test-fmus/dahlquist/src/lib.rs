@@ -69,8 +69,6 @@ impl Model for Dahlquist {
     }
 }
 
-fmi_abi::export_fmu!(crate::Dahlquist);
-
 pub const METHOD_HTML: &str = "<h2>Method</h2><p>x' = -k x + u, integrated exactly over each communication step with u held.</p>";
 
 pub fn model_description() -> model_description::ModelDescription {

@@ -100,8 +100,6 @@ impl Model for Feedthrough {
     }
 }
 
-fmi_abi::export_fmu!(crate::Feedthrough);
-
 pub const METHOD_HTML: &str =
     "<h2>Method</h2><p>y = gain * u + offset at every step; fmi2Error from fail_at on.</p>";
 
