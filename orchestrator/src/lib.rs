@@ -19,6 +19,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod info;
+pub mod input;
 pub mod master;
 pub mod record;
 pub mod resolve;

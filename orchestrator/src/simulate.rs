@@ -21,7 +21,7 @@ pub struct Signals {
 impl Signals {
     /// Reads a CSV file; errors name the file, the line and the column.
     pub fn read(path: &Path) -> Result<Signals, String> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::input::read_text(path, crate::input::CSV_LIMIT)
             .map_err(|e| format!("cannot read input file {}: {e}", path.display()))?;
         Self::parse(&text).map_err(|e| format!("input file {}: {e}", path.display()))
     }

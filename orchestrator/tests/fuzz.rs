@@ -365,4 +365,7 @@ fn signal_files_name_the_file() {
         e.starts_with(&format!("cannot read input file {}", path.display())) && e.contains("UTF-8"),
         "{e}"
     );
+    // A device is refused before it is read (it would be read until memory ran out).
+    let e = Signals::read(std::path::Path::new("/dev/zero")).unwrap_err();
+    assert_eq!(e, "cannot read input file /dev/zero: not a regular file");
 }

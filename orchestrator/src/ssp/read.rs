@@ -97,10 +97,11 @@ fn in_file(path: PathBuf, e: SspError) -> SspError {
 }
 
 fn read_text(path: &Path, shown: &Path) -> Result<String, SspError> {
-    let bytes = fs::read(path).map_err(|source| SspError::Io {
-        path: shown.to_path_buf(),
-        source,
-    })?;
+    let bytes =
+        crate::input::read_bytes(path, crate::input::XML_LIMIT).map_err(|source| SspError::Io {
+            path: shown.to_path_buf(),
+            source,
+        })?;
     let text = String::from_utf8(bytes).map_err(|e| {
         // Where the first bad byte is, as a line and column of the valid text before it.
         let valid = e.utf8_error().valid_up_to();

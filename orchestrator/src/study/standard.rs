@@ -25,7 +25,7 @@ pub struct Columns {
 
 impl Columns {
     pub fn read(path: &Path) -> Result<Columns, String> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::input::read_text(path, crate::input::CSV_LIMIT)
             .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
         let mut lines = text.lines();
         let names: Vec<String> = lines
