@@ -124,6 +124,17 @@ pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
     parse(&text, path)
 }
 
+/// The `[parameters]` table of the calibration file at `path`: the simplified model's
+/// parameters it was made with. The FMU takes them as its defaults at build time only
+/// (build.rs); a master that points `calibration_file` at another file must set them as
+/// parameters too (the orchestrator's studies do).
+pub fn file_parameters(path: &Path) -> Result<std::collections::BTreeMap<String, f64>, String> {
+    let text = fmi_abi::resource::read_text(path, "calibration file", 1 << 20)?;
+    let file: File =
+        toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
+    Ok(file.parameters.unwrap_or_default())
+}
+
 /// Parses a calibration file's text; `path` names it in messages.
 pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
     let file: File =

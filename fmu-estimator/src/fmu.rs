@@ -136,7 +136,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
     VarSpec::boolean_parameter(vr::P0_STATIONARY, "p0_stationary", true, "Start the time-varying filter from the stationary covariance at the first step's speed (no start-up transient); false: from p0_xi and typical body amplitudes, as the paper"),
     VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
-    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file, relative to the FMU's resources directory or absolute"),
+    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute"),
 ];
 
 /// The estimator's FMI model state. Everything here is part of a saved FMU state.

@@ -85,7 +85,7 @@ enum StudyCommand {
     /// and write the estimator's calibration file (rebuild the FMU afterwards: cargo xtask fmu).
     Calibrate {
         #[command(flatten)]
-        fmus: StandardFmus,
+        fmus: StudyFmus,
         /// The calibration file to write.
         #[arg(long, default_value = "fmu-estimator/resources/calibration.toml")]
         out: PathBuf,
@@ -146,10 +146,23 @@ struct LearnArgs {
     out: PathBuf,
 }
 
+/// The studies' FMUs and the user's settings for them.
+#[derive(Args, Clone)]
+struct StudyFmus {
+    #[command(flatten)]
+    fmus: StandardFmus,
+    /// Set a parameter of the vehicle or the estimator in every run of the study:
+    /// vehicle.NAME=VALUE or estimator.NAME=VALUE (repeatable), e.g. vehicle.vehicle=manchester.toml
+    /// with estimator.calibration_file=/abs/path/cal.toml from `study calibrate`. The seeds and
+    /// the cases' conditions stay the study's.
+    #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
+    set: Vec<String>,
+}
+
 #[derive(Args, Clone)]
 struct StudyArgs {
     #[command(flatten)]
-    fmus: StandardFmus,
+    fmus: StudyFmus,
     /// Held-out track seeds (never the calibration seed).
     #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5")]
     seeds: Vec<u32>,
@@ -465,10 +478,19 @@ fn export_ssp(out: &Path, system: Option<&Path>, fmus: &StandardFmus) -> Result<
 }
 
 fn study_fmus(f: &StandardFmus) -> orchestrator::study::runs::Fmus {
-    orchestrator::study::runs::Fmus {
-        vehicle: f.vehicle.clone(),
-        estimator: f.estimator.clone(),
+    orchestrator::study::runs::Fmus::new(f.vehicle.clone(), f.estimator.clone())
+}
+
+/// The study's FMUs with the user's `--set` settings.
+fn study_fmus_with(f: &StudyFmus) -> Result<orchestrator::study::runs::Fmus, RunError> {
+    let mut fmus = study_fmus(&f.fmus);
+    for s in &f.set {
+        let (name, value) = split_assignment(s)?;
+        let e = Endpoint::parse(name).map_err(|e| RunError::Config(format!("--set {s}: {e}")))?;
+        fmus.set(&e.component, &e.variable, value)
+            .map_err(|e| RunError::Config(format!("--set {s}: {e}")))?;
     }
+    Ok(fmus)
 }
 
 const STANDARD: &str = "Standard case";
@@ -484,8 +506,8 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
             seed,
             plots,
         } => {
-            let fmus = study_fmus(&fmus);
-            let vehicle = fmu_vehicle::params::VehicleParams::ml95();
+            let fmus = study_fmus_with(&fmus)?;
+            let vehicle = fmus.vehicle_params().map_err(RunError::Config)?;
             let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP)
                 .map_err(RunError::Config)?;
             let p = &id.params;
@@ -545,8 +567,10 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
             a.calibration_seed
         )));
     }
-    let fmus = study_fmus(&a.fmus);
+    let fmus = study_fmus_with(&a.fmus)?;
     let estimator = fmi_import::Fmu::open(&fmus.estimator)?;
+    // The filter's conicity, which the robustness case lowers by 10 %: the user's (or their
+    // calibration file's) if set, else the FMU's default.
     let alpha = match estimator
         .model_description()
         .variable("alpha")
@@ -555,10 +579,13 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         Some(model_description::VariableKind::Real(r)) => r.start.unwrap_or(0.1),
         _ => 0.1,
     };
+    let alpha = fmus.estimator_number("alpha").unwrap_or(alpha);
     drop(estimator);
+    let params = fmus.vehicle_params().map_err(RunError::Config)?;
+    let conicity = params.wheelset.conicity;
     let vehicle = fmu_vehicle::dynamics::Vehicle::new(
-        fmu_vehicle::params::VehicleParams::ml95(),
-        0.1,
+        params,
+        conicity,
         fmu_vehicle::dynamics::ContactOptions::default(),
     );
     let mut plan: Vec<(&str, Vec<cases::Case>)> = vec![];
@@ -671,7 +698,12 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
             a.calibration_seed
         )));
     }
-    let fmus = study_fmus(&a.fmus);
+    if let Some(s) = a.fmus.set.first() {
+        return Err(RunError::Config(format!(
+            "--set {s}: study variants runs the estimator offline with its shipped calibration and the ML95 vehicle; --set is for calibrate, standard, robustness, resonance and all"
+        )));
+    }
+    let fmus = study_fmus(&a.fmus.fmus);
     let started = std::time::Instant::now();
     let cfg = |e: String| RunError::Config(e);
     use variants::Conditions;

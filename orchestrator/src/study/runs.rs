@@ -5,13 +5,117 @@
 use crate::master::{Algorithm, Cosimulation, RunOptions, Table};
 use crate::system::{Component, Endpoint, Experiment, System, Value};
 use fmi_import::LogConfig;
-use std::path::PathBuf;
+use fmu_vehicle::params::VehicleParams;
+use std::path::{Path, PathBuf};
 
-/// The two FMUs of the studies.
-#[derive(Debug, Clone)]
+/// The two FMUs of the studies, and the user's settings for each, applied to every run before
+/// the study's own (so a study's seeds and conditions hold; [`STUDY_CONTROLLED`] are refused).
+#[derive(Debug, Clone, Default)]
 pub struct Fmus {
     pub vehicle: PathBuf,
     pub estimator: PathBuf,
+    pub vehicle_settings: Settings,
+    pub estimator_settings: Settings,
+}
+
+/// The vehicle variables the studies set themselves (seeds and the cases' conditions).
+pub const STUDY_CONTROLLED: [&str; 8] = [
+    "track_seed",
+    "noise_seed",
+    "vertical_irregularity",
+    "lateral_irregularity",
+    "sensor_noise",
+    "kalker_scale",
+    "harmonic_amplitude",
+    "harmonic_wavelength",
+];
+
+impl Fmus {
+    /// The FMUs at `vehicle` and `estimator` with no settings of the user's.
+    pub fn new(vehicle: PathBuf, estimator: PathBuf) -> Fmus {
+        Fmus {
+            vehicle,
+            estimator,
+            ..Fmus::default()
+        }
+    }
+
+    /// Adds the user's setting `component.variable = text` (component `vehicle` or
+    /// `estimator`); the value is typed against the FMU's model description when a run loads
+    /// it.
+    ///
+    /// `estimator.calibration_file` also sets the simplified model's parameters the file holds
+    /// (the FMU reads only Q and R from it at run time), and a relative path is made absolute
+    /// (the FMU would look for it in its resources).
+    pub fn set(&mut self, component: &str, variable: &str, text: &str) -> Result<(), String> {
+        let setting = (variable.to_string(), Value::String(text.to_string()));
+        if (component, variable) == ("estimator", "calibration_file") {
+            let path =
+                std::path::absolute(text).map_err(|e| format!("calibration file {text}: {e}"))?;
+            for (name, value) in fmu_estimator::calibration::file_parameters(&path)? {
+                self.estimator_settings.push((name, Value::Real(value)));
+            }
+            let path = path
+                .to_str()
+                .ok_or("the calibration file's path is not UTF-8")?;
+            self.estimator_settings
+                .push((variable.into(), Value::String(path.into())));
+            return Ok(());
+        }
+        match component {
+            "vehicle" if STUDY_CONTROLLED.contains(&variable) => Err(format!(
+                "vehicle.{variable} is set by the studies themselves (seeds: --seeds, --seed, --calibration-seed; conditions: the cases)"
+            )),
+            "vehicle" => {
+                self.vehicle_settings.push(setting);
+                Ok(())
+            }
+            "estimator" => {
+                self.estimator_settings.push(setting);
+                Ok(())
+            }
+            other => Err(format!(
+                "no component '{other}' in the studies (vehicle or estimator)"
+            )),
+        }
+    }
+
+    /// The number the user set for `variable` of the estimator, if any (the last one).
+    pub fn estimator_number(&self, variable: &str) -> Option<f64> {
+        self.estimator_settings
+            .iter()
+            .rev()
+            .find(|(n, _)| n == variable)
+            .and_then(|(_, v)| match v {
+                Value::String(s) => s.parse().ok(),
+                Value::Real(x) => Some(*x),
+                _ => None,
+            })
+    }
+
+    /// The vehicle's parameter set, as the vehicle FMU will read it: the file named by the
+    /// user's `vehicle.vehicle` (`ml95.toml`, `manchester.toml` or an absolute path), else ML95.
+    /// The identification takes the simplified model's fixed parameters from it, and the
+    /// resonance study its modes.
+    pub fn vehicle_params(&self) -> Result<VehicleParams, String> {
+        let name = self
+            .vehicle_settings
+            .iter()
+            .rev()
+            .find(|(n, _)| n == "vehicle")
+            .map(|(_, v)| match v {
+                Value::String(s) => s.clone(),
+                other => format!("{other:?}"),
+            });
+        match name.as_deref() {
+            None | Some("ml95.toml" | "ml95") => Ok(VehicleParams::ml95()),
+            Some("manchester.toml" | "manchester") => Ok(VehicleParams::manchester()),
+            Some(p) if Path::new(p).is_absolute() => VehicleParams::load(Path::new(p)),
+            Some(other) => Err(format!(
+                "vehicle.vehicle={other}: not a vehicle file the vehicle FMU ships (ml95.toml, manchester.toml) nor an absolute path"
+            )),
+        }
+    }
 }
 
 /// Settings applied to one component, as `(variable, value)` in the FMU's own terms.
@@ -74,7 +178,12 @@ pub fn vehicle_run_driven(
         components: vec![Component {
             name: "vehicle".into(),
             source: fmus.vehicle.clone(),
-            parameters: settings,
+            parameters: fmus
+                .vehicle_settings
+                .iter()
+                .cloned()
+                .chain(settings)
+                .collect(),
         }],
         connections: vec![],
         experiment: Experiment::default(),
@@ -116,8 +225,18 @@ pub fn standard_run(
     stop: f64,
 ) -> Result<Table, String> {
     let mut system = System::standard_case(&fmus.vehicle, &fmus.estimator);
-    system.components[0].parameters = vehicle;
-    system.components[1].parameters = estimator;
+    system.components[0].parameters = fmus
+        .vehicle_settings
+        .iter()
+        .cloned()
+        .chain(vehicle)
+        .collect();
+    system.components[1].parameters = fmus
+        .estimator_settings
+        .iter()
+        .cloned()
+        .chain(estimator)
+        .collect();
     let record = EVALUATED
         .iter()
         .map(|e| Endpoint::parse(e).expect("constant names"))
