@@ -58,3 +58,25 @@ def test_an_unobservable_model_is_reported_by_the_pbh_test(make_slave):
     assert observable.initialize() == OK
     assert not any("observable" in r.message for r in observable.log.records)
     assert s.step(0.0, 1e-3) == OK
+
+
+def test_a_calibration_file_made_for_other_parameters_is_flagged(make_slave, tmp_path):
+    """The FMU reads only Q and R from `calibration_file` at run time; when the file's
+    [parameters] (the model its Q and R were made with) differ from the FMU's, it must say so,
+    and stop saying so once the importer sets them to the file's values."""
+    from project import REPO
+
+    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
+    other = shipped.replace("m = 1.109e3", "m = 1.813e3", 1)
+    assert other != shipped
+    path = tmp_path / "other.toml"
+    path.write_text(other)
+
+    s = make_slave("other-calibration")
+    assert s.initialize(strings={"calibration_file": str(path)}) in (OK, WARNING)
+    flagged = [r.message for r in s.log.records if r.status == WARNING and "other model parameters" in r.message]
+    assert len(flagged) == 1 and "m = 1813 (here 1109)" in flagged[0], s.log.records
+
+    matched = make_slave("matched-calibration")
+    assert matched.initialize({"m": 1813.0}, strings={"calibration_file": str(path)}) == OK
+    assert not any("other model parameters" in r.message for r in matched.log.records), matched.log.records

@@ -78,6 +78,28 @@ fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
     }
 }
 
+/// The parameters whose value in the calibration file at `path` (its `[parameters]`, the model
+/// its Q and R were computed with) differs from the FMU's current value, as `name = file (here
+/// current)`. The FMU reads only Q and R from the file at run time (the parameters are its
+/// build-time defaults), so Q and R from a file made for another vehicle would otherwise meet
+/// this build's model silently.
+pub fn parameter_mismatches(v: &Values, path: &Path) -> Result<Vec<String>, String> {
+    let mut differ = vec![];
+    for (name, value) in calibration::file_parameters(path)? {
+        let Some(spec) = crate::fmu::VARIABLES
+            .iter()
+            .find(|s| s.name == name && s.base() == fmi_abi::variables::Base::Real)
+        else {
+            continue;
+        };
+        let here = v.real[spec.vr as usize];
+        if (here - value).abs() > 1e-9 * value.abs() {
+            differ.push(format!("{name} = {value} (here {here})"));
+        }
+    }
+    Ok(differ)
+}
+
 impl Config {
     /// The configuration from the FMI values; `resources` is the FMU's resources directory.
     pub fn from_values(
@@ -119,6 +141,14 @@ impl Config {
                 Some(path) if path.exists() => match calibration::load(&path)? {
                     Some(c) => {
                         notes.push(Note::Info(format!("Q and R from {} ({})", path.display(), c.status)));
+                        let differ = parameter_mismatches(v, &path)?;
+                        if !differ.is_empty() {
+                            notes.push(Note::Warning(format!(
+                                "calibration file {} was made with other model parameters ({}): the FMU takes only Q and R from it at run time, so set those parameters to the file's values if it is meant for them",
+                                path.display(),
+                                differ.join(", ")
+                            )));
+                        }
                         calibrated = Some(c);
                     }
                     None => notes.push(Note::Info(format!(
@@ -222,5 +252,49 @@ impl Config {
                 Core::Eight(e)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn warnings(calibration_text: &str) -> Vec<String> {
+        let dir = tempfile_dir();
+        let path = dir.join("calibration.toml");
+        std::fs::write(&path, calibration_text).unwrap();
+        let mut v = Values::from_table(crate::fmu::VARIABLES);
+        v.string[vr::CALIBRATION_FILE as usize] = path.to_str().unwrap().into();
+        let (_, notes) = Config::from_values(&v, None).unwrap();
+        notes
+            .into_iter()
+            .filter_map(|n| match n {
+                Note::Warning(m) => Some(m),
+                Note::Info(_) => None,
+            })
+            .collect()
+    }
+
+    fn tempfile_dir() -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!(
+            "fmu-estimator-config-{}-{:?}",
+            std::process::id(),
+            std::thread::current().id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_calibration_made_for_other_parameters_is_flagged() {
+        // Oracle: the shipped file was made with this build's defaults, so it agrees.
+        assert!(warnings(calibration::SHIPPED).is_empty());
+        // The same Q and R with another wheelset mass in [parameters], as a file made for
+        // another vehicle would have: the FMU keeps its own m, and says so.
+        let other = calibration::SHIPPED.replacen("m = 1.109e3", "m = 1.813e3", 1);
+        assert_ne!(other, calibration::SHIPPED);
+        let w = warnings(&other);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].contains("m = 1813 (here 1109)"), "{}", w[0]);
     }
 }
