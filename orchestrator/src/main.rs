@@ -86,9 +86,11 @@ enum StudyCommand {
     Calibrate {
         #[command(flatten)]
         fmus: StudyFmus,
-        /// The calibration file to write.
-        #[arg(long, default_value = "fmu-estimator/resources/calibration.toml")]
-        out: PathBuf,
+        /// The calibration file to write (default: the shipped one,
+        /// fmu-estimator/resources/calibration.toml; required with --set, which makes a
+        /// calibration for another vehicle).
+        #[arg(long)]
+        out: Option<PathBuf>,
         /// Track seed of the identification and calibration runs (not the vehicle's default
         /// track, seed 1, so that a plain `run` of the standard case is a held-out track).
         #[arg(long, default_value_t = CALIBRATION_SEED)]
@@ -506,6 +508,20 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
             seed,
             plots,
         } => {
+            if let Some(s) = fmus.set.iter().find(|s| s.starts_with("estimator.")) {
+                return Err(RunError::Config(format!(
+                    "--set {s}: study calibrate builds the estimator's parameters and noise itself; --set takes vehicle settings here"
+                )));
+            }
+            let out = match (out, fmus.set.is_empty()) {
+                (Some(out), _) => out,
+                (None, true) => PathBuf::from("fmu-estimator/resources/calibration.toml"),
+                (None, false) => {
+                    return Err(RunError::Config(
+                        "--out is required with --set: a calibration for another vehicle must not replace the shipped one".into(),
+                    ));
+                }
+            };
             let fmus = study_fmus_with(&fmus)?;
             let vehicle = fmus.vehicle_params().map_err(RunError::Config)?;
             let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP)
@@ -841,21 +857,24 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
 
 fn study_learn(a: &LearnArgs) -> Result<(), RunError> {
     use orchestrator::study::learned::{
-        Lookahead, default_partner, learn, training_runs, validation,
+        Lookahead, WINDOW, decimation, default_partner, learn, training_runs, validation,
     };
-    use orchestrator::study::runs::STOP;
+    use orchestrator::study::runs::{STEP, STOP};
     use orchestrator::study::variants;
     let cfg = |e: String| RunError::Config(e);
     let (grid, out) = (a.grid, &a.out);
-    if !(grid.is_finite() && grid > 0.0) {
-        return Err(cfg(format!(
-            "--grid must be a positive step in metres, not {grid}"
-        )));
-    }
+    // The grid the filter will have (a whole number of samples), checked before the runs.
+    let speed = a.speed.unwrap_or(20.0);
+    let grid =
+        STEP * speed * decimation(speed, grid).map_err(|e| cfg(format!("--grid: {e}")))? as f64;
     let lookahead = match a.lag {
         None => Lookahead::Smoother,
-        Some(m) if m.is_finite() && m >= 0.0 => Lookahead::FixedLag((m / grid).round() as usize),
-        Some(m) => return Err(cfg(format!("--lag must be 0 or more metres, not {m}"))),
+        Some(m) if (0.0..=WINDOW).contains(&m) => Lookahead::FixedLag((m / grid).round() as usize),
+        Some(m) => {
+            return Err(cfg(format!(
+                "--lag must be between 0 and {WINDOW} m (the window), not {m}"
+            )));
+        }
     };
     let (runs, provenance) = training_runs(
         &study_fmus(&a.fmus),
@@ -880,8 +899,13 @@ fn study_learn(a: &LearnArgs) -> Result<(), RunError> {
     create_parent(out)?;
     std::fs::write(out, l.to_json())
         .map_err(|e| RunError::Io(format!("cannot write {}: {e}", out.display())))?;
+    let ahead = match l.lookahead {
+        Lookahead::Smoother => format!("smoother, {WINDOW} m each way"),
+        Lookahead::FixedLag(n) => format!("look-ahead {} m", n as f64 * l.grid()),
+    };
     println!(
-        "learned FIR ({lookahead:?}) at {} m/s: {}; split {} m with {} (whole Jrel on the first {} s: {j:.3}); wrote {}",
+        "learned FIR ({ahead}, grid {} m) at {} m/s: {}; split {} m with {} (whole Jrel on the first {} s: {j:.3}); wrote {}",
+        l.grid(),
         l.speed,
         l.provenance,
         l.split,

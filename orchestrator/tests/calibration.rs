@@ -77,4 +77,22 @@ fn a_filter_calibrated_for_another_vehicle_beats_the_shipped_one_on_it() {
         own.whole.jrel,
         shipped.whole.jrel
     );
+    // The study's settings come after the user's: the robustness case's conicity (0.9 times
+    // the file's) must reach the filter, not the file's own alpha set with it.
+    let alpha = matched.estimator_number("alpha").unwrap();
+    assert_eq!(alpha, manchester.wheelset.conicity);
+    let conicity = cases::robustness(alpha)
+        .into_iter()
+        .find(|c| c.name.starts_with("conicity -10 %"))
+        .unwrap();
+    let lowered = cases::run_seed(&matched, &conicity, held_out).unwrap();
+    assert!(
+        (lowered.whole.jrel - own.whole.jrel).abs() > 1e-6,
+        "the conicity case gave the standard case's {}",
+        own.whole.jrel
+    );
+    // Settings the studies control, or that would undo them, are refused.
+    for name in ["track_file", "speed", "kalker_scale"] {
+        assert!(fmus.clone().set("vehicle", name, "1").is_err(), "{name}");
+    }
 }

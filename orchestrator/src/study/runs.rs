@@ -18,8 +18,9 @@ pub struct Fmus {
     pub estimator_settings: Settings,
 }
 
-/// The vehicle variables the studies set themselves (seeds and the cases' conditions).
-pub const STUDY_CONTROLLED: [&str; 8] = [
+/// The vehicle variables the studies set themselves (seeds and the cases' conditions), and
+/// those that would undo them: a track file replaces the seeded tracks and their conditions.
+pub const STUDY_CONTROLLED: [&str; 9] = [
     "track_seed",
     "noise_seed",
     "vertical_irregularity",
@@ -28,7 +29,12 @@ pub const STUDY_CONTROLLED: [&str; 8] = [
     "kalker_scale",
     "harmonic_amplitude",
     "harmonic_wavelength",
+    "track_file",
 ];
+
+/// The vehicle's forward speed: the studies' cases and the resonance wavelength are at the
+/// vehicle's default, 20 m/s.
+const FIXED_SPEED: &str = "speed";
 
 impl Fmus {
     /// The FMUs at `vehicle` and `estimator` with no settings of the user's.
@@ -64,8 +70,11 @@ impl Fmus {
         }
         match component {
             "vehicle" if STUDY_CONTROLLED.contains(&variable) => Err(format!(
-                "vehicle.{variable} is set by the studies themselves (seeds: --seeds, --seed, --calibration-seed; conditions: the cases)"
+                "vehicle.{variable} is set by the studies themselves (seeds: --seeds, --seed, --calibration-seed; tracks and conditions: the cases)"
             )),
+            "vehicle" if variable == FIXED_SPEED => Err(
+                "vehicle.speed: the studies run at the vehicle's default speed, 20 m/s (their cases and the resonance wavelength assume it)".into(),
+            ),
             "vehicle" => {
                 self.vehicle_settings.push(setting);
                 Ok(())
@@ -87,25 +96,47 @@ impl Fmus {
             .rev()
             .find(|(n, _)| n == variable)
             .and_then(|(_, v)| match v {
-                Value::String(s) => s.parse().ok(),
+                Value::String(s) => s.trim().parse().ok(),
+                Value::Real(x) => Some(*x),
+                _ => None,
+            })
+    }
+
+    /// The number the user set for `variable` of the vehicle, if any (the last one).
+    fn vehicle_number(&self, variable: &str) -> Option<f64> {
+        self.vehicle_settings
+            .iter()
+            .rev()
+            .find(|(n, _)| n == variable)
+            .and_then(|(_, v)| match v {
+                Value::String(s) => s.trim().parse().ok(),
                 Value::Real(x) => Some(*x),
                 _ => None,
             })
     }
 
     /// The vehicle's parameter set, as the vehicle FMU will read it: the file named by the
-    /// user's `vehicle.vehicle` (`ml95.toml`, `manchester.toml` or an absolute path), else ML95.
+    /// user's `vehicle.vehicle` (`ml95.toml`, `manchester.toml` or an absolute path), else ML95,
+    /// with the user's `vehicle.conicity` when positive (the FMU's override of the file's).
     /// The identification takes the simplified model's fixed parameters from it, and the
     /// resonance study its modes.
     pub fn vehicle_params(&self) -> Result<VehicleParams, String> {
+        let mut params = self.vehicle_file_params()?;
+        if let Some(c) = self.vehicle_number("conicity").filter(|c| *c > 0.0) {
+            params.wheelset.conicity = c;
+        }
+        Ok(params)
+    }
+
+    fn vehicle_file_params(&self) -> Result<VehicleParams, String> {
         let name = self
             .vehicle_settings
             .iter()
             .rev()
             .find(|(n, _)| n == "vehicle")
-            .map(|(_, v)| match v {
-                Value::String(s) => s.clone(),
-                other => format!("{other:?}"),
+            .and_then(|(_, v)| match v {
+                Value::String(s) => Some(s.trim().to_string()),
+                _ => None,
             });
         match name.as_deref() {
             None | Some("ml95.toml" | "ml95") => Ok(VehicleParams::ml95()),

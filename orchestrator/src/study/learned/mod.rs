@@ -171,6 +171,19 @@ fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec
     Ok(y.into_iter().step_by(decimation).collect())
 }
 
+/// The decimation that puts samples `grid` metres apart at `speed` (rounded to whole samples
+/// of the study's step); refuses a grid finer than one sample or coarser than half the window.
+pub fn decimation(speed: f64, grid: f64) -> Result<usize, String> {
+    let sample = speed * STEP;
+    if !(grid.is_finite() && grid >= 0.5 * sample && grid <= 0.5 * WINDOW) {
+        return Err(format!(
+            "the grid step must lie between one sample at {speed} m/s ({sample} m) and half the window ({} m), not {grid} m",
+            0.5 * WINDOW
+        ));
+    }
+    Ok(((grid / sample).round() as usize).max(1))
+}
+
 /// The partner the study uses for `lookahead`: the shaping filter's RTS smoother with the
 /// virtual measurement's sigma `shaping_sigma_xi` offline, the paper's causal filter on board.
 pub fn default_partner(lookahead: Lookahead, shaping_sigma_xi: f64) -> Partner {
@@ -204,11 +217,15 @@ impl LearnedSmoother {
         provenance: &str,
     ) -> Result<LearnedSmoother, String> {
         let speed = constant_speed(&rec.samples, None)?;
-        if !(grid.is_finite() && grid > 0.0) {
-            return Err(format!("the grid step must be positive, not {grid} m"));
-        }
-        let decimation = ((grid / (speed * STEP)).round() as usize).max(1);
+        let decimation = decimation(speed, grid)?;
         let half_window = (WINDOW / (speed * STEP * decimation as f64)).round() as usize;
+        if let Lookahead::FixedLag(n) = lookahead
+            && n > half_window
+        {
+            return Err(format!(
+                "a look-ahead of {n} grid points is beyond the window ({half_window} points, {WINDOW} m)"
+            ));
+        }
         let skip = (SKIP / STEP) as usize;
         if rec.samples.len() <= skip {
             return Err("the training run is shorter than its start transient".into());
