@@ -438,23 +438,7 @@ pub struct RailVehicle {
 
 impl RailVehicle {
     fn load_params(&self, name: &str) -> Result<VehicleParams, String> {
-        let path = PathBuf::from(name);
-        if path.is_absolute() {
-            return VehicleParams::load(&path);
-        }
-        if let Some(dir) = &self.resources {
-            let p = dir.join(&path);
-            if p.exists() {
-                return VehicleParams::load(&p);
-            }
-        }
-        match name {
-            "ml95.toml" | "ml95" => Ok(VehicleParams::ml95()),
-            "manchester.toml" | "manchester" => Ok(VehicleParams::manchester()),
-            other => Err(format!(
-                "parameter 'vehicle': no vehicle file '{other}' in the resources (ml95.toml, manchester.toml) and not an absolute path"
-            )),
-        }
+        VehicleParams::named(name, self.resources.as_deref())
     }
 
     fn write_outputs(&self, v: &mut Values) {

@@ -100,6 +100,29 @@ impl VehicleParams {
         Self::parse(&text, &path.display().to_string())
     }
 
+    /// The vehicle file the FMU's `vehicle` parameter names: an absolute path, a file in
+    /// `resources` (the FMU's resources directory, if known), or one of the built-in files
+    /// (`ml95.toml`, `manchester.toml`, which the FMU also ships).
+    pub fn named(name: &str, resources: Option<&Path>) -> Result<VehicleParams, String> {
+        let path = Path::new(name);
+        if path.is_absolute() {
+            return Self::load(path);
+        }
+        if let Some(dir) = resources {
+            let p = dir.join(path);
+            if p.exists() {
+                return Self::load(&p);
+            }
+        }
+        match name {
+            "ml95.toml" | "ml95" => Ok(Self::ml95()),
+            "manchester.toml" | "manchester" => Ok(Self::manchester()),
+            other => Err(format!(
+                "parameter 'vehicle': no vehicle file '{other}' in the resources (ml95.toml, manchester.toml) and not an absolute path"
+            )),
+        }
+    }
+
     /// Masses, inertias and lengths must be positive; stiffness and damping non-negative.
     pub fn check(&self) -> Result<(), String> {
         let positive = [

@@ -6,7 +6,7 @@ use crate::master::{Algorithm, Cosimulation, RunOptions, Table};
 use crate::system::{Component, Endpoint, Experiment, System, Value};
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The two FMUs of the studies, and the user's settings for each, applied to every run before
 /// the study's own (so a study's seeds and conditions hold; [`STUDY_CONTROLLED`] are refused).
@@ -91,28 +91,7 @@ impl Fmus {
 
     /// The number the user set for `variable` of the estimator, if any (the last one).
     pub fn estimator_number(&self, variable: &str) -> Option<f64> {
-        self.estimator_settings
-            .iter()
-            .rev()
-            .find(|(n, _)| n == variable)
-            .and_then(|(_, v)| match v {
-                Value::String(s) => s.trim().parse().ok(),
-                Value::Real(x) => Some(*x),
-                _ => None,
-            })
-    }
-
-    /// The number the user set for `variable` of the vehicle, if any (the last one).
-    fn vehicle_number(&self, variable: &str) -> Option<f64> {
-        self.vehicle_settings
-            .iter()
-            .rev()
-            .find(|(n, _)| n == variable)
-            .and_then(|(_, v)| match v {
-                Value::String(s) => s.trim().parse().ok(),
-                Value::Real(x) => Some(*x),
-                _ => None,
-            })
+        number(last(&self.estimator_settings, variable)?)
     }
 
     /// The vehicle's parameter set, as the vehicle FMU will read it: the file named by the
@@ -121,31 +100,35 @@ impl Fmus {
     /// The identification takes the simplified model's fixed parameters from it, and the
     /// resonance study its modes.
     pub fn vehicle_params(&self) -> Result<VehicleParams, String> {
-        let mut params = self.vehicle_file_params()?;
-        if let Some(c) = self.vehicle_number("conicity").filter(|c| *c > 0.0) {
+        let mut params = match last(&self.vehicle_settings, "vehicle") {
+            Some(Value::String(name)) => VehicleParams::named(name.trim(), None)?,
+            _ => VehicleParams::ml95(),
+        };
+        if let Some(c) = last(&self.vehicle_settings, "conicity")
+            .and_then(number)
+            .filter(|c| *c > 0.0)
+        {
             params.wheelset.conicity = c;
         }
         Ok(params)
     }
+}
 
-    fn vehicle_file_params(&self) -> Result<VehicleParams, String> {
-        let name = self
-            .vehicle_settings
-            .iter()
-            .rev()
-            .find(|(n, _)| n == "vehicle")
-            .and_then(|(_, v)| match v {
-                Value::String(s) => Some(s.trim().to_string()),
-                _ => None,
-            });
-        match name.as_deref() {
-            None | Some("ml95.toml" | "ml95") => Ok(VehicleParams::ml95()),
-            Some("manchester.toml" | "manchester") => Ok(VehicleParams::manchester()),
-            Some(p) if Path::new(p).is_absolute() => VehicleParams::load(Path::new(p)),
-            Some(other) => Err(format!(
-                "vehicle.vehicle={other}: not a vehicle file the vehicle FMU ships (ml95.toml, manchester.toml) nor an absolute path"
-            )),
-        }
+/// The last value `settings` give `variable`, the one a run applies.
+fn last<'a>(settings: &'a Settings, variable: &str) -> Option<&'a Value> {
+    settings
+        .iter()
+        .rev()
+        .find(|(n, _)| n == variable)
+        .map(|(_, v)| v)
+}
+
+/// A setting's value as a number, if it is one (the user's are text until a run types them).
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::String(s) => s.trim().parse().ok(),
+        Value::Real(x) => Some(*x),
+        _ => None,
     }
 }
 
