@@ -39,6 +39,7 @@
 use crate::filter::Mat4;
 use crate::model::Mat7;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Matrices read from a calibration file.
@@ -48,6 +49,9 @@ pub struct Calibration {
     pub step_size: f64,
     pub q: Mat7,
     pub r: Mat4,
+    /// The file's `[parameters]`: the simplified model Q and R were computed with (the FMU's
+    /// defaults at build time; at run time only compared with the FMU's parameters).
+    pub parameters: BTreeMap<String, f64>,
 }
 
 #[derive(Deserialize)]
@@ -57,9 +61,8 @@ struct File {
     step_size: Option<f64>,
     #[allow(dead_code)]
     speed: Option<f64>,
-    /// Read at build time (build.rs), not at run time.
-    #[allow(dead_code)]
-    parameters: Option<std::collections::BTreeMap<String, f64>>,
+    /// The FMU's defaults at build time (build.rs).
+    parameters: Option<BTreeMap<String, f64>>,
     noise: Option<Noise>,
 }
 
@@ -128,17 +131,18 @@ pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
 /// parameters it was made with. The FMU takes them as its defaults at build time only
 /// (build.rs); a master that points `calibration_file` at another file must set them as
 /// parameters too (the orchestrator's studies do).
-pub fn file_parameters(path: &Path) -> Result<std::collections::BTreeMap<String, f64>, String> {
+pub fn file_parameters(path: &Path) -> Result<BTreeMap<String, f64>, String> {
     let text = fmi_abi::resource::read_text(path, "calibration file", 1 << 20)?;
-    let file: File =
-        toml::from_str(&text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
-    Ok(file.parameters.unwrap_or_default())
+    Ok(file(&text, path)?.parameters.unwrap_or_default())
+}
+
+fn file(text: &str, path: &Path) -> Result<File, String> {
+    toml::from_str(text).map_err(|e| format!("calibration file {}: {e}", path.display()))
 }
 
 /// Parses a calibration file's text; `path` names it in messages.
 pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
-    let file: File =
-        toml::from_str(text).map_err(|e| format!("calibration file {}: {e}", path.display()))?;
+    let file = file(text, path)?;
     let status = file.status.unwrap_or_else(|| "unspecified".into());
     let (q, r) = file.noise.map_or((None, None), |n| (n.q, n.r));
     match (q, r) {
@@ -163,6 +167,7 @@ pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
                 step_size,
                 q,
                 r,
+                parameters: file.parameters.unwrap_or_default(),
             }))
         }
         _ => Err(format!(
@@ -173,10 +178,11 @@ pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn write(name: &str, text: &str) -> std::path::PathBuf {
+    /// `text` as `calibration.toml` in a directory of this process named `name`.
+    pub(crate) fn write(name: &str, text: &str) -> std::path::PathBuf {
         let dir =
             std::env::temp_dir().join(format!("fmu-estimator-cal-{}-{name}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

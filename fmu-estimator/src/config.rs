@@ -15,6 +15,7 @@ use crate::statespace::{BodyNoise, StateSpace};
 use fmi_abi::Values;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// A message for the FMU's logger (or the offline caller).
@@ -78,14 +79,14 @@ fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
     }
 }
 
-/// The parameters whose value in the calibration file at `path` (its `[parameters]`, the model
-/// its Q and R were computed with) differs from the FMU's current value, as `name = file (here
-/// current)`. The FMU reads only Q and R from the file at run time (the parameters are its
-/// build-time defaults), so Q and R from a file made for another vehicle would otherwise meet
-/// this build's model silently.
-pub fn parameter_mismatches(v: &Values, path: &Path) -> Result<Vec<String>, String> {
+/// The parameters whose value in a calibration file's `[parameters]` (the model its Q and R were
+/// computed with) differs from the FMU's current value, as `name = file (here current)`. The FMU
+/// reads only Q and R from the file at run time (the parameters are its build-time defaults),
+/// so Q and R from a file made for another vehicle would otherwise meet this build's model
+/// silently.
+pub fn parameter_mismatches(v: &Values, file: &BTreeMap<String, f64>) -> Vec<String> {
     let mut differ = vec![];
-    for (name, value) in calibration::file_parameters(path)? {
+    for (name, &value) in file {
         let Some(spec) = crate::fmu::VARIABLES
             .iter()
             .find(|s| s.name == name && s.base() == fmi_abi::variables::Base::Real)
@@ -97,7 +98,7 @@ pub fn parameter_mismatches(v: &Values, path: &Path) -> Result<Vec<String>, Stri
             differ.push(format!("{name} = {value} (here {here})"));
         }
     }
-    Ok(differ)
+    differ
 }
 
 impl Config {
@@ -141,7 +142,7 @@ impl Config {
                 Some(path) if path.exists() => match calibration::load(&path)? {
                     Some(c) => {
                         notes.push(Note::Info(format!("Q and R from {} ({})", path.display(), c.status)));
-                        let differ = parameter_mismatches(v, &path)?;
+                        let differ = parameter_mismatches(v, &c.parameters);
                         if !differ.is_empty() {
                             notes.push(Note::Warning(format!(
                                 "calibration file {} was made with other model parameters ({}): the FMU takes only Q and R from it at run time, so set those parameters to the file's values if it is meant for them",
@@ -260,9 +261,7 @@ mod tests {
     use super::*;
 
     fn warnings(calibration_text: &str) -> Vec<String> {
-        let dir = tempfile_dir();
-        let path = dir.join("calibration.toml");
-        std::fs::write(&path, calibration_text).unwrap();
+        let path = calibration::tests::write("config", calibration_text);
         let mut v = Values::from_table(crate::fmu::VARIABLES);
         v.string[vr::CALIBRATION_FILE as usize] = path.to_str().unwrap().into();
         let (_, notes) = Config::from_values(&v, None).unwrap();
@@ -273,16 +272,6 @@ mod tests {
                 Note::Info(_) => None,
             })
             .collect()
-    }
-
-    fn tempfile_dir() -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "fmu-estimator-config-{}-{:?}",
-            std::process::id(),
-            std::thread::current().id()
-        ));
-        std::fs::create_dir_all(&dir).unwrap();
-        dir
     }
 
     #[test]
