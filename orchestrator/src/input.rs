@@ -13,13 +13,20 @@ pub const CSV_LIMIT: u64 = 1 << 32;
 /// Limit for an SSP document (XML): 256 MiB.
 pub const XML_LIMIT: u64 = 1 << 28;
 
-/// The bytes of the regular file `path`, refused when it is not a regular file or holds more
-/// than `limit` bytes.
-pub fn read_bytes(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+/// The metadata of `path`, refused unless it is a regular file: checked before anything opens
+/// it (a FIFO would block, a device never end).
+pub fn regular_file(path: &Path) -> std::io::Result<std::fs::Metadata> {
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
         return Err(Error::new(ErrorKind::InvalidInput, "not a regular file"));
     }
+    Ok(meta)
+}
+
+/// The bytes of the regular file `path`, refused when it is not a regular file or holds more
+/// than `limit` bytes.
+pub fn read_bytes(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let meta = regular_file(path)?;
     let too_big = |len: u64| {
         Error::new(
             ErrorKind::InvalidData,

@@ -156,17 +156,10 @@ fn normalize(p: &Path) -> PathBuf {
 // Archives
 
 fn is_archive(path: &Path) -> Result<bool, SspError> {
-    // Before anything opens it: a FIFO or device would block or never end.
-    let io = |source| SspError::Io {
+    crate::input::regular_file(path).map_err(|source| SspError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    if !fs::metadata(path).map_err(io)?.is_file() {
-        return Err(io(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a regular file",
-        )));
-    }
+    })?;
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ssp"))
