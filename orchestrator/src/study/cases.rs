@@ -180,6 +180,19 @@ pub(crate) fn band_spreads(per_seed: &[BandMetrics]) -> Vec<(String, Spread)> {
         .collect()
 }
 
+/// The results of `items * per` jobs run item after item (each item with its `per` seeds or
+/// records), grouped per item; the first error if any.
+pub(crate) fn by_item<T>(
+    results: Vec<Result<T, String>>,
+    items: usize,
+    per: usize,
+) -> Result<Vec<Vec<T>>, String> {
+    let mut results = results.into_iter();
+    (0..items)
+        .map(|_| results.by_ref().take(per).collect())
+        .collect()
+}
+
 /// Mean and sample standard deviation.
 fn spread(values: &[f64]) -> (f64, f64) {
     let n = values.len() as f64;
@@ -249,13 +262,10 @@ pub fn run_cases(
         })
         .collect();
     let mut out = vec![];
-    for (ci, case) in cases.iter().enumerate() {
-        let per_seed: Vec<BandMetrics> = jobs
-            .iter()
-            .zip(&results)
-            .filter(|((c, _), _)| *c == ci)
-            .map(|(_, r)| r.clone())
-            .collect::<Result<_, _>>()?;
+    for (case, per_seed) in cases
+        .iter()
+        .zip(by_item(results, cases.len(), seeds.len())?)
+    {
         let bands = band_spreads(&per_seed);
         out.push(CaseResult {
             name: case.name.clone(),

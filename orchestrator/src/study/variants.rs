@@ -14,7 +14,7 @@
 //! accelerations of a regional train, 0.5 to 1.2 m/s²). The filters either follow the speed input
 //! (`design_speed = 0`) or keep the matrices of 20 m/s, as the paper's filter does.
 
-use super::cases::band_spreads;
+use super::cases::{band_spreads, by_item};
 use super::learned::{LearnedSmoother, Lookahead};
 use super::metrics::{BandMetrics, evaluate};
 use super::runs::{Fmus, STEP, Settings, SpeedProfile, seeded, vehicle_run_driven};
@@ -46,21 +46,22 @@ pub struct Record {
 impl Record {
     /// The first `n` samples.
     pub fn head(&self, n: usize) -> Record {
-        let n = n.min(self.samples.len());
-        Record {
-            samples: self.samples[..n].to_vec(),
-            distance: self.distance[..n].to_vec(),
-            alignment: self.alignment[..n].to_vec(),
-        }
+        self.part(0, n)
     }
 
     /// The record from sample `from` on.
     pub fn tail(&self, from: usize) -> Record {
-        let from = from.min(self.samples.len());
+        self.part(from, self.samples.len())
+    }
+
+    /// Samples `from..to`, both clamped to the record.
+    fn part(&self, from: usize, to: usize) -> Record {
+        let to = to.min(self.samples.len());
+        let from = from.min(to);
         Record {
-            samples: self.samples[from..].to_vec(),
-            distance: self.distance[from..].to_vec(),
-            alignment: self.alignment[from..].to_vec(),
+            samples: self.samples[from..to].to_vec(),
+            distance: self.distance[from..to].to_vec(),
+            alignment: self.alignment[from..to].to_vec(),
         }
     }
 }
@@ -283,19 +284,11 @@ pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantRe
         .par_iter()
         .map(|&(v, r)| evaluate_variant(&records[r], &variants[v], None))
         .collect();
-    variants
+    Ok(variants
         .iter()
-        .enumerate()
-        .map(|(vi, v)| {
-            let per_seed: Vec<BandMetrics> = jobs
-                .iter()
-                .zip(&metrics)
-                .filter(|((j, _), _)| *j == vi)
-                .map(|(_, m)| m.clone())
-                .collect::<Result<_, _>>()?;
-            Ok(summarize(v, per_seed))
-        })
-        .collect()
+        .zip(by_item(metrics, variants.len(), records.len())?)
+        .map(|(v, per_seed)| summarize(v, per_seed))
+        .collect())
 }
 
 /// Mean and spread over the seeds of one variant's metrics.
@@ -337,22 +330,18 @@ pub fn compare_learned(
         .map(|rec| smoother.evaluate(rec))
         .collect::<Result<_, String>>()?;
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
+    let grid = metres(smoother.grid());
     let name = match smoother.lookahead {
         Lookahead::Smoother => "learned FIR smoother".to_string(),
-        Lookahead::FixedLag(0) => format!(
-            "learned FIR, causal (no look-ahead, {} m grid)",
-            metres(smoother.grid())
-        ),
-        Lookahead::FixedLag(n) if smoother.grid() < 1.0 => format!(
-            "learned FIR, fixed lag of {} m ({} m grid)",
-            metres(n as f64 * smoother.grid()),
-            metres(smoother.grid())
-        ),
+        Lookahead::FixedLag(0) => format!("learned FIR, causal (no look-ahead, {grid} m grid)"),
         Lookahead::FixedLag(n) => {
-            format!(
-                "learned FIR, fixed lag of {} m",
-                metres(n as f64 * smoother.grid())
-            )
+            let lag = metres(n as f64 * smoother.grid());
+            let fine = if smoother.grid() < 1.0 {
+                format!(" ({grid} m grid)")
+            } else {
+                String::new()
+            };
+            format!("learned FIR, fixed lag of {lag} m{fine}")
         }
     };
     let smooth = smoother.lookahead == Lookahead::Smoother;
@@ -399,22 +388,20 @@ pub fn record_seeds(
 ) -> Result<Vec<Record>, String> {
     seeds
         .par_iter()
-        .map(|&s| match conditions {
-            Conditions::Standard => record(fmus, seeded(s), super::runs::STOP, None),
-            Conditions::NoVertical => {
-                let mut settings = seeded(s);
-                settings.push((
-                    "vertical_irregularity".into(),
-                    crate::system::Value::Boolean(false),
-                ));
-                record(fmus, settings, super::runs::STOP, None)
+        .map(|&s| {
+            use crate::system::Value;
+            let mut settings = seeded(s);
+            match conditions {
+                Conditions::Standard => {}
+                Conditions::NoVertical => {
+                    settings.push(("vertical_irregularity".into(), Value::Boolean(false)));
+                }
+                Conditions::KalkerHalf => settings.push(("kalker_scale".into(), Value::Real(0.5))),
+                Conditions::VariableSpeed => {
+                    return record(fmus, settings, PROFILE_STOP, Some(&profile));
+                }
             }
-            Conditions::VariableSpeed => record(fmus, seeded(s), PROFILE_STOP, Some(&profile)),
-            Conditions::KalkerHalf => {
-                let mut settings = seeded(s);
-                settings.push(("kalker_scale".into(), crate::system::Value::Real(0.5)));
-                record(fmus, settings, super::runs::STOP, None)
-            }
+            record(fmus, settings, super::runs::STOP, None)
         })
         .collect()
 }
