@@ -57,6 +57,9 @@ pub mod vr {
     pub const MAX_INTERNAL_STEP: u32 = 38;
     pub const MIN_SPEED: u32 = 39;
     pub const FORWARD_SPEED: u32 = 40;
+    pub const WS_ROLL_RATE: u32 = 41;
+    pub const WS_ROLL_RATE_TRUE: u32 = 42;
+    pub const SIGMA_ROLL_GYRO: u32 = 43;
     // Integer
     pub const TRACK_SEED: u32 = 0;
     pub const SPECTRUM: u32 = 1;
@@ -248,6 +251,20 @@ pub static VARIABLES: &[VarSpec] = &[
         "N",
         "Normal load on the leading wheelset's right wheel (static load at the start)",
     ),
+    VarSpec::real_output(
+        vr::WS_ROLL_RATE,
+        "ws_roll_rate",
+        "rad/s",
+        0.0,
+        "Roll gyroscope on the leading wheelset (rate of ws_roll, left side up positive), with noise",
+    ),
+    VarSpec::real_output(
+        vr::WS_ROLL_RATE_TRUE,
+        "ws_roll_rate_true",
+        "rad/s",
+        0.0,
+        "Leading wheelset roll rate, the time derivative of ws_roll (no noise)",
+    ),
     VarSpec::real_parameter(
         vr::CONICITY,
         "conicity",
@@ -317,7 +334,7 @@ pub static VARIABLES: &[VarSpec] = &[
         "sigma_gyro",
         "rad/s",
         0.0005,
-        "Noise sigma of the gyroscope (per sample)",
+        "Noise sigma of the yaw gyroscope (per sample)",
     )
     .min(0.0),
     VarSpec::real_parameter(
@@ -358,6 +375,14 @@ pub static VARIABLES: &[VarSpec] = &[
         "m/s",
         0.5,
         "Below this speed the vehicle stands still",
+    )
+    .min(0.0),
+    VarSpec::real_parameter(
+        vr::SIGMA_ROLL_GYRO,
+        "sigma_roll_gyro",
+        "rad/s",
+        0.0005,
+        "Noise sigma of the wheelset roll gyroscope (per sample; its own random stream from noise_seed)",
     )
     .min(0.0),
     VarSpec::integer_parameter(
@@ -472,6 +497,8 @@ impl RailVehicle {
             (vr::WHEEL_LOAD_LEFT, o.wheel_load_left),
             (vr::WHEEL_LOAD_RIGHT, o.wheel_load_right),
             (vr::FORWARD_SPEED, o.forward_speed),
+            (vr::WS_ROLL_RATE, o.ws_roll_rate),
+            (vr::WS_ROLL_RATE_TRUE, o.ws_roll_rate_clean),
         ] {
             r[i as usize] = x;
         }
@@ -571,6 +598,7 @@ pub fn build_simulation(
         enabled: boolean(vr::SENSOR_NOISE),
         sigma_acc: real(vr::SIGMA_ACC),
         sigma_gyro: real(vr::SIGMA_GYRO),
+        sigma_roll_gyro: real(vr::SIGMA_ROLL_GYRO),
     };
     Ok(Simulation::new(
         vehicle,

@@ -23,11 +23,31 @@
 //! - yaw gyroscope on the same wheelset: `psi_w'`;
 //! - bogie-frame accelerometer above the leading wheelset, at the frame's centre-of-gravity
 //!   height and `a` (semi-wheelbase) ahead of its centre: the specific force along the frame's
-//!   lateral axis, `y_b'' + a psi_b'' - z_s phi_b'' + g phi_b` with `z_s = 0`.
+//!   lateral axis, `y_b'' + a psi_b'' - z_s phi_b'' + g phi_b` with `z_s = 0`;
+//! - roll gyroscope on the leading wheelset: `phi_w'`, the time derivative of the `ws_roll`
+//!   output (same sign: left side rising is positive). The wheelset's roll is not a degree of
+//!   freedom but a function of the state and the track (see `dynamics`, "Contact-level
+//!   displacement"): with `c = alpha / l` and `k = 1 / (1 - r_0 c)`,
+//!   `phi_w = xi_cl(s) / (2 l) + c k (y - xi_al(s) + r_0 xi_cl(s) / (2 l))`,
+//!   `s` the wheelset's position (`s' = V`) and `y` its lateral displacement (`y' = ws_vy`, a
+//!   state). Differentiating along the motion, with `(.)_s` the derivative along the track,
+//!   `phi_w' = V xi_cl_s / (2 l) + c k (y' - V xi_al_s + r_0 V xi_cl_s / (2 l))`.
+//!   This is `Diagnostics::wheelset_roll_rate`, computed by the same code that computes the
+//!   roll (and used by the dynamics in the lateral creepage and the gyroscopic moment), so the
+//!   two outputs cannot drift apart. It is exact, not a finite difference: the track's
+//!   `_s` derivatives are those of its quintic Hermite interpolant (and of the run-in ramp's
+//!   product rule), not separate estimates. `V` is the speed held over the last step, so the
+//!   rate is the derivative from the left at the communication point (it jumps with the speed
+//!   input, as `forward_speed` does). Standing still (below `min_speed`) the state and `s`
+//!   are held, `ws_roll` does not change, and the rate is 0.
 //!
 //! Noise: independent Gaussian samples added at every communication point (one sample per
 //! output per step), from a xoshiro256++ generator seeded by `noise_seed`; its state is part of
-//! the FMU state, so restoring a state replays the same noise.
+//! the FMU state, so restoring a state replays the same noise. The roll gyroscope draws from a
+//! second generator, the first one jumped ahead by 2^128 draws (Vigna's `jump`): a stream of
+//! its own that never overlaps the first in any run, so adding it left the other sensors' noise
+//! (and every output that depends on it) bit for bit as it was, for every seed and whatever
+//! `sigma_roll_gyro` is. Both generators are part of the FMU state.
 
 use crate::dynamics::{Diagnostics, Dof, GRAVITY, Vehicle, WheelsetTrack, dof};
 use crate::track::{Irregularity, Track};
@@ -54,6 +74,37 @@ impl NoiseRng {
         };
         NoiseRng {
             s: [next(), next(), next(), next()],
+            spare: None,
+        }
+    }
+
+    /// The same generator advanced by 2^128 draws (the `jump` of Blackman and Vigna's reference
+    /// implementation): the start of a stream that does not overlap this one's next 2^128
+    /// draws. The spare normal deviate is not carried over.
+    pub fn jumped(&self) -> NoiseRng {
+        const JUMP: [u64; 4] = [
+            0x180e_c6d3_3cfd_0aba,
+            0xd5a6_1266_f0c9_392c,
+            0xa958_2618_e03f_c9aa,
+            0x39ab_dc45_29b1_661c,
+        ];
+        let mut walk = NoiseRng {
+            s: self.s,
+            spare: None,
+        };
+        let mut acc = [0u64; 4];
+        for word in JUMP {
+            for bit in 0..64 {
+                if word & (1u64 << bit) != 0 {
+                    for (a, s) in acc.iter_mut().zip(walk.s) {
+                        *a ^= s;
+                    }
+                }
+                walk.next_u64();
+            }
+        }
+        NoiseRng {
+            s: acc,
             spare: None,
         }
     }
@@ -98,6 +149,8 @@ pub struct SensorNoise {
     pub enabled: bool,
     pub sigma_acc: f64,
     pub sigma_gyro: f64,
+    /// Of the wheelset roll gyroscope, which has its own generator.
+    pub sigma_roll_gyro: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -147,6 +200,8 @@ pub struct Outputs {
     pub wheel_load_left: f64,
     pub wheel_load_right: f64,
     pub forward_speed: f64,
+    pub ws_roll_rate: f64,
+    pub ws_roll_rate_clean: f64,
 }
 
 /// The running simulation: everything here is part of an FMU state.
@@ -157,6 +212,8 @@ pub struct Simulation {
     pub config: SimConfig,
     pub noise: SensorNoise,
     pub rng: NoiseRng,
+    /// The roll gyroscope's generator: `rng` at the start, jumped by 2^128 draws.
+    pub roll_rng: NoiseRng,
     pub q: Dof,
     pub qd: Dof,
     /// Position of the leading wheelset along the track [m].
@@ -192,12 +249,14 @@ impl Simulation {
         noise: SensorNoise,
         noise_seed: u64,
     ) -> Simulation {
+        let rng = NoiseRng::new(noise_seed);
         let mut sim = Simulation {
             vehicle,
             track,
             config,
             noise,
-            rng: NoiseRng::new(noise_seed),
+            roll_rng: rng.jumped(),
+            rng,
             q: Dof::zeros(),
             qd: Dof::zeros(),
             s: 0.0,
@@ -303,11 +362,18 @@ impl Simulation {
         let ws_acc = acc[w] + GRAVITY * diag.wheelset_roll[0];
         let gyro = qd[w + 1];
         let frame_acc = acc[b + dof::Y] + a * acc[b + dof::YAW] + GRAVITY * q[b + dof::ROLL];
-        let (mut n1, mut n2, mut n3) = (0.0, 0.0, 0.0);
+        // See the module docs; standing, `diag` was evaluated at a stand-in speed.
+        let roll_rate = if v > 0.0 {
+            diag.wheelset_roll_rate[0]
+        } else {
+            0.0
+        };
+        let (mut n1, mut n2, mut n3, mut n4) = (0.0, 0.0, 0.0, 0.0);
         if noisy && self.noise.enabled {
             n1 = self.noise.sigma_acc * self.rng.normal();
             n2 = self.noise.sigma_gyro * self.rng.normal();
             n3 = self.noise.sigma_acc * self.rng.normal();
+            n4 = self.noise.sigma_roll_gyro * self.roll_rng.normal();
         }
         Outputs {
             ws_acc_y: ws_acc + n1,
@@ -336,6 +402,8 @@ impl Simulation {
             wheel_load_left: diag.wheel_loads[0][0],
             wheel_load_right: diag.wheel_loads[0][1],
             forward_speed: v,
+            ws_roll_rate: roll_rate + n4,
+            ws_roll_rate_clean: roll_rate,
         }
     }
 }
@@ -355,6 +423,50 @@ mod tests {
         assert!((var - 1.0).abs() < 0.01, "{var}");
         let tail = xs.iter().filter(|x| x.abs() > 1.96).count() as f64 / n as f64;
         assert!((tail - 0.05).abs() < 0.003, "{tail}");
+    }
+
+    /// The jump is the state transition raised to the power 2^128. xoshiro256's transition is
+    /// linear over GF(2), so its matrix (columns: the images of the 256 unit states) squared
+    /// 128 times gives an oracle independent of the jump polynomial's constants.
+    #[test]
+    fn the_jump_advances_by_two_to_the_128_draws() {
+        type State = [u64; 4];
+        let step = |s: State| {
+            let mut r = NoiseRng { s, spare: None };
+            r.next_u64();
+            r.s
+        };
+        let apply = |m: &[State], x: State| {
+            let mut y = [0u64; 4];
+            for (i, col) in m.iter().enumerate() {
+                if x[i / 64] >> (i % 64) & 1 == 1 {
+                    for w in 0..4 {
+                        y[w] ^= col[w];
+                    }
+                }
+            }
+            y
+        };
+        let mut m: Vec<State> = (0..256)
+            .map(|i| {
+                let mut e = [0u64; 4];
+                e[i / 64] = 1 << (i % 64);
+                step(e)
+            })
+            .collect();
+        for _ in 0..128 {
+            m = m.iter().map(|&col| apply(&m, col)).collect();
+        }
+        for seed in [0, 2, 101, u64::MAX] {
+            let r = NoiseRng::new(seed);
+            assert_eq!(r.jumped().s, apply(&m, r.s), "seed {seed}");
+            assert_ne!(r.jumped().s, r.s);
+        }
+        // And the two streams are uncorrelated normal deviates.
+        let (mut a, mut b) = (NoiseRng::new(2), NoiseRng::new(2).jumped());
+        let n = 100_000;
+        let c = (0..n).map(|_| a.normal() * b.normal()).sum::<f64>() / n as f64;
+        assert!(c.abs() < 5.0 / (n as f64).sqrt(), "{c}");
     }
 
     #[test]

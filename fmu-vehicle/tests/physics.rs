@@ -5,7 +5,7 @@ use fmu_vehicle::dynamics::{ContactOptions, GRAVITY, Vehicle};
 use fmu_vehicle::fmu::{RailVehicle, VARIABLES, build_simulation, vr};
 use fmu_vehicle::modal;
 use fmu_vehicle::params::VehicleParams;
-use fmu_vehicle::simulation::{Outputs, Simulation};
+use fmu_vehicle::simulation::{NoiseRng, Outputs, Simulation};
 
 /// A simulation built through the FMU's own parameter path, with `edit` applied to the values.
 fn simulation(edit: impl FnOnce(&mut Values)) -> Simulation {
@@ -418,4 +418,196 @@ fn creep_saturation_and_flange_contact_options() {
         flanged < 0.3 * free && flanged < 0.009 + 0.01,
         "the flange restrains it: {flanged}"
     );
+}
+
+/// The roll gyroscope's clean output is the time derivative of `ws_roll`, checked against the
+/// central difference of `ws_roll` on the standard irregular track (all irregularities on).
+///
+/// Tolerances. For a component of angular frequency `w` the central difference returns
+/// `sin(w h) / (w h)` times the derivative, a relative error below `(w h)^2 / 6`; the track's
+/// shortest wavelength (1 m) passes at 20 Hz at 20 m/s, so by Parseval the rms difference is
+/// at most `(2 pi 20 h)^2 / 6 = 2.6e-3` of the rate's rms (measured: 6e-4). Sharper: the
+/// difference must be the central difference's own leading error `h^2 f''' / 6`, which the
+/// rate's second difference estimates (`(r+ - 2 r + r-) / 6`); what is left comes from the
+/// next order, from the jumps of `f'''` at the track grid's nodes (its interpolant is C2) and
+/// from rounding, measured at 1.4e-3 of the difference (1e-8 rad/s rms, 1e-6 of the rate).
+/// A rate missing a term (the cone roll, say, 10 % of it) or with a wrong sign or speed
+/// factor would fail both bounds by orders of magnitude.
+#[test]
+fn ws_roll_rate_true_is_the_derivative_of_ws_roll() {
+    let (h, v, lambda_min) = (1e-3, 20.0, 1.0);
+    let mut sim = simulation(|v| v.boolean[vr::SENSOR_NOISE as usize] = false);
+    let out = run(&mut sim, 10.0, h, v);
+    let inner = 1..out.len() - 1;
+    let rate = |k: usize| out[k].ws_roll_rate_clean;
+    let fd = |k: usize| (out[k + 1].ws_roll - out[k - 1].ws_roll) / (2.0 * h);
+    let leading = |k: usize| (rate(k + 1) - 2.0 * rate(k) + rate(k - 1)) / 6.0;
+    let size = rms(inner.clone().map(rate));
+    let diff = rms(inner.clone().map(|k| fd(k) - rate(k)));
+    let rest = rms(inner.clone().map(|k| fd(k) - rate(k) - leading(k)));
+    let bound = (2.0 * std::f64::consts::PI * v / lambda_min * h).powi(2) / 6.0;
+    println!(
+        "ws_roll_rate_true rms {size:.3e} rad/s; central difference of ws_roll minus it: rms {diff:.3e} \
+         ({:.1e} relative, bound {bound:.1e}); less its leading error term: rms {rest:.3e}",
+        diff / size
+    );
+    assert!(size > 1e-3, "the run hardly rolls the wheelset: {size}");
+    assert!(diff < bound * size, "{diff} vs {}", bound * size);
+    assert!(rest < 0.02 * diff, "{rest} vs {diff}");
+}
+
+/// Standing still the state is held, so `ws_roll` does not change and its rate is 0 (the
+/// dynamics' roll rate at the stand-in speed must not leak out); moving again, the rate is
+/// the moving one.
+#[test]
+fn ws_roll_rate_true_is_zero_while_standing() {
+    let mut sim = simulation(|v| v.boolean[vr::SENSOR_NOISE as usize] = false);
+    let moving = run(&mut sim, 1.0, 1e-3, 20.0);
+    let standing = run(&mut sim, 0.2, 1e-3, 0.0);
+    let again = run(&mut sim, 0.2, 1e-3, 20.0);
+    let last = moving.last().unwrap();
+    assert!(last.ws_roll_rate_clean.abs() > 1e-4);
+    for o in &standing {
+        assert_eq!(o.ws_roll_rate_clean, 0.0);
+        assert_eq!(o.ws_roll, last.ws_roll);
+    }
+    assert!(again.iter().all(|o| o.ws_roll_rate_clean != 0.0));
+}
+
+/// The roll gyroscope's noise: exactly `ws_roll_rate - ws_roll_rate_true`, zero mean, the set
+/// sigma, independent of the yaw gyroscope's noise; nothing with `sensor_noise` off.
+#[test]
+fn roll_gyro_noise_has_the_configured_sigma_and_zero_mean() {
+    let sigma = 0.002;
+    let mut sim = simulation(|v| v.real[vr::SIGMA_ROLL_GYRO as usize] = sigma);
+    let out = run(&mut sim, 20.0, 1e-3, 20.0);
+    let n = out.len() as f64;
+    let noise: Vec<f64> = out
+        .iter()
+        .map(|o| o.ws_roll_rate - o.ws_roll_rate_clean)
+        .collect();
+    let mean = noise.iter().sum::<f64>() / n;
+    let sd = (noise.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let yaw: Vec<f64> = out
+        .iter()
+        .map(|o| (o.ws_yaw_rate - o.ws_yaw_rate_clean) / 0.0005)
+        .collect();
+    let corr = noise.iter().zip(&yaw).map(|(a, b)| a * b).sum::<f64>() / (n * sigma);
+    // 20 000 samples: the sample mean has standard error sigma / sqrt(n), the sample sd a
+    // relative one of 1 / sqrt(2 n) = 0.5 %, the correlation of independent streams 1 /
+    // sqrt(n); each bound is 5 standard errors.
+    println!(
+        "roll gyro noise: mean {mean:.2e}, sd {sd:.4e} (set {sigma}), correlation with the yaw gyro's {corr:.2e}"
+    );
+    assert!(mean.abs() < 5.0 * sigma / n.sqrt(), "{mean}");
+    assert!((sd / sigma - 1.0).abs() < 5.0 / (2.0 * n).sqrt(), "{sd}");
+    assert!(corr.abs() < 5.0 / n.sqrt(), "{corr}");
+
+    let mut quiet = simulation(|v| {
+        v.real[vr::SIGMA_ROLL_GYRO as usize] = sigma;
+        v.boolean[vr::SENSOR_NOISE as usize] = false;
+    });
+    for o in run(&mut quiet, 1.0, 1e-3, 20.0) {
+        assert_eq!(o.ws_roll_rate.to_bits(), o.ws_roll_rate_clean.to_bits());
+    }
+}
+
+/// The roll gyroscope draws from its own stream: every other output is bit for bit the same
+/// whatever `sigma_roll_gyro` is, and the three other sensors' noise is still exactly what it
+/// was before the roll gyroscope existed (three normal deviates per step, in their order, from
+/// the generator seeded by `noise_seed`), so records made before (the calibration file, the
+/// studies' tables) are unchanged. The second check is the one that would see the roll noise
+/// taken from the shared generator: that would draw it even at sigma 0.
+#[test]
+fn the_roll_gyro_noise_leaves_every_other_output_bit_identical() {
+    let record = |sigma: f64, seed: i32| {
+        let mut sim = simulation(|v| {
+            v.real[vr::SIGMA_ROLL_GYRO as usize] = sigma;
+            v.integer[vr::NOISE_SEED as usize] = seed;
+        });
+        let mut out = run(&mut sim, 1.0, 1e-3, 20.0);
+        out.extend(run(&mut sim, 0.1, 1e-3, 0.0));
+        out.extend(run(&mut sim, 1.0, 1e-3, 12.0));
+        out
+    };
+    // Debug prints every f64 so that it reads back to the same bits (and -0 as -0.0).
+    let others = |o: &Outputs| {
+        format!(
+            "{:?}",
+            Outputs {
+                ws_roll_rate: 0.0,
+                ..*o
+            }
+        )
+    };
+    for seed in [2, 7] {
+        let with = record(0.01, seed);
+        let mut shared = NoiseRng::new(seed as u64);
+        for o in &with {
+            let expected = [
+                o.ws_acc_y_clean + 0.01 * shared.normal(),
+                o.ws_yaw_rate_clean + 0.0005 * shared.normal(),
+                o.frame_acc_y_clean + 0.01 * shared.normal(),
+            ];
+            let got = [o.ws_acc_y, o.ws_yaw_rate, o.frame_acc_y];
+            assert_eq!(
+                got.map(f64::to_bits),
+                expected.map(f64::to_bits),
+                "seed {seed}"
+            );
+        }
+        let without = record(0.0, seed);
+        for o in &without {
+            assert_eq!(o.ws_roll_rate.to_bits(), o.ws_roll_rate_clean.to_bits());
+        }
+        for sigma in [0.0005, 0.01] {
+            let with = record(sigma, seed);
+            assert!(with.iter().any(|o| o.ws_roll_rate != o.ws_roll_rate_clean));
+            for (a, b) in without.iter().zip(&with) {
+                assert_eq!(others(a), others(b), "seed {seed}, sigma_roll_gyro {sigma}");
+            }
+        }
+    }
+}
+
+/// A saved FMU state, restored or serialized and read into another instance, replays every
+/// output bit for bit, the roll gyroscope's noise (its own generator) included.
+#[test]
+fn a_restored_state_replays_the_roll_gyro_noise() {
+    use fmi_abi::instance::{Instance, deserialize, serialize};
+    let all: Vec<u32> = (0..Values::from_table(VARIABLES).real.len() as u32).collect();
+    let start = |track_seed: i32| {
+        let mut i = Instance::<RailVehicle>::new(&InstantiateContext::default(), Logger::silent())
+            .map_err(|(_, e)| e)
+            .unwrap();
+        i.set_integer(&[vr::TRACK_SEED], &[track_seed]).unwrap();
+        i.set_real(&[vr::SIGMA_ROLL_GYRO], &[0.003]).unwrap();
+        i.setup_experiment(0.0, None).unwrap();
+        i.enter_initialization_mode().unwrap();
+        i.exit_initialization_mode().unwrap();
+        i
+    };
+    let steps = |i: &mut Instance<RailVehicle>, t0: f64, n: usize| {
+        let mut rows = vec![];
+        for k in 0..n {
+            i.do_step(t0 + k as f64 * 1e-3, 1e-3).unwrap();
+            let mut row = vec![0.0; all.len()];
+            i.get_real(&all, &mut row).unwrap();
+            rows.push(row.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+        }
+        rows
+    };
+    let mut a = start(1);
+    steps(&mut a, 0.0, 1000);
+    let saved = a.snapshot();
+    let blob = serialize(&saved).unwrap();
+    let first = steps(&mut a, 1.0, 300);
+    let (roll, roll_true) = (vr::WS_ROLL_RATE as usize, vr::WS_ROLL_RATE_TRUE as usize);
+    assert!(first.iter().all(|r| r[roll] != r[roll_true]));
+    a.restore(&saved).unwrap();
+    assert_eq!(steps(&mut a, 1.0, 300), first);
+    let mut b = start(9);
+    b.restore(&deserialize::<RailVehicle>(&blob).unwrap())
+        .unwrap();
+    assert_eq!(steps(&mut b, 1.0, 300), first);
 }
