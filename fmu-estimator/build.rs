@@ -62,6 +62,13 @@ fn main() {
         code.push_str(&format!("    ({k:?}, {v:?}),\n"));
     }
     code.push_str("];\n");
-    let out = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it")).join("calibrated.rs");
-    std::fs::write(&out, code).expect("writing calibrated.rs");
+    let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
+    std::fs::write(out_dir.join("calibrated.rs"), code).expect("writing calibrated.rs");
+
+    // The tap bank is built into the library for offline use. Before the first `orchestrator
+    // study taps` there is none: an empty file, which `learned::shipped` reports as missing.
+    let taps = manifest.join("resources/learned.taps");
+    println!("cargo::rerun-if-changed={}", taps.display());
+    let bytes = std::fs::read(&taps).unwrap_or_default();
+    std::fs::write(out_dir.join("learned.taps"), bytes).expect("writing learned.taps");
 }

@@ -13,6 +13,18 @@ use std::path::{Path, PathBuf};
 /// files above `limit` bytes. Messages start with the file, then say what it was meant to be
 /// (`what`: "track file", "calibration file").
 pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String, String> {
+    let bytes = read_bytes(path, what, limit)?;
+    String::from_utf8(bytes).map_err(|e| {
+        format!(
+            "{}: cannot read the {what}: stream did not contain valid UTF-8 (byte {})",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        )
+    })
+}
+
+/// [`read_text`] for binary files: the same refusals, the bytes as they are.
+pub fn read_bytes(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>, String> {
     let shown = path.display();
     let cannot = |e: std::io::Error| format!("{shown}: cannot read the {what}: {e}");
     let meta = std::fs::metadata(path).map_err(cannot)?;
@@ -27,9 +39,14 @@ pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String, String> 
     }
     let file = std::fs::File::open(path).map_err(cannot)?;
     // The length can change after the check (a growing file).
-    read_limited(file, limit)
-        .map_err(cannot)?
-        .ok_or_else(|| format!("{shown}: the {what} grew beyond {limit} bytes while being read"))
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(cannot)?;
+    if bytes.len() as u64 > limit {
+        return Err(format!(
+            "{shown}: the {what} grew beyond {limit} bytes while being read"
+        ));
+    }
+    Ok(bytes)
 }
 
 /// Reads `reader` to its end as UTF-8 text, but never more than `limit` bytes: `Ok(None)` when

@@ -11,6 +11,7 @@ use crate::engine::Skip;
 use crate::filter::Vec4;
 use crate::params::Params;
 use crate::prior::Spectrum;
+use crate::learned::{Bank, Choice, Learned};
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -63,18 +64,28 @@ pub mod vr {
     pub const PRIOR_SIGMA_XI: u32 = 43;
     pub const EST_XI_RATE: u32 = 44;
     pub const DESIGN_SPEED: u32 = 45;
+    pub const WS_ROLL_RATE: u32 = 46;
+    pub const LAG: u32 = 47;
+    pub const ALIGNMENT_LAGGED: u32 = 48;
+    pub const ALIGNMENT_LAGGED_STD: u32 = 49;
+    pub const DISTANCE_LAGGED: u32 = 50;
+    pub const ALIGNMENT_KALMAN: u32 = 51;
     // Integer
     pub const DISCRETIZATION: u32 = 0;
     pub const SKIPPED_UPDATES: u32 = 1;
     pub const REBUILDS: u32 = 2;
     pub const ALIGNMENT_MODEL: u32 = 3;
     pub const GAIN: u32 = 4;
+    pub const ESTIMATOR: u32 = 5;
+    pub const ACTIVE_ESTIMATOR: u32 = 6;
     // Boolean
     pub const USE_CALIBRATION_FILE: u32 = 0;
     pub const UPDATED: u32 = 1;
     pub const P0_STATIONARY: u32 = 2;
+    pub const USE_ROLL_RATE: u32 = 3;
     // String
     pub const CALIBRATION_FILE: u32 = 0;
+    pub const TAP_FILE: u32 = 1;
 }
 
 const P: Params = Params::DEFAULTS;
@@ -136,6 +147,16 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
     VarSpec::boolean_parameter(vr::P0_STATIONARY, "p0_stationary", true, "Start the time-varying filter from the stationary covariance at the first step's speed (no start-up transient); false: from p0_xi and typical body amplitudes, as the paper"),
     VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
+    VarSpec::real_input(vr::WS_ROLL_RATE, "ws_roll_rate", "rad/s", 0.0, "Wheelset roll angular velocity (gyroscope), optional: read only when use_roll_rate is true"),
+    VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
+    VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
+    VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
+    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute"),
+    VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; the Kalman estimate while the learned one is not available)"),
+    VarSpec::real_output(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", 0.0, "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
+    VarSpec::real_output(vr::DISTANCE_LAGGED, "distance_lagged", "m", 0.0, "The position alignment_lagged is for: distance - lag"),
+    VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
+    VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute"),
 ];
 
@@ -149,6 +170,12 @@ pub struct Estimator {
     /// `> 0`: the speed the filter's matrices are built for, whatever the input says.
     design_speed: f64,
     holding: bool,
+    /// The learned filter (estimator 2).
+    learned: Option<Learned>,
+    /// Whether the last step's speed was outside the taps' range (for the warning on entry).
+    outside: bool,
+    /// The step size warned about, if any (once).
+    step_warned: bool,
 }
 
 impl Estimator {
@@ -156,9 +183,29 @@ impl Estimator {
         let Some(core) = &self.core else { return };
         let (xi, std) = core.alignment();
         let (body, xi_rate) = core.states();
+        let distance = v.real[vr::DISTANCE as usize];
         let o = &mut v.real;
-        o[vr::ALIGNMENT as usize] = xi;
-        o[vr::ALIGNMENT_STD as usize] = std;
+        o[vr::ALIGNMENT_KALMAN as usize] = xi;
+        match &self.learned {
+            Some(l) => {
+                let e = l.estimate(distance, (xi, std));
+                o[vr::ALIGNMENT as usize] = e.alignment;
+                o[vr::ALIGNMENT_STD as usize] = e.std;
+                o[vr::ALIGNMENT_LAGGED as usize] = e.lagged;
+                o[vr::ALIGNMENT_LAGGED_STD as usize] = e.lagged_std;
+                o[vr::DISTANCE_LAGGED as usize] = distance - l.lag();
+                v.integer[vr::ACTIVE_ESTIMATOR as usize] = e.active;
+            }
+            None => {
+                o[vr::ALIGNMENT as usize] = xi;
+                o[vr::ALIGNMENT_STD as usize] = std;
+                o[vr::ALIGNMENT_LAGGED as usize] = xi;
+                o[vr::ALIGNMENT_LAGGED_STD as usize] = std;
+                o[vr::DISTANCE_LAGGED as usize] = distance;
+                v.integer[vr::ACTIVE_ESTIMATOR as usize] = crate::learned::ACTIVE_PAPER;
+            }
+        }
+        let o = &mut v.real;
         for (k, r) in [
             vr::EST_Y,
             vr::EST_PSI,
@@ -202,6 +249,9 @@ impl Model for Estimator {
             min_speed: 0.5,
             design_speed: 0.0,
             holding: false,
+            learned: None,
+            outside: false,
+            step_warned: false,
         })
     }
 
@@ -229,8 +279,11 @@ impl Model for Estimator {
         }
         self.min_speed = config.min_speed;
         self.design_speed = config.design_speed;
+        self.learned = learned_from_values(v, self.resources.as_deref(), log)?;
         self.core = Some(core);
         self.holding = false;
+        self.outside = false;
+        self.step_warned = false;
         self.write_outputs(v);
         Ok(())
     }
@@ -270,6 +323,15 @@ impl Model for Estimator {
             0.0,
         );
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
+        if let Some(l) = self.learned.as_mut() {
+            if !self.step_warned && (h - l.sample_step()).abs() > 0.01 * l.sample_step() {
+                log.warning(&format!(
+                    "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",
+                    l.sample_step()
+                ));
+                self.step_warned = true;
+            }
+        }
         let filter_speed = if self.design_speed > 0.0 {
             self.design_speed
         } else {
@@ -301,9 +363,83 @@ impl Model for Estimator {
             }
         };
         v.boolean[vr::UPDATED as usize] = updated;
+        if let Some(l) = self.learned.as_mut() {
+            let x = [
+                z[0],
+                z[1],
+                z[2],
+                v.real[vr::WS_ROLL_RATE as usize],
+                core.alignment().0,
+            ];
+            l.step(v.real[vr::DISTANCE as usize], speed, &x);
+            let (lo, hi) = l.speed_range();
+            let outside = !(speed >= lo && speed <= hi);
+            if outside && !self.outside {
+                log.warning(&format!(
+                    "speed {speed} m/s is outside the learned taps' range ({lo}-{hi} m/s): 'alignment' is the Kalman filter's (active_estimator = 1) until it is back inside"
+                ));
+            }
+            self.outside = outside;
+        }
         self.write_outputs(v);
         Ok(outcome)
     }
+}
+
+/// The learned filter the parameters ask for (`estimator` 2), from `tap_file` (in the resources
+/// directory unless absolute; the bank built into the library when there is no resources
+/// directory, as offline).
+pub fn learned_from_values(
+    v: &Values,
+    resources: Option<&std::path::Path>,
+    log: &Logger,
+) -> Result<Option<Learned>, String> {
+    match v.integer[vr::ESTIMATOR as usize] {
+        1 => return Ok(None),
+        2 => {}
+        e => return Err(format!("parameter 'estimator' = {e}: 1 (the paper's filter) or 2 (learned)")),
+    }
+    let lag = v.real[vr::LAG as usize];
+    if !(lag >= 0.0 && lag.is_finite()) {
+        return Err(format!("parameter 'lag' = {lag} m must be 0 (off) or a positive lag"));
+    }
+    let name = v.string[vr::TAP_FILE as usize].trim().to_string();
+    let bank = match resources {
+        _ if std::path::Path::new(&name).is_absolute() => Bank::load(std::path::Path::new(&name))?,
+        Some(dir) => Bank::load(&dir.join(&name))?,
+        None if name == "learned.taps" => crate::learned::shipped()?,
+        None => {
+            return Err(format!(
+                "tap_file '{name}' is relative and the FMU has no resources directory: give an absolute path"
+            ));
+        }
+    };
+    let choice = Choice {
+        roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
+        lag,
+    };
+    let learned = Learned::new(&bank, choice).map_err(|e| format!("tap_file '{name}': {e}"))?;
+    let own = [
+        (v.integer[vr::ALIGNMENT_MODEL as usize] != 1, "alignment_model is not 1"),
+        (v.integer[vr::GAIN as usize] != 1, "gain is not 1"),
+        (!v.boolean[vr::USE_CALIBRATION_FILE as usize], "use_calibration_file is false"),
+        (v.real[vr::DESIGN_SPEED as usize] != 0.0, "design_speed is set"),
+    ];
+    let differ: Vec<&str> = own.iter().filter(|(d, _)| *d).map(|(_, m)| *m).collect();
+    if !differ.is_empty() {
+        log.warning(&format!(
+            "the learned filter's taps were fitted with the Kalman filter at its defaults ({}); here {}: its Kalman channel differs from the one it was fitted on",
+            bank.provenance.partner,
+            differ.join(", ")
+        ));
+    }
+    let (lo, hi) = learned.speed_range();
+    log.info(&format!(
+        "learned filter from {name}: {} sensors, {lo}-{hi} m/s, lag {} m",
+        if choice.roll_rate { 4 } else { 3 },
+        learned.lag()
+    ));
+    Ok(Some(learned))
 }
 
 #[cfg(test)]

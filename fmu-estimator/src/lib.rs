@@ -22,6 +22,7 @@ pub mod core;
 pub mod discretize;
 pub mod engine;
 pub mod filter;
+pub mod learned;
 pub mod fmu;
 pub mod model;
 pub mod observability;

@@ -12,17 +12,21 @@ use crate::config::{Config, Note};
 use crate::core::Core;
 use crate::filter::Vec4;
 use crate::fmu::{VARIABLES, vr};
+use crate::learned::{Estimate, Learned};
 use fmi_abi::Values;
 use fmi_abi::variables::Start;
 use std::path::Path;
 
-/// One recorded step: the speed and the three sensor samples at its end.
+/// One recorded step: the speed and the sensor samples at its end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     pub speed: f64,
     pub ws_acc_y: f64,
     pub ws_yaw_rate: f64,
     pub frame_acc_y: f64,
+    /// The wheelset roll-rate gyroscope (0 when the record has none; only the learned filter's
+    /// four-sensor taps read it).
+    pub ws_roll_rate: f64,
 }
 
 impl Sample {
@@ -44,8 +48,18 @@ impl Sample {
                 ws_acc_y: ws_acc_y[k],
                 ws_yaw_rate: ws_yaw_rate[k],
                 frame_acc_y: frame_acc_y[k],
+                ws_roll_rate: 0.0,
             })
             .collect()
+    }
+
+    /// These samples with the roll-rate gyroscope's column.
+    pub fn with_roll_rate(mut samples: Vec<Sample>, ws_roll_rate: &[f64]) -> Vec<Sample> {
+        debug_assert_eq!(samples.len(), ws_roll_rate.len());
+        for (s, r) in samples.iter_mut().zip(ws_roll_rate) {
+            s.ws_roll_rate = *r;
+        }
+        samples
     }
 }
 
@@ -60,6 +74,9 @@ pub struct Processed {
     pub smoothed: Option<Vec<(f64, f64)>>,
     /// Samples whose measurement update was skipped (non-finite values).
     pub skipped: usize,
+    /// The FMU's outputs with the learned filter (when one is given): `alignment`,
+    /// `alignment_lagged` and their standard deviations, `active_estimator`.
+    pub learned: Option<Vec<Estimate>>,
 }
 
 /// The FMU's parameter values with `overrides` (FMI name, value as text) applied, refusing
@@ -120,13 +137,34 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
     Ok((config, notes))
 }
 
-/// Runs the filter (and the smoother, if `smooth`) over `samples` taken every `h` seconds.
+/// The learned filter `values` ask for (`estimator` 2), as the FMU builds it, with the tap bank
+/// built into the library unless `tap_file` is absolute.
+pub fn learned(values: &Values) -> Result<Option<Learned>, String> {
+    crate::fmu::learned_from_values(values, None, &fmi_abi::Logger::silent())
+}
+
+/// Runs the Kalman filter (and the smoother, if `smooth`) over `samples` taken every `h`
+/// seconds; the learned filter is not run (see [`process_learned`]).
 pub fn process(
     config: &Config,
     h: f64,
     samples: &[Sample],
     smooth: bool,
 ) -> Result<Processed, String> {
+    process_learned(config, None, h, samples, smooth)
+}
+
+/// [`process`] with the learned filter `learned` (a fresh one, as the FMU builds at
+/// initialization) stepping beside the Kalman filter, as the FMU does.
+pub fn process_learned(
+    config: &Config,
+    learned: Option<Learned>,
+    h: f64,
+    samples: &[Sample],
+    smooth: bool,
+) -> Result<Processed, String> {
+    let mut learned = learned;
+    let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(samples.len()));
     if !(h > 0.0 && h.is_finite()) {
         return Err(format!("step {h} s must be a positive number"));
     }
@@ -155,11 +193,18 @@ pub fn process(
                 out.skipped += 1;
             }
             steps += 1;
+            if let Some(l) = learned.as_mut() {
+                l.step(distance, s.speed, &crate::learned::channels(s, core.alignment().0));
+            }
         }
         step_of.push(steps.checked_sub(1));
         out.distance.push(distance);
         out.filtered.push(core.alignment());
+        if let (Some(l), Some(e)) = (&learned, estimates.as_mut()) {
+            e.push(l.estimate(distance, core.alignment()));
+        }
     }
+    out.learned = estimates;
     if smooth {
         let smoothed = core.smoothed_alignment();
         out.smoothed = Some(
@@ -185,6 +230,7 @@ mod tests {
                 ws_acc_y: 0.3 * (k as f64 * 0.05).sin(),
                 ws_yaw_rate: 0.01 * (k as f64 * 0.03).cos(),
                 frame_acc_y: 0.05 * (k as f64 * 0.02).sin(),
+                ws_roll_rate: 0.0,
             })
             .collect()
     }
@@ -198,6 +244,7 @@ mod tests {
                 ("use_calibration_file".to_string(), "false".to_string()),
                 ("alignment_model".to_string(), model.to_string()),
                 ("gain".to_string(), gain.to_string()),
+                ("estimator".to_string(), "1".to_string()),
             ];
             let values = settings(&overrides).unwrap();
             let (config, _) = config(&values, None).unwrap();
@@ -215,8 +262,8 @@ mod tests {
             inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false])
                 .unwrap();
             inst.set_integer(
-                &[vr::ALIGNMENT_MODEL, vr::GAIN],
-                &[model.parse().unwrap(), gain.parse().unwrap()],
+                &[vr::ALIGNMENT_MODEL, vr::GAIN, vr::ESTIMATOR],
+                &[model.parse().unwrap(), gain.parse().unwrap(), 1],
             )
             .unwrap();
             inst.setup_experiment(0.0, None).unwrap();
@@ -241,6 +288,88 @@ mod tests {
                 );
                 assert_eq!(o[2], offline.distance[k]);
             }
+        }
+    }
+
+    /// With the learned filter (the default), the offline outputs are the FMU's too, bit for
+    /// bit: alignment, its std, the lagged estimate and which estimator is active, under a
+    /// speed that rises through the taps' lower bound.
+    #[test]
+    fn offline_learned_filtering_equals_the_fmu() {
+        // Without resources the FMU has no calibration file: the diagonal noise model on both.
+        let values = settings(&[("use_calibration_file".into(), "false".into())]).unwrap();
+        let (config, _) = config(&values, None).unwrap();
+        let speed = |k: usize| 3.0 + 0.002 * k as f64;
+        let recorded = samples(6000, speed);
+        let offline = process_learned(&config, learned(&values).unwrap(), 1e-3, &recorded, false)
+            .unwrap();
+        let est = offline.learned.unwrap();
+        assert!(est.iter().any(|e| e.active == crate::learned::ACTIVE_LEARNED));
+        assert!(est.iter().any(|e| e.active == crate::learned::ACTIVE_PAPER));
+        let ctx = InstantiateContext {
+            instance_name: "t".into(),
+            resources: None,
+        };
+        let mut inst = Instance::<crate::Estimator>::new(&ctx, Logger::silent())
+            .map_err(|(_, e)| e)
+            .unwrap();
+        inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false]).unwrap();
+        inst.setup_experiment(0.0, None).unwrap();
+        inst.enter_initialization_mode().unwrap();
+        inst.exit_initialization_mode().unwrap();
+        let mut t = 0.0;
+        for (k, s) in recorded.iter().enumerate() {
+            inst.set_real(
+                &[vr::SPEED, vr::WS_ACC_Y, vr::WS_YAW_RATE, vr::FRAME_ACC_Y],
+                &[s.speed, s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y],
+            )
+            .unwrap();
+            inst.do_step(t, 1e-3).unwrap();
+            t += 1e-3;
+            let mut o = [0.0; 4];
+            inst.get_real(
+                &[vr::ALIGNMENT, vr::ALIGNMENT_STD, vr::ALIGNMENT_LAGGED, vr::ALIGNMENT_LAGGED_STD],
+                &mut o,
+            )
+            .unwrap();
+            let mut active = [0];
+            inst.get_integer(&[vr::ACTIVE_ESTIMATOR], &mut active).unwrap();
+            let e = est[k];
+            assert_eq!(o, [e.alignment, e.std, e.lagged, e.lagged_std], "step {k}");
+            assert_eq!(active[0], e.active, "step {k}");
+        }
+    }
+
+    /// Oracle: causality. Cutting the record at sample `k` (here: changing every sample from
+    /// `k` on) leaves every output before `k` unchanged, the learned filter's causal estimate
+    /// and its fixed-lag estimate alike, for both sensor sets.
+    #[test]
+    fn the_learned_outputs_read_no_later_sample() {
+        for roll in ["false", "true"] {
+            let values = settings(&[("use_roll_rate".into(), roll.into())]).unwrap();
+            let (config, _) = config(&values, None).unwrap();
+            let recorded: Vec<Sample> = samples(8000, |_| 20.0)
+                .into_iter()
+                .enumerate()
+                .map(|(k, s)| Sample { ws_roll_rate: 0.02 * (k as f64 * 0.07).sin(), ..s })
+                .collect();
+            let run = |r: &[Sample]| {
+                process_learned(&config, learned(&values).unwrap(), 1e-3, r, false)
+                    .unwrap()
+                    .learned
+                    .unwrap()
+            };
+            let before = run(&recorded);
+            let k = 6000;
+            let mut cut = recorded.clone();
+            for s in &mut cut[k..] {
+                s.ws_acc_y += 1.0;
+                s.ws_roll_rate -= 0.1;
+            }
+            let after = run(&cut);
+            assert_eq!(before[..k], after[..k], "roll rate {roll}");
+            assert!(before[k..].iter().zip(&after[k..]).any(|(a, b)| a != b));
+            assert!(before[k - 1].active == crate::learned::ACTIVE_LEARNED);
         }
     }
 

@@ -113,6 +113,39 @@ enum StudyCommand {
     /// Fit the learned FIR smoother on one track seed and save it (JSON) for `orchestrator
     /// smooth --learned`: taps from the run after its first 20 s, the split chosen on those.
     Learn(LearnArgs),
+    /// Fit the estimator FMU's learned filter (the tap bank, resources/learned.taps) in the
+    /// metric's bands: every speed, with and without the roll-rate gyroscope, causal and with
+    /// the fixed lags; ridge chosen on validation seeds (rebuild the FMU afterwards: cargo
+    /// xtask fmu).
+    Taps(TapsArgs),
+}
+
+/// `study taps`' options.
+#[derive(Args, Clone)]
+struct TapsArgs {
+    #[command(flatten)]
+    fmus: StandardFmus,
+    /// Speeds of the bank [m/s].
+    #[arg(long, value_delimiter = ',', default_value = "5,10,15,20,25,30")]
+    speeds: Vec<f64>,
+    /// Kalker-coefficient scales of the training runs (one run each).
+    #[arg(long, value_delimiter = ',', default_value = "1,0.5")]
+    kalker_scales: Vec<f64>,
+    /// Lags of the fixed-lag entries [m].
+    #[arg(long, value_delimiter = ',', default_value = "10")]
+    lags: Vec<f64>,
+    /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).
+    #[arg(long)]
+    no_roll_rate: bool,
+    /// Track seed of the training runs.
+    #[arg(long, default_value_t = CALIBRATION_SEED)]
+    seed: u32,
+    /// Track seeds the ridge is chosen on (neither the training seed nor an evaluation seed).
+    #[arg(long, value_delimiter = ',', default_value = "102,103,104,105,106")]
+    validation_seeds: Vec<u32>,
+    /// The file to write.
+    #[arg(long, default_value = "fmu-estimator/resources/learned.taps")]
+    out: PathBuf,
 }
 
 /// `study learn`'s options.
@@ -393,14 +426,26 @@ fn standard_case_metrics(results: &Path) -> Result<(), RunError> {
             return Ok(());
         }
     };
+    let lagged = match standard::evaluate_lagged(&cols) {
+        Some(Ok(l)) => Some(l),
+        Some(Err(e)) => {
+            eprintln!("no accuracy metrics for the lagged output: {e}");
+            None
+        }
+        None => None,
+    };
     let path = results.with_file_name("metrics.json");
-    std::fs::write(&path, standard::metrics_json(&m))
+    std::fs::write(&path, standard::metrics_json(&m, lagged.as_ref()))
         .map_err(|e| RunError::Io(format!("cannot write {}: {e}", path.display())))?;
     println!(
-        "Alignment estimate against the truth (EN 13848 bands; {}):",
+        "Alignment estimate against the truth (EN 13848 bands, this run's track only; {}):",
         path.display()
     );
     print!("{}", standard::table(&m));
+    if let Some(l) = &lagged {
+        println!("Fixed-lag output alignment_lagged at distance_lagged:");
+        print!("{}", standard::table(l));
+    }
     Ok(())
 }
 
@@ -575,6 +620,7 @@ fn study(what: StudyCommand) -> Result<(), RunError> {
         StudyCommand::All(a) => (a, vec!["standard", "robustness", "resonance"]),
         StudyCommand::Variants(a) => return study_variants(&a),
         StudyCommand::Learn(a) => return study_learn(&a),
+        StudyCommand::Taps(a) => return study_taps(&a),
     };
     let (a, groups) = args;
     if a.seeds.contains(&a.calibration_seed) {
@@ -801,7 +847,23 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         variants::record_seeds(&fmus, &a.seeds, Conditions::VariableSpeed).map_err(cfg)?;
     let at_variable =
         variants::compare(&variable, &variants::speed_variants(&tuned)).map_err(cfg)?;
-    let mut md = String::from("# Beyond the paper: estimator variants\n\n");
+    // The estimator FMU's learned filter (its default) against the paper's filter, as the FMU
+    // computes them (the built-in tap bank), under the conditions the taps must hold in.
+    let three_quarters =
+        variants::record_seeds(&fmus, &a.seeds, Conditions::KalkerThreeQuarters).map_err(cfg)?;
+    let fmu_rows = variants::learned_variants();
+    let fmu_tables: Vec<(&str, &str, Vec<variants::VariantResult>)> = vec![
+        ("standard", "Standard case (20 m/s, 20 s)", variants::compare(&constant, &fmu_rows).map_err(cfg)?),
+        ("kalker_75", "Kalker coefficients at 75 % in the vehicle (between the taps' training conditions)", variants::compare(&three_quarters, &fmu_rows).map_err(cfg)?),
+        ("kalker_50", "Kalker coefficients at 50 % in the vehicle", variants::compare(&kalker, &fmu_rows).map_err(cfg)?),
+        ("variable_speed", "Variable speed (0 -> 20 -> 10 m/s, 50 s; the learned filter blends its taps by speed, below 5 m/s the paper's filter)", variants::compare(&variable, &fmu_rows).map_err(cfg)?),
+    ];
+    let mut md = String::from("# Beyond the paper: estimator variants\n\n## The estimator FMU: learned filter (default) and the paper's filter\n\n");
+    for (_, title, rows) in &fmu_tables {
+        md.push_str(&variants::markdown(title, &a.seeds, rows));
+        md.push('\n');
+    }
+    md.push_str("## Options of the Kalman filter and the earlier learned FIR\n\n");
     md.push_str(&variants::markdown(
         "Standard case (20 m/s, 20 s)",
         &a.seeds,
@@ -835,6 +897,7 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         "no_vertical_irregularity": at_flat,
         "kalker_half": at_kalker,
         "variable_speed": at_variable,
+        "estimator_fmu": fmu_tables.iter().map(|(k, _, r)| (k.to_string(), serde_json::to_value(r).unwrap_or_default())).collect::<serde_json::Map<_, _>>(),
     });
     for (name, text) in [
         ("variants.md", md),
@@ -912,6 +975,46 @@ fn study_learn(a: &LearnArgs) -> Result<(), RunError> {
         l.partner.name,
         STOP,
         out.display()
+    );
+    Ok(())
+}
+
+fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
+    use orchestrator::study::learned::taps::{Options, fit};
+    let mut o = Options::shipped();
+    o.speeds = a.speeds.clone();
+    o.kalker_scales = a.kalker_scales.clone();
+    o.lags = a.lags.clone();
+    o.roll_rate = !a.no_roll_rate;
+    o.training_seed = a.seed;
+    o.validation_seeds = a.validation_seeds.clone();
+    let defaults = Options::shipped();
+    if (o.speeds.clone(), o.kalker_scales.clone(), o.lags.clone(), o.roll_rate, o.training_seed, o.validation_seeds.clone())
+        != (defaults.speeds, defaults.kalker_scales, defaults.lags, defaults.roll_rate, defaults.training_seed, defaults.validation_seeds)
+    {
+        o.command = std::env::args().collect::<Vec<_>>().join(" ");
+    }
+    let started = std::time::Instant::now();
+    let bank = fit(&study_fmus(&a.fmus), &o, &|m| eprintln!("{m}")).map_err(RunError::Config)?;
+    create_parent(&a.out)?;
+    std::fs::write(&a.out, bank.to_bytes())
+        .map_err(|e| RunError::Io(format!("cannot write {}: {e}", a.out.display())))?;
+    for e in &bank.entries {
+        let w = e.windows.last().expect("full window");
+        println!(
+            "{:>5} m/s {:<48} lag {:>4} m: ridge {:.0e}, validation objective {:.4}, rms error {:.3} mm",
+            e.speed,
+            e.channels.join(","),
+            e.lag as f64 * bank.grid,
+            e.ridge,
+            e.validation_objective,
+            w.rms_error * 1e3
+        );
+    }
+    eprintln!(
+        "tap bank in {:.1} s; wrote {}",
+        started.elapsed().as_secs_f64(),
+        a.out.display()
     );
     Ok(())
 }

@@ -120,8 +120,9 @@ pub struct System {
 }
 
 impl System {
-    /// The paper's standard case: the vehicle's three sensor signals and its speed feed the
-    /// estimator, connected by variable name; 20 s at 1 ms.
+    /// The paper's standard case: the vehicle's sensor signals (the paper's three and the
+    /// roll-rate gyroscope) and its speed feed the estimator, connected by variable name; 20 s
+    /// at 1 ms.
     pub fn standard_case(vehicle_fmu: &Path, estimator_fmu: &Path) -> System {
         let link = |from: &str, to: &str| Connection {
             from: Endpoint::new("vehicle", from),
@@ -146,6 +147,8 @@ impl System {
                 link("ws_acc_y", "ws_acc_y"),
                 link("ws_yaw_rate", "ws_yaw_rate"),
                 link("frame_acc_y", "frame_acc_y"),
+                // Read by the estimator only with use_roll_rate = true.
+                link("ws_roll_rate", "ws_roll_rate"),
                 link("forward_speed", "speed"),
             ],
             experiment: Experiment {

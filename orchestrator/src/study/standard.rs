@@ -72,11 +72,40 @@ pub fn evaluate_results(cols: &Columns) -> Result<BandMetrics, String> {
     )
 }
 
-/// `{"bands": {"whole": {"J_mm": .., "Jrel": .., "truth_rms_mm": ..}, "D1": .., ...}}`.
-pub fn metrics_json(m: &BandMetrics) -> String {
-    let value = serde_json::json!({ "bands": m, "method": {
+/// The band metrics of the estimator's fixed-lag output (`alignment_lagged` against
+/// `distance_lagged`), when the results hold it and the estimator made one (`lag` > 0).
+pub fn evaluate_lagged(cols: &Columns) -> Option<Result<BandMetrics, String>> {
+    let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
+    let (d, a) = (
+        cols.column("estimator.distance_lagged").ok()?,
+        cols.column("estimator.alignment_lagged").ok()?,
+    );
+    let dist = cols.column("estimator.distance").ok()?;
+    // distance_lagged == distance: no lagged output (lag 0 or estimator 1).
+    if d.iter().zip(dist).all(|(a, b)| a == b) {
+        return None;
+    }
+    Some((|| {
+        evaluate(
+            &skip(d),
+            &skip(a),
+            &skip(cols.column("vehicle.distance")?),
+            &skip(cols.column("vehicle.alignment")?),
+            DS,
+            TRIM,
+        )
+    })())
+}
+
+/// `{"bands": {"whole": {"J_mm": .., "Jrel": .., "truth_rms_mm": ..}, "D1": .., ...},
+/// "lagged": {"bands": ..} (when present)}`.
+pub fn metrics_json(m: &BandMetrics, lagged: Option<&BandMetrics>) -> String {
+    let mut value = serde_json::json!({ "bands": m, "method": {
         "grid_step_m": DS, "trim_m": TRIM, "filter": "Butterworth band-pass, order 4 per edge, zero phase (sosfiltfilt)",
     }});
+    if let Some(l) = lagged {
+        value["lagged"] = serde_json::json!({ "bands": l, "output": "alignment_lagged at distance_lagged" });
+    }
     serde_json::to_string_pretty(&value).unwrap_or_default()
 }
 

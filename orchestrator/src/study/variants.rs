@@ -88,8 +88,29 @@ pub fn record(
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
 ) -> Result<Record, String> {
-    let table = vehicle_run_driven(fmus, settings, &RECORDED, stop, speed)?;
-    from_table(&table)
+    record_with(fmus, settings, stop, speed, None)
+}
+
+/// [`record`], also recording the vehicle's `extra` column as the samples' roll rate
+/// (`ws_roll_rate`, for the learned filter's four-sensor taps).
+pub fn record_with(
+    fmus: &Fmus,
+    settings: Settings,
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+    roll_rate: Option<&str>,
+) -> Result<Record, String> {
+    let mut variables = RECORDED.to_vec();
+    variables.extend(roll_rate);
+    let table = vehicle_run_driven(fmus, settings, &variables, stop, speed)?;
+    let mut rec = from_table(&table)?;
+    if let Some(name) = roll_rate {
+        let col = table
+            .column(&format!("vehicle.{name}"))
+            .ok_or_else(|| format!("no column vehicle.{name}"))?;
+        rec.samples = Sample::with_roll_rate(rec.samples, &col[1..]);
+    }
+    Ok(rec)
 }
 
 /// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row
@@ -122,6 +143,9 @@ pub struct Variant {
     pub settings: Vec<(String, String)>,
     /// Evaluate the smoothed estimate instead of the filtered one.
     pub smooth: bool,
+    /// Which FMU output is evaluated (with `estimator` 2 in the settings: the learned filter).
+    #[serde(skip_serializing_if = "Output::is_alignment")]
+    pub output: Output,
 }
 
 fn variant(name: &str, settings: &[(&str, String)], smooth: bool) -> Variant {
@@ -132,7 +156,46 @@ fn variant(name: &str, settings: &[(&str, String)], smooth: bool) -> Variant {
             .map(|(k, v)| (k.to_string(), v.clone()))
             .collect(),
         smooth,
+        output: Output::Alignment,
     }
+}
+
+/// The estimator FMU's output a variant is judged on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Output {
+    /// `alignment` at `distance`.
+    Alignment,
+    /// `alignment_lagged` at `distance_lagged` (the learned filter's fixed lag).
+    Lagged,
+}
+
+impl Output {
+    fn is_alignment(&self) -> bool {
+        *self == Output::Alignment
+    }
+}
+
+/// The learned filter (estimator FMU default) beside the paper's filter: causal and fixed lag,
+/// with three sensors and with the roll-rate gyroscope.
+pub fn learned_variants() -> Vec<Variant> {
+    let learned = |name: &str, roll: bool, output: Output| Variant {
+        output,
+        ..variant(
+            name,
+            &[
+                ("estimator", "2".into()),
+                ("use_roll_rate", roll.to_string()),
+            ],
+            false,
+        )
+    };
+    vec![
+        variant("paper's filter (estimator 1)", &[("estimator", "1".into())], false),
+        learned("learned, causal (FMU default)", false, Output::Alignment),
+        learned("learned, fixed lag 10 m (alignment_lagged)", false, Output::Lagged),
+        learned("learned + roll-rate gyro, causal", true, Output::Alignment),
+        learned("learned + roll-rate gyro, fixed lag 10 m", true, Output::Lagged),
+    ]
 }
 
 /// The prior's virtual-measurement sigma for the 8-state models, chosen on the calibration seed.
@@ -200,7 +263,11 @@ pub fn evaluate_variant(
     v: &Variant,
     calibration: Option<&Path>,
 ) -> Result<BandMetrics, String> {
-    let (distance, est) = estimate(&rec.samples, STEP, &v.settings, calibration, v.smooth)?;
+    let (distance, est) = if v.settings.iter().any(|(k, x)| k == "estimator" && x == "2") {
+        estimate_learned(&rec.samples, STEP, &v.settings, v.output)?
+    } else {
+        estimate(&rec.samples, STEP, &v.settings, calibration, v.smooth)?
+    };
     evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)
 }
 
@@ -224,6 +291,34 @@ pub fn estimate(
         out.filtered
     };
     Ok((out.distance, est.into_iter().map(|e| e.0).collect()))
+}
+
+/// The estimator FMU's learned filter (`estimator` 2) with `settings` over `samples`: the
+/// positions and values of `output`, as the FMU computes them (the built-in tap bank).
+pub fn estimate_learned(
+    samples: &[Sample],
+    h: f64,
+    settings: &[(String, String)],
+    output: Output,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let values = offline::settings(settings)?;
+    let (config, _) = offline::config(&values, None)?;
+    let learned = offline::learned(&values)?.ok_or("the settings do not select the learned filter")?;
+    let lag = learned.lag();
+    let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
+    let est = out.learned.ok_or("no learned estimate")?;
+    Ok(match output {
+        Output::Alignment => (out.distance, est.iter().map(|e| e.alignment).collect()),
+        Output::Lagged => {
+            if lag <= 0.0 {
+                return Err("the lagged output needs lag > 0".into());
+            }
+            (
+                out.distance.iter().map(|d| d - lag).collect(),
+                est.iter().map(|e| e.lagged).collect(),
+            )
+        }
+    })
 }
 
 /// Chooses the virtual measurement's sigma of `model` (2 or 3) by whole-band Jrel on the
@@ -348,6 +443,7 @@ pub fn compare_learned(
     let name = format!("{name} ({trained})");
     let learned = variant(&name, &[], smooth);
     let combined = Variant {
+        output: Output::Alignment,
         name: format!(
             "{name} for waves under {} m + {}",
             smoother.split, smoother.partner.name
@@ -378,6 +474,9 @@ pub enum Conditions {
     /// The standard case with the vehicle's Kalker coefficients halved (the paper's robustness
     /// case): the filters keep their calibration, the learned one its taps.
     KalkerHalf,
+    /// The standard case with the vehicle's Kalker coefficients at 75 % (between the learned
+    /// filter's training conditions, 100 % and 50 %).
+    KalkerThreeQuarters,
 }
 
 /// Records the given seeds in parallel.
@@ -397,11 +496,14 @@ pub fn record_seeds(
                     settings.push(("vertical_irregularity".into(), Value::Boolean(false)));
                 }
                 Conditions::KalkerHalf => settings.push(("kalker_scale".into(), Value::Real(0.5))),
+                Conditions::KalkerThreeQuarters => {
+                    settings.push(("kalker_scale".into(), Value::Real(0.75)))
+                }
                 Conditions::VariableSpeed => {
-                    return record(fmus, settings, PROFILE_STOP, Some(&profile));
+                    return record_with(fmus, settings, PROFILE_STOP, Some(&profile), Some("ws_roll_rate"));
                 }
             }
-            record(fmus, settings, super::runs::STOP, None)
+            record_with(fmus, settings, super::runs::STOP, None, Some("ws_roll_rate"))
         })
         .collect()
 }

@@ -63,7 +63,9 @@
 //! 0.17 nominal and 0.23 halved (docs/cross-level.md section 5).
 
 mod fir;
+pub mod spectra;
 mod split;
+pub mod taps;
 mod training;
 
 pub use fir::Fir;

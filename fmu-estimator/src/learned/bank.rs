@@ -1,0 +1,317 @@
+//! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
+//! sensor set and lag, with where they came from.
+//!
+//! # Format (version 1)
+//! | part | content |
+//! |---|---|
+//! | first line | `learned-taps 1 <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
+//! | header | TOML, UTF-8: [`Header`] (grid, window, high-pass, provenance, and every entry's windows without their taps) |
+//! | data | the taps, little-endian `f32`, entry after entry, window after window in header order |
+//!
+//! A window of `past` points behind and `future` ahead over `C` channels holds `C (past + future
+//! + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
+//! multiplies the channel's value `j` grid points before the newest one. The estimate is for the
+//! position `future` points behind the newest cell (the lag). Taps are in physical units (metres
+//! of alignment per unit of the channel). `f32` keeps 7 significant digits: the estimate's
+//! rounding error is below 1e-6 of its rms, far under the estimator's own error, at half the
+//! size of `f64`.
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+pub const MAGIC: &str = "learned-taps";
+pub const FORMAT: u32 = 1;
+
+/// Where the taps came from: enough to regenerate them and to judge where they hold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// The vehicle model and parameter set the training runs used.
+    pub vehicle: String,
+    /// Track seed of the training runs (the calibration seed).
+    pub training_seed: u32,
+    /// Track seeds the ridge was chosen on, and the rms errors measured.
+    pub validation_seeds: Vec<u32>,
+    /// Kalker-coefficient scales of the training runs (one run each, normal equations summed).
+    pub kalker_scales: Vec<f64>,
+    /// Length of each training run \[m\].
+    pub training_distance: f64,
+    /// Sample step of the training runs \[s\] (the sensors' sampling interval).
+    pub sample_step: f64,
+    /// The least-squares objective the taps minimise.
+    pub objective: String,
+    /// The Kalman channel: the estimator FMU's filter with these settings.
+    pub partner: String,
+    /// Ridge values tried (relative to the mean diagonal).
+    pub ridges: Vec<f64>,
+    /// The command that regenerates the file.
+    pub command: String,
+}
+
+/// One set of windows: a speed, a sensor set, a lag.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Entry {
+    /// The constant speed of the training runs \[m/s\].
+    pub speed: f64,
+    /// Channel names, from [`super::grid::CHANNELS`].
+    pub channels: Vec<String>,
+    /// Look-ahead in grid points (0: causal).
+    pub lag: usize,
+    /// The ridge chosen on the validation seeds (relative to the mean diagonal).
+    pub ridge: f64,
+    /// The mean objective on the validation seeds with that ridge.
+    pub validation_objective: f64,
+    pub windows: Vec<Window>,
+}
+
+/// The taps for one history length. An entry's windows share its lag and differ in `past`:
+/// the full one and shorter ones for the start of a run, when less history exists.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Window {
+    pub past: usize,
+    pub future: usize,
+    /// Root-mean-square error of this window's estimate against the true alignment on the
+    /// validation seeds \[m\]: the estimate's standard deviation.
+    pub rms_error: f64,
+    #[serde(skip)]
+    pub taps: Vec<f64>,
+}
+
+/// The header: everything but the taps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    pub format: u32,
+    /// Grid step along the track \[m\].
+    pub grid: f64,
+    /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
+    pub kalman_highpass: f64,
+    pub provenance: Provenance,
+    #[serde(rename = "entry")]
+    pub entries: Vec<Entry>,
+}
+
+/// A whole tap bank.
+pub type Bank = Header;
+
+impl Header {
+    /// The file's bytes.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let header = toml::to_string(self).expect("plain numbers, strings and arrays");
+        let mut data = Vec::new();
+        for e in &self.entries {
+            for w in &e.windows {
+                for t in &w.taps {
+                    data.extend_from_slice(&(*t as f32).to_le_bytes());
+                }
+            }
+        }
+        let mut out = format!(
+            "{MAGIC} {FORMAT} {} {} {:016x}\n",
+            header.len(),
+            data.len(),
+            fnv1a(&data)
+        )
+        .into_bytes();
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(&data);
+        out
+    }
+
+    /// Reads a tap bank, checking everything the runtime relies on; errors start with `file`.
+    pub fn parse(bytes: &[u8], file: &Path) -> Result<Bank, String> {
+        let shown = file.display();
+        let bad = |m: String| format!("{shown}: not a valid tap bank: {m}");
+        let nl = bytes
+            .iter()
+            .position(|b| *b == b'\n')
+            .filter(|n| *n < 200)
+            .ok_or_else(|| bad("no first line".into()))?;
+        let first = std::str::from_utf8(&bytes[..nl]).map_err(|_| bad("first line".into()))?;
+        let f: Vec<&str> = first.split(' ').collect();
+        if f.len() != 5 || f[0] != MAGIC {
+            return Err(bad(format!("the first line is '{first}'")));
+        }
+        if f[1] != FORMAT.to_string() {
+            return Err(format!(
+                "{shown}: tap bank format {} (this estimator reads format {FORMAT})",
+                f[1]
+            ));
+        }
+        let num = |s: &str| s.parse::<usize>().map_err(|_| bad(format!("'{s}' in the first line")));
+        let (hlen, dlen) = (num(f[2])?, num(f[3])?);
+        let body = &bytes[nl + 1..];
+        if body.len() != hlen.saturating_add(dlen) {
+            return Err(bad(format!(
+                "{} bytes after the first line, which announces {hlen} + {dlen} (truncated or extended)",
+                body.len()
+            )));
+        }
+        let (head, data) = body.split_at(hlen);
+        if format!("{:016x}", fnv1a(data)) != f[4] {
+            return Err(bad("the taps' checksum does not match (damaged file)".into()));
+        }
+        let head = std::str::from_utf8(head).map_err(|_| bad("the header is not UTF-8".into()))?;
+        let mut bank: Bank = toml::from_str(head).map_err(|e| bad(format!("header: {e}")))?;
+        bank.check().map_err(bad)?;
+        let needed: usize = bank
+            .entries
+            .iter()
+            .flat_map(|e| e.windows.iter().map(|w| e.channels.len() * (w.past + w.future + 1)))
+            .sum();
+        if needed * 4 != dlen {
+            return Err(bad(format!(
+                "the header's windows need {needed} taps, the data holds {}",
+                dlen / 4
+            )));
+        }
+        let mut taps = data
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64);
+        for (i, e) in bank.entries.iter_mut().enumerate() {
+            let nc = e.channels.len();
+            for w in &mut e.windows {
+                w.taps = taps.by_ref().take(nc * (w.past + w.future + 1)).collect();
+                if w.taps.iter().any(|t| !t.is_finite()) {
+                    return Err(bad(format!("entry {i} has a tap that is not a number")));
+                }
+            }
+        }
+        Ok(bank)
+    }
+
+    /// Reads the tap bank at `path`.
+    pub fn load(path: &Path) -> Result<Bank, String> {
+        let bytes = fmi_abi::resource::read_bytes(path, "tap bank", 64 << 20)?;
+        Bank::parse(&bytes, path)
+    }
+
+    /// The consistency of the header (taps aside).
+    fn check(&self) -> Result<(), String> {
+        if self.format != FORMAT {
+            return Err(format!("header format {}", self.format));
+        }
+        if !(self.grid.is_finite() && self.grid > 0.0) {
+            return Err(format!("grid step {} m", self.grid));
+        }
+        if !(self.kalman_highpass.is_finite() && self.kalman_highpass > 2.0 * self.grid) {
+            return Err(format!("Kalman high-pass at {} m", self.kalman_highpass));
+        }
+        if self.entries.is_empty() {
+            return Err("no entries".into());
+        }
+        for (i, e) in self.entries.iter().enumerate() {
+            if !(e.speed.is_finite() && e.speed > 0.0) {
+                return Err(format!("entry {i}: speed {}", e.speed));
+            }
+            if e.channels.is_empty() {
+                return Err(format!("entry {i}: no channels"));
+            }
+            for c in &e.channels {
+                if !super::grid::CHANNELS.contains(&c.as_str()) {
+                    return Err(format!("entry {i}: unknown channel '{c}'"));
+                }
+            }
+            if e.windows.is_empty() {
+                return Err(format!("entry {i}: no windows"));
+            }
+            for w in &e.windows {
+                if w.future != e.lag || w.past > 100_000 {
+                    return Err(format!(
+                        "entry {i}: a window of {} behind and {} ahead under a lag of {}",
+                        w.past, w.future, e.lag
+                    ));
+                }
+                if !(w.rms_error.is_finite() && w.rms_error >= 0.0) {
+                    return Err(format!("entry {i}: rms error {}", w.rms_error));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// FNV-1a, 64 bits: detects a damaged or edited data block.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf29ce484222325, |h, b| {
+        (h ^ *b as u64).wrapping_mul(0x100000001b3)
+    })
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A small bank with recognisable taps.
+    pub fn sample_bank() -> Bank {
+        let entry = |speed: f64, lag: usize| Entry {
+            speed,
+            channels: vec!["ws_acc_y".into(), "kalman".into()],
+            lag,
+            ridge: 1e-6,
+            validation_objective: 0.1,
+            windows: [2usize, 5]
+                .iter()
+                .map(|&past| Window {
+                    past,
+                    future: lag,
+                    rms_error: 1e-3 * past as f64,
+                    taps: (0..2 * (past + lag + 1))
+                        .map(|k| (k as f64 * 0.37 + speed).sin())
+                        .collect(),
+                })
+                .collect(),
+        };
+        Header {
+            format: FORMAT,
+            grid: 0.2,
+            kalman_highpass: 500.0,
+            provenance: Provenance {
+                vehicle: "test".into(),
+                training_seed: 101,
+                validation_seeds: vec![102, 103],
+                kalker_scales: vec![1.0, 0.5],
+                training_distance: 1000.0,
+                sample_step: 1e-3,
+                objective: "test".into(),
+                partner: "test".into(),
+                ridges: vec![1e-6],
+                command: "none".into(),
+            },
+            entries: vec![entry(10.0, 0), entry(20.0, 0), entry(10.0, 3), entry(20.0, 3)],
+        }
+    }
+
+    #[test]
+    fn a_bank_survives_its_file_to_f32_precision() {
+        let b = sample_bank();
+        let bytes = b.to_bytes();
+        let back = Bank::parse(&bytes, Path::new("t.taps")).unwrap();
+        assert_eq!(back.entries.len(), 4);
+        for (e, f) in b.entries.iter().zip(&back.entries) {
+            for (w, v) in e.windows.iter().zip(&f.windows) {
+                assert_eq!(w.taps.len(), v.taps.len());
+                for (a, b) in w.taps.iter().zip(&v.taps) {
+                    assert_eq!(*b, *a as f32 as f64);
+                }
+            }
+        }
+        // Written again, byte for byte.
+        assert_eq!(back.to_bytes(), bytes);
+    }
+
+    #[test]
+    fn damaged_files_are_refused_by_name() {
+        let bytes = sample_bank().to_bytes();
+        let p = Path::new("x.taps");
+        let mut flipped = bytes.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        let e = Bank::parse(&flipped, p).unwrap_err();
+        assert!(e.starts_with("x.taps:") && e.contains("checksum"), "{e}");
+        let e = Bank::parse(&bytes[..bytes.len() - 3], p).unwrap_err();
+        assert!(e.contains("truncated"), "{e}");
+        let e = Bank::parse(b"hello\n", p).unwrap_err();
+        assert!(e.contains("first line"), "{e}");
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 1", "learned-taps 7");
+        let e = Bank::parse(text.as_bytes(), p).unwrap_err();
+        assert!(e.contains("format 7"), "{e}");
+    }
+}

@@ -1,0 +1,225 @@
+//! The distance grid the learned filter works on: a causal block mean of the 1 kHz samples over
+//! cells of `ds` metres, and the causal high-pass of the Kalman channel.
+//!
+//! # Why a distance grid
+//! The track is a function of distance; the sensors are sampled in time. Cells of fixed length
+//! make the FIR's lags metres whatever the speed, so one history serves the taps of every speed
+//! in the bank and a speed change costs nothing. A block mean (a box filter one cell long) is the
+//! cheapest causal anti-alias filter: its delay is half a cell (0.1 m on the 0.2 m grid), and it
+//! reads no sample after the cell's end.
+//!
+//! # Cells
+//! Cell `m` holds the samples whose distance (after their step) lies in `[m ds, (m + 1) ds)`.
+//! It closes at the first sample at or beyond `(m + 1) ds`; that sample belongs to the next
+//! cell. A step that crosses several boundaries (coarse steps, high speed) closes each crossed
+//! cell with the same mean. Non-finite sensor samples are left out of the mean; a cell without
+//! any finite sample repeats the previous cell's values.
+//!
+//! # The Kalman channel's high-pass
+//! The paper's filter models the alignment as a random walk, so its estimate wanders at long
+//! wavelengths (tens of mm over a few hundred metres on the standard run). Before it enters the
+//! FIR it passes a causal second-order Butterworth high-pass in distance (cut-off
+//! `kalman_highpass` metres, bilinear transform with pre-warping, i.e. the RBJ cookbook
+//! high-pass with `Q = 1/sqrt(2)`): the FIR sees a bounded signal, so its output stays bounded
+//! over any run length, and the taps learn the high-pass's phase inside the band.
+
+use serde::{Deserialize, Serialize};
+
+/// The channels a tap bank may use, in the order the grid holds them.
+pub const CHANNELS: [&str; 5] = [
+    "ws_acc_y",
+    "ws_yaw_rate",
+    "frame_acc_y",
+    "ws_roll_rate",
+    "kalman",
+];
+/// Index of the Kalman channel in [`CHANNELS`].
+pub const KALMAN: usize = 4;
+/// Index of the roll-rate channel in [`CHANNELS`].
+pub const ROLL_RATE: usize = 3;
+
+/// A causal biquad section, direct form II transposed.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Biquad {
+    b: [f64; 3],
+    a: [f64; 2],
+    s: [f64; 2],
+}
+
+impl Biquad {
+    /// Second-order Butterworth high-pass with cut-off wavelength `cutoff` on a grid of `ds`
+    /// (both metres).
+    pub fn highpass(ds: f64, cutoff: f64) -> Biquad {
+        let w0 = std::f64::consts::TAU * ds / cutoff;
+        let (sin, cos) = w0.sin_cos();
+        let alpha = sin / std::f64::consts::SQRT_2; // sin(w0) / (2 Q), Q = 1/sqrt(2)
+        let a0 = 1.0 + alpha;
+        let k = (1.0 + cos) / 2.0 / a0;
+        Biquad {
+            b: [k, -2.0 * k, k],
+            a: [-2.0 * cos / a0, (1.0 - alpha) / a0],
+            s: [0.0; 2],
+        }
+    }
+
+    pub fn step(&mut self, x: f64) -> f64 {
+        let y = self.b[0] * x + self.s[0];
+        self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];
+        self.s[1] = self.b[2] * x - self.a[1] * y;
+        y
+    }
+}
+
+/// The cell accumulator.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Grid {
+    ds: f64,
+    /// The distance at which the open cell closes.
+    next: f64,
+    sum: [f64; 5],
+    count: u32,
+    last: [f64; 5],
+    highpass: Biquad,
+}
+
+/// Cells closed by one sample: how many, their channel values (high-pass applied to the Kalman
+/// channel of each), and the distance of the sample that closed them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Closed {
+    pub cells: Vec<[f64; 5]>,
+    pub distance: f64,
+}
+
+impl Grid {
+    pub fn new(ds: f64, kalman_highpass: f64) -> Grid {
+        Grid {
+            ds,
+            next: ds,
+            sum: [0.0; 5],
+            count: 0,
+            last: [0.0; 5],
+            highpass: Biquad::highpass(ds, kalman_highpass),
+        }
+    }
+
+    pub fn step_length(&self) -> f64 {
+        self.ds
+    }
+
+    /// Adds the sample `x` (channels in [`CHANNELS`] order) taken at `distance`; returns the
+    /// cells it closes. `x` belongs to the cell it is in, never to one it closes.
+    pub fn add(&mut self, distance: f64, x: &[f64; 5]) -> Option<Closed> {
+        let mut closed = None;
+        if distance >= self.next {
+            let mean = if self.count == 0 {
+                self.last
+            } else {
+                std::array::from_fn(|c| self.sum[c] / self.count as f64)
+            };
+            self.last = mean;
+            // Whole cells crossed: at most what the distance allows (a huge jump is refused by
+            // the caller; here it only bounds the loop).
+            let n = (((distance - self.next) / self.ds).floor() as usize + 1).min(1 << 20);
+            let mut cells = Vec::with_capacity(n);
+            for _ in 0..n {
+                let mut cell = mean;
+                cell[KALMAN] = self.highpass.step(mean[KALMAN]);
+                cells.push(cell);
+            }
+            self.next += n as f64 * self.ds;
+            self.sum = [0.0; 5];
+            self.count = 0;
+            closed = Some(Closed { cells, distance });
+        }
+        if x.iter().all(|v| v.is_finite()) {
+            for (s, v) in self.sum.iter_mut().zip(x) {
+                *s += v;
+            }
+            self.count += 1;
+        }
+        closed
+    }
+}
+
+/// A record on the grid: the channel values of every closed cell and the index of the sample
+/// that closed it (the position the causal estimate of that cell is for).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct GridRecord {
+    pub cells: Vec<[f64; 5]>,
+    pub closed_by: Vec<usize>,
+}
+
+/// Runs [`Grid`] over a whole record: `distance[k]` and `x[k]` of sample `k`.
+pub fn decimate(distance: &[f64], x: &[[f64; 5]], ds: f64, kalman_highpass: f64) -> GridRecord {
+    let mut g = Grid::new(ds, kalman_highpass);
+    let mut out = GridRecord::default();
+    for (k, (d, s)) in distance.iter().zip(x).enumerate() {
+        if let Some(c) = g.add(*d, s) {
+            for cell in c.cells {
+                out.cells.push(cell);
+                out.closed_by.push(k);
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_are_block_means_of_their_own_samples() {
+        // 0.02 m per sample, 0.2 m cells: samples 1..=9 (distances 0.02..0.18) and sample 0 at
+        // distance 0 form cell 0, which sample 10 (0.2 m) closes.
+        let d: Vec<f64> = (0..100).map(|k| 0.02 * k as f64 + 1e-12).collect();
+        let x: Vec<[f64; 5]> = (0..100).map(|k| [k as f64, 0.0, 0.0, 0.0, 0.0]).collect();
+        let r = decimate(&d, &x, 0.2, 500.0);
+        assert_eq!(r.closed_by[0], 10);
+        assert!((r.cells[0][0] - 4.5).abs() < 1e-12, "{}", r.cells[0][0]);
+        assert!((r.cells[1][0] - 14.5).abs() < 1e-12);
+        assert_eq!(r.cells.len(), 9);
+    }
+
+    #[test]
+    fn a_coarse_step_closes_every_crossed_cell() {
+        let mut g = Grid::new(0.2, 500.0);
+        assert!(g.add(0.1, &[1.0; 5]).is_none());
+        let c = g.add(0.75, &[3.0; 5]).unwrap();
+        assert_eq!(c.cells.len(), 3);
+        assert_eq!(c.cells[0][0], 1.0);
+        let c = g.add(0.85, &[5.0; 5]).unwrap();
+        assert_eq!(c.cells.len(), 1);
+        assert_eq!(c.cells[0][0], 3.0);
+    }
+
+    #[test]
+    fn the_highpass_is_a_butterworth_of_order_two() {
+        // Oracle: |H| of the analog prototype, s^2 / (s^2 + sqrt(2) s + 1), at the pre-warped
+        // frequency: 1/sqrt(2) at the cut-off, (f/fc)^2 well below it, 1 well above.
+        let gain = |wavelength: f64| {
+            let mut b = Biquad::highpass(0.2, 500.0);
+            let n = 200_000;
+            let w = std::f64::consts::TAU * 0.2 / wavelength;
+            let y: Vec<f64> = (0..n).map(|k| b.step((w * k as f64).sin())).collect();
+            let tail = &y[n / 2..];
+            (2.0 * tail.iter().map(|v| v * v).sum::<f64>() / tail.len() as f64).sqrt()
+        };
+        assert!((gain(500.0) - std::f64::consts::FRAC_1_SQRT_2).abs() < 2e-3);
+        assert!((gain(5000.0) / 0.01 - 1.0).abs() < 0.02, "{}", gain(5000.0));
+        assert!((gain(20.0) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn non_finite_samples_are_left_out_of_the_mean() {
+        let mut g = Grid::new(1.0, 500.0);
+        g.add(0.2, &[2.0; 5]);
+        g.add(0.4, &[f64::NAN, 0.0, 0.0, 0.0, 0.0]);
+        let c = g.add(1.0, &[0.0; 5]).unwrap();
+        assert_eq!(c.cells[0][0], 2.0);
+        // A cell of non-finite samples only repeats the last mean.
+        g.add(1.5, &[f64::INFINITY; 5]);
+        let c = g.add(2.0, &[0.0; 5]).unwrap();
+        assert_eq!(c.cells[0][0], 0.0);
+    }
+}

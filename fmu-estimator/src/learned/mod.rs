@@ -1,0 +1,69 @@
+//! The learned estimator: a multichannel FIR filter on a distance grid, whose taps were fitted
+//! by least squares on vehicle runs in the bands the accuracy is measured in, with the paper's
+//! Kalman filter as one of its channels.
+//!
+//! - [`grid`]: the causal block mean onto the distance grid, the Kalman channel's high-pass;
+//! - [`bank`]: the tap bank file (format, provenance, checks);
+//! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
+//!
+//! How the taps are fitted (`orchestrator study taps`, `orchestrator/src/study/learned/`) and
+//! what they reach is in `docs/cross-level.md` sections 5-6 and the README.
+
+pub mod bank;
+pub mod grid;
+pub mod stream;
+
+pub use bank::Bank;
+pub use stream::{Choice, Learned};
+
+/// The tap bank shipped in the FMU's resources (`resources/learned.taps`), as built into this
+/// library (offline processing without an unpacked FMU).
+pub fn shipped() -> Result<Bank, String> {
+    const BYTES: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps"));
+    if BYTES.is_empty() {
+        return Err("this build has no tap bank (resources/learned.taps): run `orchestrator study taps`".into());
+    }
+    Bank::parse(BYTES, std::path::Path::new("learned.taps (built in)"))
+}
+
+/// One sample's channels in [`grid::CHANNELS`] order: the sensors, then the Kalman filter's
+/// alignment estimate `kalman`.
+pub fn channels(s: &crate::offline::Sample, kalman: f64) -> [f64; 5] {
+    [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate, kalman]
+}
+
+/// Which estimate the FMU's `alignment` output carries (`active_estimator`).
+pub const ACTIVE_PAPER: i32 = 1;
+pub const ACTIVE_LEARNED: i32 = 2;
+
+/// The outputs of one step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// The best causal estimate at the current position, and its standard deviation \[m\].
+    pub alignment: f64,
+    pub std: f64,
+    /// The fixed-lag estimate for the position `lag` metres behind, and its standard deviation.
+    pub lagged: f64,
+    pub lagged_std: f64,
+    /// [`ACTIVE_PAPER`] or [`ACTIVE_LEARNED`].
+    pub active: i32,
+}
+
+impl Learned {
+    /// The outputs at `distance`: the learned estimates where they exist, else the Kalman
+    /// filter's (`kalman`: its alignment and standard deviation), flagged by `active`.
+    pub fn estimate(&self, distance: f64, kalman: (f64, f64)) -> Estimate {
+        let (alignment, std, active) = match self.causal(distance) {
+            Some((a, s)) => (a, s, ACTIVE_LEARNED),
+            None => (kalman.0, kalman.1, ACTIVE_PAPER),
+        };
+        let (lagged, lagged_std) = self.lagged(distance).unwrap_or((alignment, std));
+        Estimate {
+            alignment,
+            std,
+            lagged,
+            lagged_std,
+            active,
+        }
+    }
+}

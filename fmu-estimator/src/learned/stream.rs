@@ -1,0 +1,496 @@
+//! The learned filter at run time: the grid, the channels' history, the taps of the speeds
+//! around the current one, and the estimates between grid points.
+//!
+//! Per sample: the sample joins its cell ([`Grid`]). When cells close, their values enter the
+//! history and, if the speed lies inside the bank's range, the estimate of the newest cell
+//! (causal) and of the cell `lag` points behind (fixed lag) are computed with the taps of the
+//! two bank speeds around the current speed, blended linearly in speed. Between closings the
+//! outputs extrapolate the last two grid estimates linearly in distance (causal).
+//!
+//! At the start of a run the history is short: each entry has windows with shorter pasts, and
+//! the longest one the history covers is used. Outside the bank's speed range no learned
+//! estimate is made (the caller falls back to the Kalman filter); the history goes on, so the
+//! learned estimate resumes as soon as the speed is back inside.
+
+use super::bank::{Bank, Entry};
+use super::grid::{CHANNELS, Grid, ROLL_RATE};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// One window ready to apply: per channel, the history slot it reads and its taps oldest first
+/// (so the dot product runs over the history in memory order).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Applied {
+    past: usize,
+    len: usize,
+    slots: Vec<usize>,
+    /// `slots.len() * len` taps, channel after channel, oldest first.
+    taps: Vec<f64>,
+    rms_error: f64,
+}
+
+/// The windows of one entry, shortest history first.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Windows(Vec<Applied>);
+
+impl Windows {
+    fn of(e: &Entry) -> Windows {
+        let slot = |name: &String| CHANNELS.iter().position(|c| c == name).expect("checked");
+        let slots: Vec<usize> = e.channels.iter().map(slot).collect();
+        let mut w: Vec<Applied> = e
+            .windows
+            .iter()
+            .map(|w| {
+                let len = w.past + w.future + 1;
+                let mut taps = Vec::with_capacity(slots.len() * len);
+                for c in 0..slots.len() {
+                    // File order: tap j is j points before the newest; here oldest first.
+                    taps.extend(w.taps[c * len..(c + 1) * len].iter().rev());
+                }
+                Applied {
+                    past: w.past,
+                    len,
+                    slots: slots.clone(),
+                    taps,
+                    rms_error: w.rms_error,
+                }
+            })
+            .collect();
+        w.sort_by_key(|a| a.past);
+        Windows(w)
+    }
+
+    /// The estimate from the longest window `filled` points of history cover, and its rms error.
+    fn apply(&self, hist: &History) -> Option<(f64, f64)> {
+        let w = self.0.iter().rev().find(|w| w.len <= hist.filled)?;
+        let mut e = 0.0;
+        for (c, slot) in w.slots.iter().enumerate() {
+            let x = hist.latest(*slot, w.len);
+            let t = &w.taps[c * w.len..(c + 1) * w.len];
+            e += dot(t, x);
+        }
+        Some((e, w.rms_error))
+    }
+
+    fn longest(&self) -> usize {
+        self.0.iter().map(|w| w.len).max().unwrap_or(0)
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    // Four partial sums: lets the compiler vectorize, and fixes the summation order.
+    let mut s = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for i in 0..4 {
+            s[i] += x[i] * y[i];
+        }
+    }
+    let mut r = (s[0] + s[1]) + (s[2] + s[3]);
+    for (x, y) in ra.iter().zip(rb) {
+        r += x * y;
+    }
+    r
+}
+
+/// The bank's entries for one sensor set and lag, by speed.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Selection {
+    speeds: Vec<f64>,
+    causal: Vec<Windows>,
+    lagged: Vec<Windows>,
+    lag: usize,
+    uses_roll_rate: bool,
+    sample_step: f64,
+}
+
+/// Per channel, the newest `capacity` values, each written twice (at `i` and `i + capacity`)
+/// so the newest `n` are always one contiguous slice.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct History {
+    capacity: usize,
+    data: Vec<Vec<f64>>,
+    /// Position of the next write.
+    pos: usize,
+    filled: usize,
+}
+
+impl History {
+    fn new(capacity: usize) -> History {
+        History {
+            capacity,
+            data: vec![vec![0.0; 2 * capacity]; CHANNELS.len()],
+            pos: 0,
+            filled: 0,
+        }
+    }
+
+    fn push(&mut self, x: &[f64; 5]) {
+        for (d, v) in self.data.iter_mut().zip(x) {
+            d[self.pos] = *v;
+            d[self.pos + self.capacity] = *v;
+        }
+        self.pos = (self.pos + 1) % self.capacity;
+        self.filled = (self.filled + 1).min(self.capacity);
+    }
+
+    /// The newest `n` values of channel `c`, oldest first.
+    fn latest(&self, c: usize, n: usize) -> &[f64] {
+        let end = self.pos + self.capacity;
+        &self.data[c][end - n..end]
+    }
+}
+
+/// An estimate on the grid: its value, rms error, and the distance it was made at.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
+struct Point {
+    value: f64,
+    std: f64,
+    distance: f64,
+}
+
+/// The last two grid estimates, for the linear extrapolation between closings.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+struct Track {
+    points: Vec<Point>,
+}
+
+impl Track {
+    fn push(&mut self, p: Point) {
+        if self.points.len() == 2 {
+            self.points.remove(0);
+        }
+        self.points.push(p);
+    }
+
+    fn clear(&mut self) {
+        self.points.clear();
+    }
+
+    /// The estimate at `distance` (linear extrapolation from the last two points; the last
+    /// point alone when only one exists or they coincide).
+    fn at(&self, distance: f64) -> Option<(f64, f64)> {
+        match self.points.as_slice() {
+            [] => None,
+            [p] => Some((p.value, p.std)),
+            [a, b] => {
+                let span = b.distance - a.distance;
+                let slope = if span > 0.0 {
+                    (b.value - a.value) / span
+                } else {
+                    0.0
+                };
+                // Never further than one cell ahead: a held speed of zero must not extrapolate.
+                let ahead = (distance - b.distance).clamp(0.0, span.max(0.0));
+                Some((b.value + slope * ahead, b.std))
+            }
+            _ => unreachable!("two points at most"),
+        }
+    }
+}
+
+/// The learned filter's run-time state. Cloning it (FMU state) shares the taps.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Learned {
+    selection: Arc<Selection>,
+    grid: Grid,
+    history: History,
+    causal: Track,
+    lagged: Track,
+    /// Whether the last closed cell's speed was inside the bank's range.
+    in_range: bool,
+}
+
+/// What [`Learned::select`] needs to know of the FMU's configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice {
+    /// Use the taps fitted with the wheelset roll-rate gyroscope.
+    pub roll_rate: bool,
+    /// The fixed-lag output's lag \[m\] (0: none).
+    pub lag: f64,
+}
+
+impl Learned {
+    /// The learned filter with the bank's entries for `choice`: the sensor set with or without
+    /// the roll-rate channel and, for the fixed-lag output, the lag the bank holds nearest
+    /// `choice.lag` (refused unless within half a grid step of it).
+    pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, String> {
+        let roll = |e: &Entry| e.channels.iter().any(|c| c == CHANNELS[ROLL_RATE]);
+        let of_set = |lag: usize| -> Vec<&Entry> {
+            let mut v: Vec<&Entry> = bank
+                .entries
+                .iter()
+                .filter(|e| roll(e) == choice.roll_rate && e.lag == lag)
+                .collect();
+            v.sort_by(|a, b| a.speed.total_cmp(&b.speed));
+            v
+        };
+        let sensors = if choice.roll_rate {
+            "four sensors (with the roll-rate gyroscope)"
+        } else {
+            "three sensors"
+        };
+        let causal = of_set(0);
+        if causal.is_empty() {
+            return Err(format!("the tap bank has no causal taps for {sensors}"));
+        }
+        let speeds: Vec<f64> = causal.iter().map(|e| e.speed).collect();
+        if speeds.windows(2).any(|w| !(w[1] > w[0])) {
+            return Err(format!(
+                "the tap bank has two causal entries for one speed ({speeds:?} m/s)"
+            ));
+        }
+        let (lag, lagged) = if choice.lag > 0.0 {
+            let want = choice.lag / bank.grid;
+            let lags: Vec<usize> = {
+                let mut l: Vec<usize> = bank
+                    .entries
+                    .iter()
+                    .filter(|e| roll(e) == choice.roll_rate && e.lag > 0)
+                    .map(|e| e.lag)
+                    .collect();
+                l.sort();
+                l.dedup();
+                l
+            };
+            let best = lags
+                .iter()
+                .copied()
+                .min_by(|a, b| (*a as f64 - want).abs().total_cmp(&(*b as f64 - want).abs()));
+            let shown: Vec<String> = lags
+                .iter()
+                .map(|l| format!("{}", *l as f64 * bank.grid))
+                .collect();
+            match best {
+                Some(l) if (l as f64 - want).abs() <= 0.5 => {
+                    let entries = of_set(l);
+                    if entries.iter().map(|e| e.speed).collect::<Vec<_>>() != speeds {
+                        return Err(format!(
+                            "the tap bank's {} m lag taps are not at the speeds of its causal taps",
+                            l as f64 * bank.grid
+                        ));
+                    }
+                    (l, entries.iter().map(|e| Windows::of(e)).collect())
+                }
+                _ => {
+                    return Err(format!(
+                        "lag = {} m: the tap bank holds fixed-lag taps for {} m ({sensors}); 0 switches the lagged output off",
+                        choice.lag,
+                        if shown.is_empty() { "no lag".into() } else { shown.join(", ") }
+                    ));
+                }
+            }
+        } else {
+            (0, vec![])
+        };
+        let causal: Vec<Windows> = causal.iter().map(|e| Windows::of(e)).collect();
+        let capacity = causal
+            .iter()
+            .chain(&lagged)
+            .map(Windows::longest)
+            .max()
+            .unwrap_or(1)
+            .max(1);
+        Ok(Learned {
+            selection: Arc::new(Selection {
+                speeds,
+                causal,
+                lagged,
+                lag,
+                uses_roll_rate: choice.roll_rate,
+                sample_step: bank.provenance.sample_step,
+            }),
+            grid: Grid::new(bank.grid, bank.kalman_highpass),
+            history: History::new(capacity),
+            causal: Track::default(),
+            lagged: Track::default(),
+            in_range: false,
+        })
+    }
+
+    /// The speed range the taps cover \[m/s\].
+    pub fn speed_range(&self) -> (f64, f64) {
+        let s = &self.selection.speeds;
+        (s[0], s[s.len() - 1])
+    }
+
+    /// The lag of the fixed-lag output \[m\] (0: none).
+    pub fn lag(&self) -> f64 {
+        self.selection.lag as f64 * self.grid.step_length()
+    }
+
+    /// The sample step the taps were fitted for \[s\].
+    pub fn sample_step(&self) -> f64 {
+        self.selection.sample_step
+    }
+
+    pub fn uses_roll_rate(&self) -> bool {
+        self.selection.uses_roll_rate
+    }
+
+    /// Whether the last closed cell's speed was inside the taps' range.
+    pub fn in_range(&self) -> bool {
+        self.in_range
+    }
+
+    /// One sample: `distance` after the step, the speed over it, the channels in
+    /// [`CHANNELS`] order (the Kalman filter's alignment estimate last).
+    pub fn step(&mut self, distance: f64, speed: f64, x: &[f64; 5]) {
+        let Some(closed) = self.grid.add(distance, x) else {
+            return;
+        };
+        for cell in &closed.cells {
+            self.history.push(cell);
+        }
+        let s = &self.selection.speeds;
+        self.in_range = speed >= s[0] && speed <= s[s.len() - 1];
+        if !self.in_range {
+            self.causal.clear();
+            self.lagged.clear();
+            return;
+        }
+        let sel = Arc::clone(&self.selection);
+        // The two bank speeds around `speed` and the weight of the upper one.
+        let i = s.partition_point(|v| *v <= speed).clamp(1, s.len().max(2) - 1);
+        let (lo, hi, a) = if s.len() == 1 {
+            (0, 0, 0.0)
+        } else {
+            (i - 1, i, (speed - s[i - 1]) / (s[i] - s[i - 1]))
+        };
+        let blend = |set: &[Windows], hist: &History| -> Option<(f64, f64)> {
+            let (e0, r0) = set[lo].apply(hist)?;
+            if a == 0.0 || lo == hi {
+                return Some((e0, r0));
+            }
+            let (e1, r1) = set[hi].apply(hist)?;
+            if a == 1.0 {
+                return Some((e1, r1));
+            }
+            Some(((1.0 - a) * e0 + a * e1, (1.0 - a) * r0 + a * r1))
+        };
+        let d = closed.distance;
+        if let Some((value, std)) = blend(&sel.causal, &self.history) {
+            self.causal.push(Point {
+                value,
+                std,
+                distance: d,
+            });
+        }
+        if !sel.lagged.is_empty()
+            && let Some((value, std)) = blend(&sel.lagged, &self.history)
+        {
+            self.lagged.push(Point {
+                value,
+                std,
+                distance: d,
+            });
+        }
+    }
+
+    /// The causal estimate at `distance` and its standard deviation; `None` while there is
+    /// none (start of the run, speed outside the taps' range).
+    pub fn causal(&self, distance: f64) -> Option<(f64, f64)> {
+        self.causal.at(distance)
+    }
+
+    /// The fixed-lag estimate for the position `lag` metres behind `distance`.
+    pub fn lagged(&self, distance: f64) -> Option<(f64, f64)> {
+        self.lagged.at(distance)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::bank::tests::sample_bank;
+    use super::*;
+
+    /// The estimate straight from the taps (file order), for the oracle: channel values of the
+    /// cells pushed so far, newest last.
+    fn direct(entry: &Entry, window: usize, cells: &[[f64; 5]]) -> f64 {
+        let w = &entry.windows[window];
+        let len = w.past + w.future + 1;
+        let mut e = 0.0;
+        for (c, name) in entry.channels.iter().enumerate() {
+            let slot = CHANNELS.iter().position(|n| n == name).unwrap();
+            for j in 0..len {
+                e += w.taps[c * len + j] * cells[cells.len() - 1 - j][slot];
+            }
+        }
+        e
+    }
+
+    #[test]
+    fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
+        let bank = sample_bank();
+        let mut l = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.6,
+            },
+        )
+        .unwrap();
+        assert!((l.lag() - 0.6).abs() < 1e-12);
+        // 0.05 m per sample at 12.5 m/s, 4 samples per 0.2 m cell.
+        let mut grid = Grid::new(0.2, 500.0);
+        let mut cells = vec![];
+        let mut d = 0.0;
+        for k in 0..200 {
+            d += 0.05;
+            let x = [(k as f64 * 0.3).sin(), 0.0, 0.0, 0.0, (k as f64 * 0.11).cos()];
+            if let Some(c) = grid.add(d, &x) {
+                cells.extend(c.cells);
+            }
+            l.step(d, 12.5, &x);
+        }
+        let a = 0.25; // 12.5 m/s between 10 and 20
+        // Enough history for the longest window (5 behind, 3 ahead).
+        let e10 = &bank.entries[0];
+        let e20 = &bank.entries[1];
+        let want = (1.0 - a) * direct(e10, 1, &cells) + a * direct(e20, 1, &cells);
+        let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
+        assert!((got - want).abs() < 1e-12 * want.abs().max(1.0), "{got} {want}");
+        let want = (1.0 - a) * direct(&bank.entries[2], 1, &cells)
+            + a * direct(&bank.entries[3], 1, &cells);
+        let (got, _) = l.lagged(l.lagged.points[1].distance).unwrap();
+        assert!((got - want).abs() < 1e-12 * want.abs().max(1.0), "{got} {want}");
+    }
+
+    #[test]
+    fn outside_the_speed_range_there_is_no_estimate_and_it_resumes_inside() {
+        let bank = sample_bank();
+        let mut l = Learned::new(&bank, Choice { roll_rate: false, lag: 0.0 }).unwrap();
+        assert_eq!(l.speed_range(), (10.0, 20.0));
+        let mut d = 0.0;
+        for _ in 0..100 {
+            d += 0.05;
+            l.step(d, 25.0, &[1.0; 5]);
+        }
+        assert!(!l.in_range() && l.causal(d).is_none());
+        for _ in 0..10 {
+            d += 0.05;
+            l.step(d, 15.0, &[1.0; 5]);
+        }
+        assert!(l.in_range() && l.causal(d).is_some());
+    }
+
+    #[test]
+    fn unavailable_choices_are_refused_by_name() {
+        let bank = sample_bank();
+        let e = Learned::new(&bank, Choice { roll_rate: true, lag: 0.0 }).unwrap_err();
+        assert!(e.contains("four sensors"), "{e}");
+        let e = Learned::new(&bank, Choice { roll_rate: false, lag: 10.0 }).unwrap_err();
+        assert!(e.contains("lag = 10 m") && e.contains("0.6"), "{e}");
+    }
+
+    #[test]
+    fn extrapolation_is_linear_and_at_most_one_cell_ahead() {
+        let mut t = Track::default();
+        t.push(Point { value: 1.0, std: 0.1, distance: 1.0 });
+        t.push(Point { value: 2.0, std: 0.2, distance: 1.2 });
+        assert!((t.at(1.3).unwrap().0 - 2.5).abs() < 1e-12);
+        assert!((t.at(5.0).unwrap().0 - 3.0).abs() < 1e-12);
+        assert_eq!(t.at(1.0).unwrap(), (2.0, 0.2));
+    }
+}
