@@ -230,7 +230,8 @@ def test_export_ssp_round_trip(tmp_path):
 
     ssd = read_ssd(str(ssp))  # fmpy validates the .ssd against the SSP 1.0 schema
     assert sorted(c.name for c in ssd.system.elements) == ["estimator", "vehicle"]
-    assert len(ssd.system.connections) == 4
+    # The three sensors, the roll-rate gyroscope and the speed.
+    assert len(ssd.system.connections) == 5
 
     res = simulate_ssp(str(ssp), stop_time=0.5, step_size=1e-3)
     orch = oc.read_results(tmp_path / "builtin")

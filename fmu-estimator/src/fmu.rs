@@ -153,8 +153,8 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
     VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute"),
     VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; the Kalman estimate while the learned one is not available)"),
-    VarSpec::real_output(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", 0.0, "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
-    VarSpec::real_output(vr::DISTANCE_LAGGED, "distance_lagged", "m", 0.0, "The position alignment_lagged is for: distance - lag"),
+    VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
+    VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
     VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
     VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute"),
@@ -257,6 +257,10 @@ impl Model for Estimator {
 
     fn calculate_initial(&mut self, v: &mut Values) {
         v.real[vr::ALIGNMENT_STD as usize] = v.real[vr::P0_XI as usize];
+        v.real[vr::ALIGNMENT_LAGGED_STD as usize] = v.real[vr::P0_XI as usize];
+        let lag = v.real[vr::LAG as usize];
+        let learned = v.integer[vr::ESTIMATOR as usize] == 2 && lag.is_finite() && lag > 0.0;
+        v.real[vr::DISTANCE_LAGGED as usize] = if learned { -lag } else { 0.0 };
     }
 
     fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {

@@ -109,6 +109,10 @@ impl Grid {
     /// Adds the sample `x` (channels in [`CHANNELS`] order) taken at `distance`; returns the
     /// cells it closes. `x` belongs to the cell it is in, never to one it closes.
     pub fn add(&mut self, distance: f64, x: &[f64; 5]) -> Option<Closed> {
+        if !distance.is_finite() {
+            // Nothing can be placed on the grid (an absurd step); the cell stays open.
+            return None;
+        }
         let mut closed = None;
         if distance >= self.next {
             let mean = if self.count == 0 {
