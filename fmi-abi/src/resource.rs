@@ -40,7 +40,9 @@ pub fn read_bytes(path: &Path, what: &str, limit: u64) -> Result<Vec<u8>, String
     let file = std::fs::File::open(path).map_err(cannot)?;
     // The length can change after the check (a growing file).
     let mut bytes = Vec::new();
-    file.take(limit + 1).read_to_end(&mut bytes).map_err(cannot)?;
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
     if bytes.len() as u64 > limit {
         return Err(format!(
             "{shown}: the {what} grew beyond {limit} bytes while being read"

@@ -9,9 +9,9 @@ use crate::config::{Config, Note};
 use crate::core::Core;
 use crate::engine::Skip;
 use crate::filter::Vec4;
+use crate::learned::{Bank, Choice, Learned};
 use crate::params::Params;
 use crate::prior::Spectrum;
-use crate::learned::{Bank, Choice, Learned};
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -401,11 +401,17 @@ pub fn learned_from_values(
     match v.integer[vr::ESTIMATOR as usize] {
         1 => return Ok(None),
         2 => {}
-        e => return Err(format!("parameter 'estimator' = {e}: 1 (the paper's filter) or 2 (learned)")),
+        e => {
+            return Err(format!(
+                "parameter 'estimator' = {e}: 1 (the paper's filter) or 2 (learned)"
+            ));
+        }
     }
     let lag = v.real[vr::LAG as usize];
     if !(lag >= 0.0 && lag.is_finite()) {
-        return Err(format!("parameter 'lag' = {lag} m must be 0 (off) or a positive lag"));
+        return Err(format!(
+            "parameter 'lag' = {lag} m must be 0 (off) or a positive lag"
+        ));
     }
     let name = v.string[vr::TAP_FILE as usize].trim().to_string();
     let bank = match resources {
@@ -424,10 +430,19 @@ pub fn learned_from_values(
     };
     let learned = Learned::new(&bank, choice).map_err(|e| format!("tap_file '{name}': {e}"))?;
     let own = [
-        (v.integer[vr::ALIGNMENT_MODEL as usize] != 1, "alignment_model is not 1"),
+        (
+            v.integer[vr::ALIGNMENT_MODEL as usize] != 1,
+            "alignment_model is not 1",
+        ),
         (v.integer[vr::GAIN as usize] != 1, "gain is not 1"),
-        (!v.boolean[vr::USE_CALIBRATION_FILE as usize], "use_calibration_file is false"),
-        (v.real[vr::DESIGN_SPEED as usize] != 0.0, "design_speed is set"),
+        (
+            !v.boolean[vr::USE_CALIBRATION_FILE as usize],
+            "use_calibration_file is false",
+        ),
+        (
+            v.real[vr::DESIGN_SPEED as usize] != 0.0,
+            "design_speed is set",
+        ),
     ];
     let differ: Vec<&str> = own.iter().filter(|(d, _)| *d).map(|(_, m)| *m).collect();
     if !differ.is_empty() {

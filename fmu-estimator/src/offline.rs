@@ -194,7 +194,11 @@ pub fn process_learned(
             }
             steps += 1;
             if let Some(l) = learned.as_mut() {
-                l.step(distance, s.speed, &crate::learned::channels(s, core.alignment().0));
+                l.step(
+                    distance,
+                    s.speed,
+                    &crate::learned::channels(s, core.alignment().0),
+                );
             }
         }
         step_of.push(steps.checked_sub(1));
@@ -301,10 +305,13 @@ mod tests {
         let (config, _) = config(&values, None).unwrap();
         let speed = |k: usize| 3.0 + 0.002 * k as f64;
         let recorded = samples(6000, speed);
-        let offline = process_learned(&config, learned(&values).unwrap(), 1e-3, &recorded, false)
-            .unwrap();
+        let offline =
+            process_learned(&config, learned(&values).unwrap(), 1e-3, &recorded, false).unwrap();
         let est = offline.learned.unwrap();
-        assert!(est.iter().any(|e| e.active == crate::learned::ACTIVE_LEARNED));
+        assert!(
+            est.iter()
+                .any(|e| e.active == crate::learned::ACTIVE_LEARNED)
+        );
         assert!(est.iter().any(|e| e.active == crate::learned::ACTIVE_PAPER));
         let ctx = InstantiateContext {
             instance_name: "t".into(),
@@ -313,7 +320,8 @@ mod tests {
         let mut inst = Instance::<crate::Estimator>::new(&ctx, Logger::silent())
             .map_err(|(_, e)| e)
             .unwrap();
-        inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false]).unwrap();
+        inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false])
+            .unwrap();
         inst.setup_experiment(0.0, None).unwrap();
         inst.enter_initialization_mode().unwrap();
         inst.exit_initialization_mode().unwrap();
@@ -328,12 +336,18 @@ mod tests {
             t += 1e-3;
             let mut o = [0.0; 4];
             inst.get_real(
-                &[vr::ALIGNMENT, vr::ALIGNMENT_STD, vr::ALIGNMENT_LAGGED, vr::ALIGNMENT_LAGGED_STD],
+                &[
+                    vr::ALIGNMENT,
+                    vr::ALIGNMENT_STD,
+                    vr::ALIGNMENT_LAGGED,
+                    vr::ALIGNMENT_LAGGED_STD,
+                ],
                 &mut o,
             )
             .unwrap();
             let mut active = [0];
-            inst.get_integer(&[vr::ACTIVE_ESTIMATOR], &mut active).unwrap();
+            inst.get_integer(&[vr::ACTIVE_ESTIMATOR], &mut active)
+                .unwrap();
             let e = est[k];
             assert_eq!(o, [e.alignment, e.std, e.lagged, e.lagged_std], "step {k}");
             assert_eq!(active[0], e.active, "step {k}");
@@ -351,7 +365,10 @@ mod tests {
             let recorded: Vec<Sample> = samples(8000, |_| 20.0)
                 .into_iter()
                 .enumerate()
-                .map(|(k, s)| Sample { ws_roll_rate: 0.02 * (k as f64 * 0.07).sin(), ..s })
+                .map(|(k, s)| Sample {
+                    ws_roll_rate: 0.02 * (k as f64 * 0.07).sin(),
+                    ..s
+                })
                 .collect();
             let run = |r: &[Sample]| {
                 process_learned(&config, learned(&values).unwrap(), 1e-3, r, false)

@@ -168,7 +168,8 @@ fn the_fmu_runs_the_same_filter() {
     )
     .unwrap();
     // The Kalman filter alone (estimator 1): its output is what this test compares.
-    inst.set_integer(&[vr::DISCRETIZATION, vr::ESTIMATOR], &[2, 1]).unwrap();
+    inst.set_integer(&[vr::DISCRETIZATION, vr::ESTIMATOR], &[2, 1])
+        .unwrap();
     inst.setup_experiment(0.0, Some(1.0)).unwrap();
     inst.enter_initialization_mode().unwrap();
     inst.exit_initialization_mode().unwrap();

@@ -853,12 +853,30 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         variants::record_seeds(&fmus, &a.seeds, Conditions::KalkerThreeQuarters).map_err(cfg)?;
     let fmu_rows = variants::learned_variants();
     let fmu_tables: Vec<(&str, &str, Vec<variants::VariantResult>)> = vec![
-        ("standard", "Standard case (20 m/s, 20 s)", variants::compare(&constant, &fmu_rows).map_err(cfg)?),
-        ("kalker_75", "Kalker coefficients at 75 % in the vehicle (between the taps' training conditions)", variants::compare(&three_quarters, &fmu_rows).map_err(cfg)?),
-        ("kalker_50", "Kalker coefficients at 50 % in the vehicle", variants::compare(&kalker, &fmu_rows).map_err(cfg)?),
-        ("variable_speed", "Variable speed (0 -> 20 -> 10 m/s, 50 s; the learned filter blends its taps by speed, below 5 m/s the paper's filter)", variants::compare(&variable, &fmu_rows).map_err(cfg)?),
+        (
+            "standard",
+            "Standard case (20 m/s, 20 s)",
+            variants::compare(&constant, &fmu_rows).map_err(cfg)?,
+        ),
+        (
+            "kalker_75",
+            "Kalker coefficients at 75 % in the vehicle (between the taps' training conditions)",
+            variants::compare(&three_quarters, &fmu_rows).map_err(cfg)?,
+        ),
+        (
+            "kalker_50",
+            "Kalker coefficients at 50 % in the vehicle",
+            variants::compare(&kalker, &fmu_rows).map_err(cfg)?,
+        ),
+        (
+            "variable_speed",
+            "Variable speed (0 -> 20 -> 10 m/s, 50 s; the learned filter blends its taps by speed, below 5 m/s the paper's filter)",
+            variants::compare(&variable, &fmu_rows).map_err(cfg)?,
+        ),
     ];
-    let mut md = String::from("# Beyond the paper: estimator variants\n\n## The estimator FMU: learned filter (default) and the paper's filter\n\n");
+    let mut md = String::from(
+        "# Beyond the paper: estimator variants\n\n## The estimator FMU: learned filter (default) and the paper's filter\n\n",
+    );
     for (_, title, rows) in &fmu_tables {
         md.push_str(&variants::markdown(title, &a.seeds, rows));
         md.push('\n');
@@ -989,9 +1007,21 @@ fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
     o.training_seed = a.seed;
     o.validation_seeds = a.validation_seeds.clone();
     let defaults = Options::shipped();
-    if (o.speeds.clone(), o.kalker_scales.clone(), o.lags.clone(), o.roll_rate, o.training_seed, o.validation_seeds.clone())
-        != (defaults.speeds, defaults.kalker_scales, defaults.lags, defaults.roll_rate, defaults.training_seed, defaults.validation_seeds)
-    {
+    if (
+        o.speeds.clone(),
+        o.kalker_scales.clone(),
+        o.lags.clone(),
+        o.roll_rate,
+        o.training_seed,
+        o.validation_seeds.clone(),
+    ) != (
+        defaults.speeds,
+        defaults.kalker_scales,
+        defaults.lags,
+        defaults.roll_rate,
+        defaults.training_seed,
+        defaults.validation_seeds,
+    ) {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
     let started = std::time::Instant::now();

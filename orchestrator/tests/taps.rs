@@ -13,7 +13,10 @@ use std::path::Path;
 #[test]
 #[ignore = "not yet seen passing in a debug build; run with --ignored (issue 13)"]
 fn the_shipped_taps_are_regenerated_byte_for_byte() {
-    let fmus = Fmus::new(common::fmu("RailVehicle"), common::fmu("AlignmentEstimator"));
+    let fmus = Fmus::new(
+        common::fmu("RailVehicle"),
+        common::fmu("AlignmentEstimator"),
+    );
     let shipped = Bank::load(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("../fmu-estimator/resources/learned.taps"),
     )

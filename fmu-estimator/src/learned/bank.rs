@@ -136,7 +136,10 @@ impl Header {
                 f[1]
             ));
         }
-        let num = |s: &str| s.parse::<usize>().map_err(|_| bad(format!("'{s}' in the first line")));
+        let num = |s: &str| {
+            s.parse::<usize>()
+                .map_err(|_| bad(format!("'{s}' in the first line")))
+        };
         let (hlen, dlen) = (num(f[2])?, num(f[3])?);
         let body = &bytes[nl + 1..];
         if body.len() != hlen.saturating_add(dlen) {
@@ -147,7 +150,9 @@ impl Header {
         }
         let (head, data) = body.split_at(hlen);
         if format!("{:016x}", fnv1a(data)) != f[4] {
-            return Err(bad("the taps' checksum does not match (damaged file)".into()));
+            return Err(bad(
+                "the taps' checksum does not match (damaged file)".into()
+            ));
         }
         let head = std::str::from_utf8(head).map_err(|_| bad("the header is not UTF-8".into()))?;
         let mut bank: Bank = toml::from_str(head).map_err(|e| bad(format!("header: {e}")))?;
@@ -155,7 +160,11 @@ impl Header {
         let needed: usize = bank
             .entries
             .iter()
-            .flat_map(|e| e.windows.iter().map(|w| e.channels.len() * (w.past + w.future + 1)))
+            .flat_map(|e| {
+                e.windows
+                    .iter()
+                    .map(|w| e.channels.len() * (w.past + w.future + 1))
+            })
             .sum();
         if needed * 4 != dlen {
             return Err(bad(format!(
@@ -276,7 +285,12 @@ pub(crate) mod tests {
                 ridges: vec![1e-6],
                 command: "none".into(),
             },
-            entries: vec![entry(10.0, 0), entry(20.0, 0), entry(10.0, 3), entry(20.0, 3)],
+            entries: vec![
+                entry(10.0, 0),
+                entry(20.0, 0),
+                entry(10.0, 3),
+                entry(20.0, 3),
+            ],
         }
     }
 

@@ -21,7 +21,10 @@ pub use stream::{Choice, Learned};
 pub fn shipped() -> Result<Bank, String> {
     const BYTES: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps"));
     if BYTES.is_empty() {
-        return Err("this build has no tap bank (resources/learned.taps): run `orchestrator study taps`".into());
+        return Err(
+            "this build has no tap bank (resources/learned.taps): run `orchestrator study taps`"
+                .into(),
+        );
     }
     Bank::parse(BYTES, std::path::Path::new("learned.taps (built in)"))
 }
@@ -29,7 +32,13 @@ pub fn shipped() -> Result<Bank, String> {
 /// One sample's channels in [`grid::CHANNELS`] order: the sensors, then the Kalman filter's
 /// alignment estimate `kalman`.
 pub fn channels(s: &crate::offline::Sample, kalman: f64) -> [f64; 5] {
-    [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate, kalman]
+    [
+        s.ws_acc_y,
+        s.ws_yaw_rate,
+        s.frame_acc_y,
+        s.ws_roll_rate,
+        kalman,
+    ]
 }
 
 /// Which estimate the FMU's `alignment` output carries (`active_estimator`).

@@ -254,10 +254,11 @@ impl Learned {
                 l.dedup();
                 l
             };
-            let best = lags
-                .iter()
-                .copied()
-                .min_by(|a, b| (*a as f64 - want).abs().total_cmp(&(*b as f64 - want).abs()));
+            let best = lags.iter().copied().min_by(|a, b| {
+                (*a as f64 - want)
+                    .abs()
+                    .total_cmp(&(*b as f64 - want).abs())
+            });
             let shown: Vec<String> = lags
                 .iter()
                 .map(|l| format!("{}", *l as f64 * bank.grid))
@@ -277,7 +278,11 @@ impl Learned {
                     return Err(format!(
                         "lag = {} m: the tap bank holds fixed-lag taps for {} m ({sensors}); 0 switches the lagged output off",
                         choice.lag,
-                        if shown.is_empty() { "no lag".into() } else { shown.join(", ") }
+                        if shown.is_empty() {
+                            "no lag".into()
+                        } else {
+                            shown.join(", ")
+                        }
                     ));
                 }
             }
@@ -352,7 +357,9 @@ impl Learned {
         }
         let sel = Arc::clone(&self.selection);
         // The two bank speeds around `speed` and the weight of the upper one.
-        let i = s.partition_point(|v| *v <= speed).clamp(1, s.len().max(2) - 1);
+        let i = s
+            .partition_point(|v| *v <= speed)
+            .clamp(1, s.len().max(2) - 1);
         let (lo, hi, a) = if s.len() == 1 {
             (0, 0, 0.0)
         } else {
@@ -438,7 +445,13 @@ mod tests {
         let mut d = 0.0;
         for k in 0..200 {
             d += 0.05;
-            let x = [(k as f64 * 0.3).sin(), 0.0, 0.0, 0.0, (k as f64 * 0.11).cos()];
+            let x = [
+                (k as f64 * 0.3).sin(),
+                0.0,
+                0.0,
+                0.0,
+                (k as f64 * 0.11).cos(),
+            ];
             if let Some(c) = grid.add(d, &x) {
                 cells.extend(c.cells);
             }
@@ -450,17 +463,30 @@ mod tests {
         let e20 = &bank.entries[1];
         let want = (1.0 - a) * direct(e10, 1, &cells) + a * direct(e20, 1, &cells);
         let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
-        assert!((got - want).abs() < 1e-12 * want.abs().max(1.0), "{got} {want}");
+        assert!(
+            (got - want).abs() < 1e-12 * want.abs().max(1.0),
+            "{got} {want}"
+        );
         let want = (1.0 - a) * direct(&bank.entries[2], 1, &cells)
             + a * direct(&bank.entries[3], 1, &cells);
         let (got, _) = l.lagged(l.lagged.points[1].distance).unwrap();
-        assert!((got - want).abs() < 1e-12 * want.abs().max(1.0), "{got} {want}");
+        assert!(
+            (got - want).abs() < 1e-12 * want.abs().max(1.0),
+            "{got} {want}"
+        );
     }
 
     #[test]
     fn outside_the_speed_range_there_is_no_estimate_and_it_resumes_inside() {
         let bank = sample_bank();
-        let mut l = Learned::new(&bank, Choice { roll_rate: false, lag: 0.0 }).unwrap();
+        let mut l = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.0,
+            },
+        )
+        .unwrap();
         assert_eq!(l.speed_range(), (10.0, 20.0));
         let mut d = 0.0;
         for _ in 0..100 {
@@ -478,17 +504,39 @@ mod tests {
     #[test]
     fn unavailable_choices_are_refused_by_name() {
         let bank = sample_bank();
-        let e = Learned::new(&bank, Choice { roll_rate: true, lag: 0.0 }).unwrap_err();
+        let e = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: true,
+                lag: 0.0,
+            },
+        )
+        .unwrap_err();
         assert!(e.contains("four sensors"), "{e}");
-        let e = Learned::new(&bank, Choice { roll_rate: false, lag: 10.0 }).unwrap_err();
+        let e = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 10.0,
+            },
+        )
+        .unwrap_err();
         assert!(e.contains("lag = 10 m") && e.contains("0.6"), "{e}");
     }
 
     #[test]
     fn extrapolation_is_linear_and_at_most_one_cell_ahead() {
         let mut t = Track::default();
-        t.push(Point { value: 1.0, std: 0.1, distance: 1.0 });
-        t.push(Point { value: 2.0, std: 0.2, distance: 1.2 });
+        t.push(Point {
+            value: 1.0,
+            std: 0.1,
+            distance: 1.0,
+        });
+        t.push(Point {
+            value: 2.0,
+            std: 0.2,
+            distance: 1.2,
+        });
         assert!((t.at(1.3).unwrap().0 - 2.5).abs() < 1e-12);
         assert!((t.at(5.0).unwrap().0 - 3.0).abs() < 1e-12);
         assert_eq!(t.at(1.0).unwrap(), (2.0, 0.2));

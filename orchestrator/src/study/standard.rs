@@ -104,7 +104,8 @@ pub fn metrics_json(m: &BandMetrics, lagged: Option<&BandMetrics>) -> String {
         "grid_step_m": DS, "trim_m": TRIM, "filter": "Butterworth band-pass, order 4 per edge, zero phase (sosfiltfilt)",
     }});
     if let Some(l) = lagged {
-        value["lagged"] = serde_json::json!({ "bands": l, "output": "alignment_lagged at distance_lagged" });
+        value["lagged"] =
+            serde_json::json!({ "bands": l, "output": "alignment_lagged at distance_lagged" });
     }
     serde_json::to_string_pretty(&value).unwrap_or_default()
 }

@@ -190,11 +190,23 @@ pub fn learned_variants() -> Vec<Variant> {
         )
     };
     vec![
-        variant("paper's filter (estimator 1)", &[("estimator", "1".into())], false),
+        variant(
+            "paper's filter (estimator 1)",
+            &[("estimator", "1".into())],
+            false,
+        ),
         learned("learned, causal (FMU default)", false, Output::Alignment),
-        learned("learned, fixed lag 10 m (alignment_lagged)", false, Output::Lagged),
+        learned(
+            "learned, fixed lag 10 m (alignment_lagged)",
+            false,
+            Output::Lagged,
+        ),
         learned("learned + roll-rate gyro, causal", true, Output::Alignment),
-        learned("learned + roll-rate gyro, fixed lag 10 m", true, Output::Lagged),
+        learned(
+            "learned + roll-rate gyro, fixed lag 10 m",
+            true,
+            Output::Lagged,
+        ),
     ]
 }
 
@@ -303,7 +315,8 @@ pub fn estimate_learned(
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
     let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, None)?;
-    let learned = offline::learned(&values)?.ok_or("the settings do not select the learned filter")?;
+    let learned =
+        offline::learned(&values)?.ok_or("the settings do not select the learned filter")?;
     let lag = learned.lag();
     let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
     let est = out.learned.ok_or("no learned estimate")?;
@@ -500,10 +513,22 @@ pub fn record_seeds(
                     settings.push(("kalker_scale".into(), Value::Real(0.75)))
                 }
                 Conditions::VariableSpeed => {
-                    return record_with(fmus, settings, PROFILE_STOP, Some(&profile), Some("ws_roll_rate"));
+                    return record_with(
+                        fmus,
+                        settings,
+                        PROFILE_STOP,
+                        Some(&profile),
+                        Some("ws_roll_rate"),
+                    );
                 }
             }
-            record_with(fmus, settings, super::runs::STOP, None, Some("ws_roll_rate"))
+            record_with(
+                fmus,
+                settings,
+                super::runs::STOP,
+                None,
+                Some("ws_roll_rate"),
+            )
         })
         .collect()
 }

@@ -98,7 +98,11 @@ impl Correlations {
             let mut p: Vec<Complex64> = (0..nfft).map(|k| a[k].conj() * b[k] * w[k]).collect();
             inv.process(&mut p);
             for tau in -span..=span {
-                let k = if tau >= 0 { tau as usize } else { nfft - (-tau) as usize };
+                let k = if tau >= 0 {
+                    tau as usize
+                } else {
+                    nfft - (-tau) as usize
+                };
                 out[(tau + span) as usize] += p[k].re / nfft as f64;
             }
         };
@@ -157,14 +161,21 @@ mod tests {
         // transients are O(filter length / N).
         let n = 40_000;
         let a = noise(n, 1);
-        let b: Vec<f64> = noise(n, 2).iter().zip(&a).map(|(x, y)| x + 0.5 * y).collect();
+        let b: Vec<f64> = noise(n, 2)
+            .iter()
+            .zip(&a)
+            .map(|(x, y)| x + 0.5 * y)
+            .collect();
         let ds = 0.2;
         let band = BANDS[1];
         let g = band_power(&band, ds).unwrap();
         let weight = |f: f64| g(f) * g(f);
         let mut c = Correlations::new(1, 20, 0);
         c.add(&[a.clone()], &b, &weight, &[], ds);
-        let (fa, fb) = (bandpass(&a, ds, &band).unwrap(), bandpass(&b, ds, &band).unwrap());
+        let (fa, fb) = (
+            bandpass(&a, ds, &band).unwrap(),
+            bandpass(&b, ds, &band).unwrap(),
+        );
         for tau in [-7isize, 0, 3, 20] {
             let direct: f64 = (0..n)
                 .filter_map(|i| {

@@ -111,12 +111,25 @@ struct GridRun {
 /// The vehicle variables the runs record beyond a [`Record`]'s.
 const ROLL: &str = "ws_roll_rate";
 
-fn run(fmus: &Fmus, seed: u32, kalker: f64, speed: f64, distance: f64, roll: bool) -> Result<GridRun, String> {
+fn run(
+    fmus: &Fmus,
+    seed: u32,
+    kalker: f64,
+    speed: f64,
+    distance: f64,
+    roll: bool,
+) -> Result<GridRun, String> {
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(20.0, MAX_STOP).round();
     let mut settings = seeded(seed);
     settings.push(("kalker_scale".into(), Value::Real(kalker)));
-    let rec: Record = record_with(fmus, settings, stop, Some(&move |_| speed), roll.then_some(ROLL))?;
+    let rec: Record = record_with(
+        fmus,
+        settings,
+        stop,
+        Some(&move |_| speed),
+        roll.then_some(ROLL),
+    )?;
     on_grid(&rec)
 }
 
@@ -174,19 +187,28 @@ impl Fit {
             let mean = all.iter().sum::<f64>() / n;
             let sd = (all.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
             if !(sd.is_finite() && sd > 0.0) {
-                return Err(format!("training channel {} is constant or not finite", CHANNELS[c]));
+                return Err(format!(
+                    "training channel {} is constant or not finite",
+                    CHANNELS[c]
+                ));
             }
             scale.push(sd);
         }
         let bands: Vec<Box<dyn Fn(f64) -> f64 + Sync>> = BANDS
             .iter()
             .chain([&WIDE])
-            .map(|b| band_power(b, GRID).map(|g| Box::new(move |f: f64| g(f) * g(f)) as Box<dyn Fn(f64) -> f64 + Sync>))
+            .map(|b| {
+                band_power(b, GRID)
+                    .map(|g| Box::new(move |f: f64| g(f) * g(f)) as Box<dyn Fn(f64) -> f64 + Sync>)
+            })
             .collect::<Result<_, _>>()?;
         // Band variances of the target first (the weights), then the correlations.
         let mut var = Correlations::new(0, 0, bands.len());
         for r in runs {
-            let extra: Vec<&dyn Fn(f64) -> f64> = bands.iter().map(|b| b.as_ref() as &dyn Fn(f64) -> f64).collect();
+            let extra: Vec<&dyn Fn(f64) -> f64> = bands
+                .iter()
+                .map(|b| b.as_ref() as &dyn Fn(f64) -> f64)
+                .collect();
             var.add(&[], &r.target[skip..], &|_| 0.0, &extra, GRID);
         }
         let mut w: Vec<f64> = var.extra.iter().map(|v| 1.0 / v).collect();
@@ -202,7 +224,11 @@ impl Fit {
                 .collect();
             corr.add(&x, &r.target[skip..], &weight, &[], GRID);
         }
-        Ok(Fit { corr, scale, channels })
+        Ok(Fit {
+            corr,
+            scale,
+            channels,
+        })
     }
 
     /// Taps (physical units, file order) of the window `past` behind, `future` ahead.
@@ -231,7 +257,13 @@ impl Fit {
 }
 
 /// The estimates of a window on a run's grid (where its history exists), with positions.
-fn apply(run: &GridRun, channels: &[usize], taps: &[f64], past: usize, future: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+fn apply(
+    run: &GridRun,
+    channels: &[usize],
+    taps: &[f64],
+    past: usize,
+    future: usize,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
     let len = past + future + 1;
     let n = run.cells.cells.len();
     let (mut pos, mut est, mut err) = (vec![], vec![], vec![]);
@@ -251,12 +283,21 @@ fn apply(run: &GridRun, channels: &[usize], taps: &[f64], past: usize, future: u
 }
 
 /// `sum_b Jrel_b^2` of a window on the validation runs (mean), and its rms error.
-fn validate(runs: &[GridRun], channels: &[usize], taps: &[f64], past: usize, future: usize) -> Result<(f64, f64), String> {
+fn validate(
+    runs: &[GridRun],
+    channels: &[usize],
+    taps: &[f64],
+    past: usize,
+    future: usize,
+) -> Result<(f64, f64), String> {
     let (mut obj, mut sq, mut n) = (0.0, 0.0, 0usize);
     for r in runs {
         let (pos, est, err) = apply(r, channels, taps, past, future);
         let m = evaluate(&pos, &est, &r.truth_distance, &r.truth, DS, TRIM)?;
-        obj += [m.whole, m.d1, m.d2, m.d3].iter().map(|a| a.jrel * a.jrel).sum::<f64>();
+        obj += [m.whole, m.d1, m.d2, m.d3]
+            .iter()
+            .map(|a| a.jrel * a.jrel)
+            .sum::<f64>();
         sq += err.iter().map(|e| e * e).sum::<f64>();
         n += err.len();
     }
@@ -268,7 +309,16 @@ fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String>
     let training: Vec<GridRun> = o
         .kalker_scales
         .par_iter()
-        .map(|k| run(fmus, o.training_seed, *k, speed, TRAINING_DISTANCE, o.roll_rate))
+        .map(|k| {
+            run(
+                fmus,
+                o.training_seed,
+                *k,
+                speed,
+                TRAINING_DISTANCE,
+                o.roll_rate,
+            )
+        })
         .collect::<Result<_, _>>()?;
     let validation: Vec<GridRun> = o
         .validation_seeds
@@ -278,7 +328,11 @@ fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String>
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
     let past = points(WINDOW);
     let span = past + lags.iter().copied().max().unwrap_or(0);
-    let sets: Vec<bool> = if o.roll_rate { vec![false, true] } else { vec![false] };
+    let sets: Vec<bool> = if o.roll_rate {
+        vec![false, true]
+    } else {
+        vec![false]
+    };
     let mut entries = vec![];
     for roll in sets {
         let channels = channel_set(roll);
@@ -302,13 +356,25 @@ fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String>
                 .map(|p| {
                     let taps = fit.solve(*p, lag, ridge)?;
                     let (_, rms_error) = validate(&validation, &channels, &taps, *p, lag)?;
-                    Ok(Window { past: *p, future: lag, rms_error, taps })
+                    Ok(Window {
+                        past: *p,
+                        future: lag,
+                        rms_error,
+                        taps,
+                    })
                 })
                 .collect::<Result<_, String>>()?;
             let validation_objective = if lag == 0 {
                 objective
             } else {
-                validate(&validation, &channels, &windows.last().expect("full").taps, past, lag)?.0
+                validate(
+                    &validation,
+                    &channels,
+                    &windows.last().expect("full").taps,
+                    past,
+                    lag,
+                )?
+                .0
             };
             entries.push(Entry {
                 speed,
@@ -329,17 +395,30 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, St
         return Err("the validation seeds must differ from the training seed".into());
     }
     if o.speeds.is_empty() || o.speeds.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-        return Err(format!("the speeds must be positive numbers of m/s; got {:?}", o.speeds));
+        return Err(format!(
+            "the speeds must be positive numbers of m/s; got {:?}",
+            o.speeds
+        ));
     }
-    if o.lags.iter().any(|l| !(l.is_finite() && *l > 0.0 && *l <= WINDOW)) {
-        return Err(format!("the lags must lie in (0, {WINDOW}] m; got {:?}", o.lags));
+    if o.lags
+        .iter()
+        .any(|l| !(l.is_finite() && *l > 0.0 && *l <= WINDOW))
+    {
+        return Err(format!(
+            "the lags must lie in (0, {WINDOW}] m; got {:?}",
+            o.lags
+        ));
     }
     let mut entries = vec![];
     for v in &o.speeds {
         progress(&format!("fitting the taps at {v} m/s"));
         entries.extend(fit_speed(fmus, o, *v)?);
     }
-    let scales: Vec<String> = o.kalker_scales.iter().map(|k| format!("{}", k * 100.0)).collect();
+    let scales: Vec<String> = o
+        .kalker_scales
+        .iter()
+        .map(|k| format!("{}", k * 100.0))
+        .collect();
     Ok(Header {
         format: fmu_estimator::learned::bank::FORMAT,
         grid: GRID,
