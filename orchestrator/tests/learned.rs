@@ -39,6 +39,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
             name: smoother_partner.name.clone(),
             settings: smoother_partner.settings.clone(),
             smooth: true,
+            output: variants::Output::Alignment,
         },
         None,
     )
