@@ -8,7 +8,10 @@
 //! outputs extrapolate the last two grid estimates linearly in distance (causal).
 //!
 //! At the start of a run the history is short: each entry has windows with shorter pasts, and
-//! the longest one the history covers is used. Outside the bank's speed range no learned
+//! the longest one the history covers is used. Until the fixed-lag window has its `lag` metres
+//! of look-ahead (the first `lag` + 1 m), the fixed-lag output is the causal estimate made when
+//! the vehicle was at `distance - lag` (a delay line of the causal grid estimates): the best
+//! estimate there is of that position, never one of another position relabelled. Outside the bank's speed range no learned
 //! estimate is made (the caller falls back to the Kalman filter); the history goes on, so the
 //! learned estimate resumes as soon as the speed is back inside.
 
@@ -190,6 +193,40 @@ impl Track {
     }
 }
 
+/// The causal grid estimates of the last `lag` metres (and two more points), oldest first: the
+/// fixed-lag output while its own window is not yet available.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+struct Delay {
+    points: std::collections::VecDeque<Point>,
+    capacity: usize,
+}
+
+impl Delay {
+    fn push(&mut self, p: Point) {
+        if self.points.len() == self.capacity {
+            self.points.pop_front();
+        }
+        self.points.push_back(p);
+    }
+
+    /// The causal estimate made at `distance` (linear between grid points; the oldest point
+    /// before it, the newest after it).
+    fn at(&self, distance: f64) -> Option<(f64, f64)> {
+        let first = self.points.front()?;
+        if distance <= first.distance {
+            return Some((first.value, first.std));
+        }
+        let i = self.points.partition_point(|p| p.distance < distance);
+        let Some(b) = self.points.get(i) else {
+            let last = self.points.back().expect("non-empty");
+            return Some((last.value, last.std));
+        };
+        let a = &self.points[i - 1];
+        let w = (distance - a.distance) / (b.distance - a.distance);
+        Some((a.value + w * (b.value - a.value), b.std))
+    }
+}
+
 /// The learned filter's run-time state. Cloning it (FMU state) shares the taps.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Learned {
@@ -198,6 +235,7 @@ pub struct Learned {
     history: History,
     causal: Track,
     lagged: Track,
+    delay: Delay,
     /// Whether the last closed cell's speed was inside the bank's range.
     in_range: bool,
 }
@@ -310,6 +348,10 @@ impl Learned {
             history: History::new(capacity),
             causal: Track::default(),
             lagged: Track::default(),
+            delay: Delay {
+                points: Default::default(),
+                capacity: if lag > 0 { lag + 2 } else { 0 },
+            },
             in_range: false,
         })
     }
@@ -353,6 +395,7 @@ impl Learned {
         if !self.in_range {
             self.causal.clear();
             self.lagged.clear();
+            self.delay.points.clear();
             return;
         }
         let sel = Arc::clone(&self.selection);
@@ -378,11 +421,15 @@ impl Learned {
         };
         let d = closed.distance;
         if let Some((value, std)) = blend(&sel.causal, &self.history) {
-            self.causal.push(Point {
+            let p = Point {
                 value,
                 std,
                 distance: d,
-            });
+            };
+            self.causal.push(p);
+            if self.delay.capacity > 0 {
+                self.delay.push(p);
+            }
         }
         if !sel.lagged.is_empty()
             && let Some((value, std)) = blend(&sel.lagged, &self.history)
@@ -401,9 +448,15 @@ impl Learned {
         self.causal.at(distance)
     }
 
-    /// The fixed-lag estimate for the position `lag` metres behind `distance`.
+    /// The fixed-lag estimate for the position `lag` metres behind `distance` (the causal
+    /// estimate made there while the fixed-lag window is not yet available).
     pub fn lagged(&self, distance: f64) -> Option<(f64, f64)> {
-        self.lagged.at(distance)
+        if self.selection.lagged.is_empty() {
+            return None;
+        }
+        self.lagged
+            .at(distance)
+            .or_else(|| self.delay.at(distance - self.lag()))
     }
 }
 
@@ -474,6 +527,50 @@ mod tests {
             (got - want).abs() < 1e-12 * want.abs().max(1.0),
             "{got} {want}"
         );
+    }
+
+    #[test]
+    fn before_its_window_fills_the_lagged_output_is_the_causal_estimate_made_lag_behind() {
+        let mut bank = sample_bank();
+        // Fixed-lag windows from 5 points back only: the causal ones start 1.2 m earlier.
+        for e in bank.entries.iter_mut().filter(|e| e.lag > 0) {
+            e.windows.retain(|w| w.past == 5);
+        }
+        let mut l = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.6,
+            },
+        )
+        .unwrap();
+        let (mut d, mut made) = (0.0, vec![]);
+        let mut checked = 0;
+        for k in 0..40 {
+            d = (k + 1) as f64 * 0.05;
+            l.step(d, 15.0, &[(k as f64 * 0.7).sin(), 0.0, 0.0, 0.0, 0.1]);
+            if let Some(p) = l.causal.points.last()
+                && made.last().map(|m: &Point| m.distance) != Some(p.distance)
+            {
+                made.push(*p);
+            }
+            // Before the fixed-lag window fills, every position lag behind that lies between
+            // two causal estimates gets their linear interpolation.
+            let at = d - 0.6;
+            if l.lagged.points.is_empty()
+                && let Some(i) = made.iter().position(|m| m.distance >= at)
+                && i > 0
+            {
+                let (a, b) = (made[i - 1], made[i]);
+                let want = a.value + (at - a.distance) / (b.distance - a.distance) * (b.value - a.value);
+                let (got, std) = l.lagged(d).unwrap();
+                assert!((got - want).abs() < 1e-12, "at {d} m: {got} {want}");
+                assert_eq!(std, b.std);
+                checked += 1;
+            }
+        }
+        assert!(checked >= 2, "{checked} positions checked");
+        assert!(!l.lagged.points.is_empty(), "the lagged window filled by {d} m");
     }
 
     #[test]
