@@ -38,17 +38,27 @@ unsafe extern "C" {
     fn fmi2SetReal(c: fmi2Component, vr: *const u32, n: usize, v: *const f64) -> fmi2Status;
     fn fmi2GetReal(c: fmi2Component, vr: *const u32, n: usize, v: *mut f64) -> fmi2Status;
     fn fmi2SetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int) -> fmi2Status;
+    fn fmi2GetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *mut c_int) -> fmi2Status;
+    fn fmi2SetBoolean(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int)
+    -> fmi2Status;
 }
 
+/// The paper's filter alone (`estimator` 1) with the given discretization.
 fn instance(scheme: i32) -> fmi2Component {
-    instance_with(scheme, 1, 1)
+    instance_with(scheme, 1, 1, |_| {})
 }
 
-/// An initialized instance with the given discretization, alignment model and gain.
-fn instance_with(scheme: i32, model: i32, gain: i32) -> fmi2Component {
+/// An initialized instance with the given discretization, alignment model and gain; `more`
+/// sets further parameters before initialization.
+fn instance_with(
+    scheme: i32,
+    model: i32,
+    gain: i32,
+    more: impl FnOnce(fmi2Component),
+) -> fmi2Component {
     let name = CString::new("bench").unwrap();
     let guid = CString::new(<fmu_estimator::Estimator as fmi_abi::Model>::INFO.guid).unwrap();
-    let res = CString::new(format!("file://{}/resources", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let res = CString::new(format!("file://{}/../resources", env!("CARGO_MANIFEST_DIR"))).unwrap();
     unsafe {
         let c = fmi2Instantiate(
             name.as_ptr(),
@@ -63,6 +73,8 @@ fn instance_with(scheme: i32, model: i32, gain: i32) -> fmi2Component {
         fmi2SetInteger(c, &vr::DISCRETIZATION, 1, &scheme);
         fmi2SetInteger(c, &vr::ALIGNMENT_MODEL, 1, &model);
         fmi2SetInteger(c, &vr::GAIN, 1, &gain);
+        fmi2SetInteger(c, &vr::ESTIMATOR, 1, &1);
+        more(c);
         fmi2SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0);
         fmi2EnterInitializationMode(c);
         assert_eq!(fmi2ExitInitializationMode(c), fmi2Status::OK);
@@ -153,7 +165,7 @@ fn bench_options(c: &mut Criterion) {
             })
         },
     );
-    let comp = instance_with(1, 1, 2);
+    let comp = instance_with(1, 1, 2, |_| {});
     let mut t = 0.0;
     c.bench_function("fmi2DoStep (paper, steady-state gain)", |b| {
         b.iter(|| {
@@ -165,5 +177,53 @@ fn bench_options(c: &mut Criterion) {
     unsafe { fmi2FreeInstance(comp) };
 }
 
-criterion_group!(benches, bench, bench_options);
+/// The learned filter (`estimator` 2, the FMU's default) at 20 m/s: a 0.2 m cell closes every
+/// 10 steps and costs the FIR products of two bank speeds, so the figure is the mean over cells.
+fn bench_learned(c: &mut Criterion) {
+    let h = 1e-3;
+    for (lag, roll, label) in [
+        (10.0, false, "learned, causal + 10 m lag (default)"),
+        (0.0, false, "learned, causal only"),
+        (10.0, true, "learned + roll-rate gyro, causal + 10 m lag"),
+    ] {
+        let comp = instance_with(1, 1, 1, |c| unsafe {
+            fmi2SetInteger(c, &vr::ESTIMATOR, 1, &2);
+            fmi2SetReal(c, &vr::LAG, 1, &lag);
+            fmi2SetBoolean(c, &vr::USE_ROLL_RATE, 1, &(roll as fmi2Boolean));
+        });
+        let inputs = [
+            vr::WS_ACC_Y,
+            vr::WS_YAW_RATE,
+            vr::FRAME_ACC_Y,
+            vr::SPEED,
+            vr::WS_ROLL_RATE,
+        ];
+        let outputs = [vr::ALIGNMENT, vr::ALIGNMENT_LAGGED];
+        let (mut t, mut k) = (0.0, 0u64);
+        c.bench_function(
+            &format!("SetReal(5) + fmi2DoStep + GetReal(2) ({label})"),
+            |b| {
+                b.iter(|| {
+                    k += 1;
+                    let x = (k as f64 * 1e-3).sin();
+                    let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0, 0.001 * x];
+                    let mut out = [0.0; 2];
+                    unsafe {
+                        fmi2SetReal(comp, inputs.as_ptr(), 5, vals.as_ptr());
+                        fmi2DoStep(comp, t, h, 1);
+                        fmi2GetReal(comp, outputs.as_ptr(), 2, out.as_mut_ptr());
+                    }
+                    t += h;
+                    black_box(out)
+                })
+            },
+        );
+        let mut active = 0;
+        unsafe { fmi2GetInteger(comp, &vr::ACTIVE_ESTIMATOR, 1, &mut active) };
+        assert_eq!(active, 2, "{label}: the learned filter must be the active one");
+        unsafe { fmi2FreeInstance(comp) };
+    }
+}
+
+criterion_group!(benches, bench, bench_options, bench_learned);
 criterion_main!(benches);
