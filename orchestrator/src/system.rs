@@ -119,16 +119,36 @@ pub struct System {
     pub experiment: Experiment,
 }
 
+/// Whether both FMUs declare a variable `name` (from their model descriptions only). An archive
+/// that cannot be read counts as having it: loading the system then reports what is wrong.
+fn both_have(a: &Path, b: &Path, name: &str) -> bool {
+    [a, b].iter().all(|p| match crate::info::read_archive(p) {
+        Ok(archive) => archive.model_description.variable(name).is_some(),
+        Err(_) => true,
+    })
+}
+
 impl System {
-    /// The paper's standard case: the vehicle's sensor signals (the paper's three and the
-    /// roll-rate gyroscope) and its speed feed the estimator, connected by variable name; 20 s
-    /// at 1 ms.
+    /// The paper's standard case: the vehicle's sensor signals and its speed feed the
+    /// estimator, connected by variable name; 20 s at 1 ms. The roll-rate gyroscope
+    /// (`ws_roll_rate`) is connected when both FMUs have it, so an older vehicle or estimator
+    /// without it still runs the paper's three sensors.
     pub fn standard_case(vehicle_fmu: &Path, estimator_fmu: &Path) -> System {
         let link = |from: &str, to: &str| Connection {
             from: Endpoint::new("vehicle", from),
             to: Endpoint::new("estimator", to),
             transform: None,
         };
+        let mut connections = vec![
+            link("ws_acc_y", "ws_acc_y"),
+            link("ws_yaw_rate", "ws_yaw_rate"),
+            link("frame_acc_y", "frame_acc_y"),
+        ];
+        if both_have(vehicle_fmu, estimator_fmu, "ws_roll_rate") {
+            // Read by the estimator only with use_roll_rate = true.
+            connections.push(link("ws_roll_rate", "ws_roll_rate"));
+        }
+        connections.push(link("forward_speed", "speed"));
         System {
             name: "standard_case".into(),
             components: vec![
@@ -143,14 +163,7 @@ impl System {
                     parameters: vec![],
                 },
             ],
-            connections: vec![
-                link("ws_acc_y", "ws_acc_y"),
-                link("ws_yaw_rate", "ws_yaw_rate"),
-                link("frame_acc_y", "frame_acc_y"),
-                // Read by the estimator only with use_roll_rate = true.
-                link("ws_roll_rate", "ws_roll_rate"),
-                link("forward_speed", "speed"),
-            ],
+            connections,
             experiment: Experiment {
                 start: 0.0,
                 stop: Some(20.0),

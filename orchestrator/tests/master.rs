@@ -216,6 +216,27 @@ fn bad_systems_are_refused_before_running() {
 }
 
 #[test]
+fn the_standard_case_connects_the_roll_rate_gyro_only_when_both_fmus_have_it() {
+    let linked = |vehicle: &str| -> Vec<String> {
+        System::standard_case(&common::fmu(vehicle), &common::fmu("AlignmentEstimator"))
+            .connections
+            .iter()
+            .map(|c| c.to.variable.clone())
+            .collect()
+    };
+    let full = linked("RailVehicle");
+    assert!(full.contains(&"ws_roll_rate".to_string()), "{full:?}");
+    assert_eq!(full.len(), 5);
+    // Any FMU without ws_roll_rate in the vehicle's place: the paper's three sensors and speed.
+    let without = linked("Feedthrough");
+    assert_eq!(
+        without,
+        ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed"],
+        "{without:?}"
+    );
+}
+
+#[test]
 fn the_standard_case_runs_through_the_master() {
     let cosim = Cosimulation::load(System::standard_case(
         &common::fmu("RailVehicle"),
