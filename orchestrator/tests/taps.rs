@@ -11,7 +11,6 @@ use orchestrator::study::runs::Fmus;
 use std::path::Path;
 
 #[test]
-#[ignore = "not yet seen passing in a debug build; run with --ignored (issue 13)"]
 fn the_shipped_taps_are_regenerated_byte_for_byte() {
     let fmus = Fmus::new(
         common::fmu("RailVehicle"),
