@@ -65,10 +65,12 @@ fn main() {
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
     std::fs::write(out_dir.join("calibrated.rs"), code).expect("writing calibrated.rs");
 
-    // The tap bank is built into the library for offline use. Before the first `orchestrator
-    // study taps` there is none: an empty file, which `learned::shipped` reports as missing.
-    let taps = manifest.join("resources/learned.taps");
-    println!("cargo::rerun-if-changed={}", taps.display());
-    let bytes = std::fs::read(&taps).unwrap_or_default();
-    std::fs::write(out_dir.join("learned.taps"), bytes).expect("writing learned.taps");
+    // The tap banks are built into the library for offline use. Before the first `orchestrator
+    // study taps` there are none: empty files, which `learned::shipped` reports as missing.
+    for name in ["learned.taps", "learned-nominal.taps"] {
+        let taps = manifest.join("resources").join(name);
+        println!("cargo::rerun-if-changed={}", taps.display());
+        let bytes = std::fs::read(&taps).unwrap_or_default();
+        std::fs::write(out_dir.join(name), bytes).expect("writing the tap bank");
+    }
 }

@@ -151,7 +151,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
     VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
-    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute"),
+    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (trained at Kalker 100 % and 50 %, robust to wear), learned-nominal.taps (Kalker 100 % only)"),
     VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; over the first lag + 1 m the causal estimate made at distance_lagged, outside the taps' speed range the Kalman estimate)"),
     VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
     VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
@@ -417,12 +417,15 @@ pub fn learned_from_values(
     let bank = match resources {
         _ if std::path::Path::new(&name).is_absolute() => Bank::load(std::path::Path::new(&name))?,
         Some(dir) => Bank::load(&dir.join(&name))?,
-        None if name == "learned.taps" => crate::learned::shipped()?,
-        None => {
-            return Err(format!(
-                "tap_file '{name}' is relative and the FMU has no resources directory: give an absolute path"
-            ));
-        }
+        None => match crate::learned::shipped_named(&name) {
+            Some(bank) => bank?,
+            None => {
+                return Err(format!(
+                    "tap_file '{name}' is relative and the FMU has no resources directory: give an absolute path or a shipped bank ({})",
+                    crate::learned::SHIPPED.join(", ")
+                ));
+            }
+        },
     };
     let choice = Choice {
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],

@@ -39,8 +39,7 @@ unsafe extern "C" {
     fn fmi2GetReal(c: fmi2Component, vr: *const u32, n: usize, v: *mut f64) -> fmi2Status;
     fn fmi2SetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int) -> fmi2Status;
     fn fmi2GetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *mut c_int) -> fmi2Status;
-    fn fmi2SetBoolean(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int)
-    -> fmi2Status;
+    fn fmi2SetBoolean(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int) -> fmi2Status;
 }
 
 /// The paper's filter alone (`estimator` 1) with the given discretization.
@@ -58,7 +57,11 @@ fn instance_with(
 ) -> fmi2Component {
     let name = CString::new("bench").unwrap();
     let guid = CString::new(<fmu_estimator::Estimator as fmi_abi::Model>::INFO.guid).unwrap();
-    let res = CString::new(format!("file://{}/../resources", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let res = CString::new(format!(
+        "file://{}/../resources",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
     unsafe {
         let c = fmi2Instantiate(
             name.as_ptr(),
@@ -220,7 +223,10 @@ fn bench_learned(c: &mut Criterion) {
         );
         let mut active = 0;
         unsafe { fmi2GetInteger(comp, &vr::ACTIVE_ESTIMATOR, 1, &mut active) };
-        assert_eq!(active, 2, "{label}: the learned filter must be the active one");
+        assert_eq!(
+            active, 2,
+            "{label}: the learned filter must be the active one"
+        );
         unsafe { fmi2FreeInstance(comp) };
     }
 }

@@ -60,6 +60,11 @@ pub struct Entry {
     pub ridge: f64,
     /// The mean objective on the validation seeds with that ridge.
     pub validation_objective: f64,
+    /// The Kalker-coefficient scales this entry was trained and validated on, where they differ
+    /// from the provenance's: a condition under which the vehicle is unstable at this speed
+    /// (hunting into derailment) is left out.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub kalker_scales: Vec<f64>,
     pub windows: Vec<Window>,
 }
 
@@ -257,6 +262,7 @@ pub(crate) mod tests {
             lag,
             ridge: 1e-6,
             validation_objective: 0.1,
+            kalker_scales: vec![],
             windows: [2usize, 5]
                 .iter()
                 .map(|&past| Window {

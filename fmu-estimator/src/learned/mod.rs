@@ -16,17 +16,36 @@ pub mod stream;
 pub use bank::Bank;
 pub use stream::{Choice, Learned};
 
-/// The tap bank shipped in the FMU's resources (`resources/learned.taps`), as built into this
-/// library (offline processing without an unpacked FMU).
-pub fn shipped() -> Result<Bank, String> {
-    const BYTES: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps"));
-    if BYTES.is_empty() {
-        return Err(
-            "this build has no tap bank (resources/learned.taps): run `orchestrator study taps`"
-                .into(),
-        );
+/// The tap banks shipped in the FMU's resources, by file name:
+///
+/// | file | trained on | use |
+/// |---|---|---|
+/// | `learned.taps` | Kalker 100 % and 50 % | the default: robust to wheel and rail wear |
+/// | `learned-nominal.taps` | Kalker 100 % only | a vehicle whose contact is known to be nominal |
+pub const SHIPPED: [&str; 2] = ["learned.taps", "learned-nominal.taps"];
+
+/// A tap bank shipped in the FMU's resources ([`SHIPPED`]), as built into this library
+/// (offline processing without an unpacked FMU); `None` for any other name.
+pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
+    let bytes: &[u8] = match name {
+        "learned.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps")),
+        "learned-nominal.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned-nominal.taps")),
+        _ => return None,
+    };
+    if bytes.is_empty() {
+        return Some(Err(format!(
+            "this build has no tap bank resources/{name}: run `orchestrator study taps`"
+        )));
     }
-    Bank::parse(BYTES, std::path::Path::new("learned.taps (built in)"))
+    Some(Bank::parse(
+        bytes,
+        std::path::Path::new(&format!("{name} (built in)")),
+    ))
+}
+
+/// The default tap bank (`learned.taps`), as built into this library.
+pub fn shipped() -> Result<Bank, String> {
+    shipped_named(SHIPPED[0]).expect("a shipped name")
 }
 
 /// One sample's channels in [`grid::CHANNELS`] order: the sensors, then the Kalman filter's

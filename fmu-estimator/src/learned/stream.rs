@@ -562,7 +562,8 @@ mod tests {
                 && i > 0
             {
                 let (a, b) = (made[i - 1], made[i]);
-                let want = a.value + (at - a.distance) / (b.distance - a.distance) * (b.value - a.value);
+                let want =
+                    a.value + (at - a.distance) / (b.distance - a.distance) * (b.value - a.value);
                 let (got, std) = l.lagged(d).unwrap();
                 assert!((got - want).abs() < 1e-12, "at {d} m: {got} {want}");
                 assert_eq!(std, b.std);
@@ -570,7 +571,10 @@ mod tests {
             }
         }
         assert!(checked >= 2, "{checked} positions checked");
-        assert!(!l.lagged.points.is_empty(), "the lagged window filled by {d} m");
+        assert!(
+            !l.lagged.points.is_empty(),
+            "the lagged window filled by {d} m"
+        );
     }
 
     #[test]

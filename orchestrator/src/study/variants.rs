@@ -100,8 +100,22 @@ pub fn record_with(
     speed: Option<SpeedProfile<'_>>,
     roll_rate: Option<&str>,
 ) -> Result<Record, String> {
+    Ok(record_table(fmus, settings, stop, speed, roll_rate, &[])?.0)
+}
+
+/// [`record_with`], also recording the vehicle's variables `more`: the record and the table
+/// of every recorded column.
+pub fn record_table(
+    fmus: &Fmus,
+    settings: Settings,
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+    roll_rate: Option<&str>,
+    more: &[&str],
+) -> Result<(Record, Table), String> {
     let mut variables = RECORDED.to_vec();
     variables.extend(roll_rate);
+    variables.extend(more);
     let table = vehicle_run_driven(fmus, settings, &variables, stop, speed)?;
     let mut rec = from_table(&table)?;
     if let Some(name) = roll_rate {
@@ -110,7 +124,7 @@ pub fn record_with(
             .ok_or_else(|| format!("no column vehicle.{name}"))?;
         rec.samples = Sample::with_roll_rate(rec.samples, &col[1..]);
     }
-    Ok(rec)
+    Ok((rec, table))
 }
 
 /// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row
@@ -201,6 +215,28 @@ pub fn learned_variants() -> Vec<Variant> {
             false,
             Output::Lagged,
         ),
+        Variant {
+            output: Output::Alignment,
+            ..variant(
+                "learned, causal, nominal-only taps (tap_file learned-nominal.taps)",
+                &[
+                    ("estimator", "2".into()),
+                    ("tap_file", "learned-nominal.taps".into()),
+                ],
+                false,
+            )
+        },
+        Variant {
+            output: Output::Lagged,
+            ..variant(
+                "learned, fixed lag 10 m, nominal-only taps",
+                &[
+                    ("estimator", "2".into()),
+                    ("tap_file", "learned-nominal.taps".into()),
+                ],
+                false,
+            )
+        },
         learned("learned + roll-rate gyro, causal", true, Output::Alignment),
         learned(
             "learned + roll-rate gyro, fixed lag 10 m",

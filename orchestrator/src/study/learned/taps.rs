@@ -23,15 +23,19 @@
 //!    window ([`WINDOW`] m behind, the lag ahead) and for shorter histories ([`STARTS`], used
 //!    at the start of a run).
 //! 4. Ridge: chosen from [`RIDGES`] by the mean objective on the validation seeds (never the
-//!    calibration seed, never an evaluation seed), per speed and sensor set on the causal
-//!    window; the lagged window uses the same ridge. Each window's rms error against the true
+//!    calibration seed, never an evaluation seed), each run under every trained contact
+//!    condition, per speed and sensor set on the causal window; the lagged window uses the
+//!    same ridge.
+//! 5. Stability: a run in which the vehicle is unstable ([`UNSTABLE_WS_Y`]) is no running
+//!    condition; its contact condition is left out at that speed (training and validation),
+//!    and the entry lists the conditions it kept (`kalker_scales`). Each window's rms error against the true
 //!    alignment on the validation seeds becomes its standard deviation.
 
 use super::spectra::{Correlations, band_power};
 use crate::study::metrics::{BANDS, Band, evaluate};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
-use crate::study::variants::{Record, record_with};
+use crate::study::variants::record_table;
 use crate::system::Value;
 use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
@@ -51,7 +55,7 @@ pub const STARTS: [f64; 6] = [1.0, 2.0, 5.0, 10.0, 20.0, 40.0];
 /// error 9.2 mm against a truth of about 2.8 mm); 1000 m gives 0.066 with 3.8 mm.
 pub const KALMAN_HIGHPASS: f64 = 1000.0;
 /// Ridge values tried, relative to the mean diagonal of the normal equations.
-pub const RIDGES: [f64; 6] = [1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
+pub const RIDGES: [f64; 9] = [1e-6, 1e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
 /// Length of each training run \[m\] (10 km: 500 s at 20 m/s).
 pub const TRAINING_DISTANCE: f64 = 10_000.0;
 /// The longest training run \[s\] (bounds the low speeds' runs: 1000 s is 5 km at 5 m/s).
@@ -110,7 +114,16 @@ struct GridRun {
 
 /// The vehicle variables the runs record beyond a [`Record`]'s.
 const ROLL: &str = "ws_roll_rate";
+const WS_Y: &str = "ws_y";
 
+/// A leading-wheelset lateral displacement beyond this \[m\] means the vehicle is unstable at
+/// that speed and contact (hunting grown into flange climbing: over three times the ML95's 9 mm
+/// flange clearance, where a real wheel would derail). With the Kalker coefficients halved the
+/// ML95 reaches 0.37 m at 30 m/s; stable runs stay near 10 mm. Such a run is not a running
+/// condition to learn from.
+pub const UNSTABLE_WS_Y: f64 = 0.03;
+
+/// One run on the grid; `None` if the vehicle is unstable in it ([`UNSTABLE_WS_Y`]).
 fn run(
     fmus: &Fmus,
     seed: u32,
@@ -118,23 +131,30 @@ fn run(
     speed: f64,
     distance: f64,
     roll: bool,
-) -> Result<GridRun, String> {
+) -> Result<Option<GridRun>, String> {
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(20.0, MAX_STOP).round();
     let mut settings = seeded(seed);
     settings.push(("kalker_scale".into(), Value::Real(kalker)));
-    let rec: Record = record_with(
+    let (rec, table) = record_table(
         fmus,
         settings,
         stop,
         Some(&move |_| speed),
         roll.then_some(ROLL),
+        &[WS_Y],
     )?;
-    on_grid(&rec)
+    let ws_y = table
+        .column(&format!("vehicle.{WS_Y}"))
+        .ok_or("no column vehicle.ws_y")?;
+    if ws_y.iter().any(|y| !(y.abs() <= UNSTABLE_WS_Y)) {
+        return Ok(None);
+    }
+    on_grid(&rec).map(Some)
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
-fn on_grid(rec: &Record) -> Result<GridRun, String> {
+fn on_grid(rec: &crate::study::variants::Record) -> Result<GridRun, String> {
     let values = offline::settings(&[])?;
     let (config, _) = offline::config(&values, None)?;
     let out = offline::process(&config, STEP, &rec.samples, false)?;
@@ -305,8 +325,13 @@ fn validate(
 }
 
 /// The entries of one speed: both sensor sets, causal and every lag.
-fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String> {
-    let training: Vec<GridRun> = o
+fn fit_speed(
+    fmus: &Fmus,
+    o: &Options,
+    speed: f64,
+    progress: &dyn Fn(&str),
+) -> Result<Vec<Entry>, String> {
+    let training: Vec<Option<GridRun>> = o
         .kalker_scales
         .par_iter()
         .map(|k| {
@@ -320,11 +345,47 @@ fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String>
             )
         })
         .collect::<Result<_, _>>()?;
-    let validation: Vec<GridRun> = o
+    let stable: Vec<f64> = o
+        .kalker_scales
+        .iter()
+        .zip(&training)
+        .filter(|(_, r)| r.is_some())
+        .map(|(k, _)| *k)
+        .collect();
+    for (k, r) in o.kalker_scales.iter().zip(&training) {
+        if r.is_none() {
+            progress(&format!(
+                "  {speed} m/s, Kalker {} %: the vehicle is unstable (|ws_y| > {} mm), left out",
+                k * 100.0,
+                UNSTABLE_WS_Y * 1e3
+            ));
+        }
+    }
+    if stable.is_empty() {
+        return Err(format!(
+            "at {speed} m/s the vehicle is unstable under every training contact condition"
+        ));
+    }
+    let training: Vec<GridRun> = training.into_iter().flatten().collect();
+    // Validated under every contact condition trained on: robust taps are chosen for all of them.
+    let cases: Vec<(u32, f64)> = o
         .validation_seeds
+        .iter()
+        .flat_map(|s| stable.iter().map(move |k| (*s, *k)))
+        .collect();
+    let validation: Vec<Option<GridRun>> = cases
         .par_iter()
-        .map(|s| run(fmus, *s, 1.0, speed, VALIDATION_DISTANCE, o.roll_rate))
+        .map(|(s, k)| run(fmus, *s, *k, speed, VALIDATION_DISTANCE, o.roll_rate))
         .collect::<Result<_, _>>()?;
+    let validation: Vec<GridRun> = validation.into_iter().flatten().collect();
+    if validation.is_empty() {
+        return Err(format!("at {speed} m/s every validation run is unstable"));
+    }
+    let kalker_scales = if stable == o.kalker_scales {
+        vec![]
+    } else {
+        stable
+    };
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
     let past = points(WINDOW);
     let span = past + lags.iter().copied().max().unwrap_or(0);
@@ -382,6 +443,7 @@ fn fit_speed(fmus: &Fmus, o: &Options, speed: f64) -> Result<Vec<Entry>, String>
                 lag,
                 ridge,
                 validation_objective,
+                kalker_scales: kalker_scales.clone(),
                 windows,
             });
         }
@@ -412,7 +474,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, St
     let mut entries = vec![];
     for v in &o.speeds {
         progress(&format!("fitting the taps at {v} m/s"));
-        entries.extend(fit_speed(fmus, o, *v)?);
+        entries.extend(fit_speed(fmus, o, *v, progress)?);
     }
     let scales: Vec<String> = o
         .kalker_scales
