@@ -31,6 +31,7 @@ pub mod instance;
 pub mod logger;
 pub mod model;
 pub mod resource;
+pub mod step;
 pub mod types;
 pub mod units;
 pub mod variables;

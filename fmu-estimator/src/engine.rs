@@ -214,11 +214,13 @@ impl<const N: usize> Engine<N> {
     }
 
     /// Rebuilds the discrete matrices (and the steady-state gain) when the speed or the step
-    /// differs from the last ones (exact comparison: a constant-speed run builds them once).
+    /// differs from the last ones: the speed compared exactly (a constant-speed run builds them
+    /// once), the step within [`fmi_abi::step::RELATIVE`] (a master's clock rounding, as
+    /// libcosim's alternating 1 ms +- 1 ulp, is not a new step).
     fn ensure_discrete(&mut self, speed: f64, h: f64) -> Result<(), String> {
         if let Some(d) = &self.discrete
             && d.speed == speed
-            && d.h == h
+            && fmi_abi::step::same(d.h, h)
         {
             return Ok(());
         }
@@ -369,6 +371,32 @@ mod tests {
         }
         assert!(max_late < 1e-9, "{max_late}");
         assert_eq!(b.rebuilds, 1);
+    }
+
+    /// Issue 14: libcosim passes a 1 ms step as 1 ms +- 1 ulp by turns (differences of a
+    /// nanosecond clock); the matrices are built once, as for the exact step (12 797 rebuilds
+    /// in a 20 s run before), and the estimate is the exact step's to rounding.
+    #[test]
+    fn a_masters_clock_rounding_is_not_a_new_step() {
+        let p = Params::default();
+        let space = StateSpace::paper(&p, noise(), true);
+        let p0 = SMatrix::<f64, 7, 7>::identity() * 1e-6;
+        let mut exact = Engine::new(space.clone(), Scheme::Taylor2, Gain::TimeVarying, r(), p0);
+        let mut jittered = Engine::new(space, Scheme::Taylor2, Gain::TimeVarying, r(), p0);
+        let mut t_ns = 0u64;
+        let mut odd = 0;
+        for k in 0..20_000 {
+            let h = (t_ns + 1_000_000) as f64 * 1e-9 - t_ns as f64 * 1e-9;
+            t_ns += 1_000_000;
+            odd += (h != 1e-3) as usize;
+            let t = k as f64 * 1e-3;
+            let z = Vec4::new((3.0 * t).sin() * 0.1, (5.0 * t).cos() * 1e-3, 0.0, 0.0);
+            exact.step(20.0, 1e-3, &z).unwrap().unwrap();
+            jittered.step(20.0, h, &z).unwrap().unwrap();
+        }
+        assert!(odd > 1000, "the clock rounds on {odd} steps");
+        assert_eq!((exact.rebuilds, jittered.rebuilds), (1, 1));
+        assert_eq!(jittered.filter.x, exact.filter.x);
     }
 
     #[test]

@@ -319,7 +319,8 @@ impl Simulation {
             let ahead = self.s + v * h + 1.0;
             let behind = self.s - self.vehicle.wheelset_offset(3) - 1.0;
             self.track.ensure_covers(behind.min(0.0), ahead);
-            let n = (h / self.internal_step(v)).ceil().max(1.0) as usize;
+            // A master's clock rounding (h a few ulps over the step) must not add a substep.
+            let n = fmi_abi::step::substeps(h, self.internal_step(v));
             let dt = h / n as f64;
             for _ in 0..n {
                 self.rk4(dt, v);

@@ -611,3 +611,24 @@ fn a_restored_state_replays_the_roll_gyro_noise() {
         .unwrap();
     assert_eq!(steps(&mut b, 1.0, 300), first);
 }
+
+/// Issue 14: libcosim's nanosecond clock passes a 1 ms step as 1 ms +- 1 ulp by turns; the
+/// vehicle must take the same internal substeps as for the exact step (it took two for every
+/// step a few ulps over, 1.5 times the work), and reach the same state.
+#[test]
+fn a_masters_clock_rounding_adds_no_substeps() {
+    let mut exact = simulation(|_| {});
+    let mut jittered = simulation(|_| {});
+    let (mut t_ns, n) = (0u64, 2000);
+    for _ in 0..n {
+        // The step as libcosim computes it: the difference of two times in whole nanoseconds.
+        let h = (t_ns + 1_000_000) as f64 * 1e-9 - t_ns as f64 * 1e-9;
+        t_ns += 1_000_000;
+        exact.step(1e-3, 20.0);
+        jittered.step(h, 20.0);
+    }
+    assert!(exact.substeps >= n as u64);
+    assert_eq!(jittered.substeps, exact.substeps);
+    let d = (jittered.outputs.ws_y - exact.outputs.ws_y).abs();
+    assert!(d < 1e-9, "lateral displacement differs by {d} m");
+}
