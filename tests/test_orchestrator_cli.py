@@ -320,3 +320,21 @@ def test_start_time_other_than_zero(chain, tmp_path):
                        [pm.Connection("plant.x", "feed.u")], start=1.0, stop=1.5, step=0.1, record=r.columns[1:])
     for c in r.columns:
         np.testing.assert_array_equal(r[c], py[c], err_msg=c)
+
+
+def test_an_fmu_that_ends_the_simulation_ends_the_run_as_in_fmpy(tmp_path):
+    """Issue 14: fmi2Discard with fmi2Terminated ends the run with exit 0 and a last row at the
+    FMU's last successful time; fmpy, the oracle, stops at the same time with the same value."""
+    import fmpy
+
+    dahlquist = oc.fmus()["Dahlquist"]
+    out = tmp_path / "out"
+    p = oc.run("simulate", dahlquist, "--stop", "1", "--step", "0.1", "--quiet",
+               "--set", "end_at=0.55", "--out", out)
+    assert "ended the simulation" in p.stderr, p.stderr
+    ours = oc.read_results(out)
+    theirs = fmpy.simulate_fmu(str(dahlquist), stop_time=1.0, step_size=0.1, output_interval=0.1,
+                               start_values={"end_at": 0.55})
+    assert theirs["time"][-1] == pytest.approx(0.55)
+    assert ours["time"][-1] == pytest.approx(theirs["time"][-1])
+    assert ours["Dahlquist.x"][-1] == pytest.approx(theirs["x"][-1], rel=1e-12)

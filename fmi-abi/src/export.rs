@@ -565,7 +565,11 @@ pub unsafe fn get_boolean_status<M: Model>(
             inst.check_status_query("fmi2GetBooleanStatus")?;
             let out = slice_mut(inst, value, 1, "value", "fmi2GetBooleanStatus")?;
             if kind == FMI2_TERMINATED {
-                out[0] = FMI2_FALSE; // the model never asks the master to stop
+                out[0] = if inst.terminated() {
+                    FMI2_TRUE
+                } else {
+                    FMI2_FALSE
+                };
                 Ok(fmi2Status::OK)
             } else {
                 Ok(fmi2Status::Discard)

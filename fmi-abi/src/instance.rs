@@ -55,6 +55,9 @@ pub struct Snapshot<M: Model> {
     pub initial_dirty: bool,
     /// Inputs were set since the outputs were last computed (direct feedthrough).
     pub inputs_dirty: bool,
+    /// The model ended the simulation ([`StepOutcome::Terminated`]).
+    #[serde(default)]
+    pub terminated: bool,
 }
 
 /// An instance as fmi2Instantiate returns it (wrapped in a tagged handle by `export`).
@@ -91,6 +94,7 @@ impl<M: Model> Instance<M> {
             parameters_dirty: false,
             initial_dirty: true,
             inputs_dirty: false,
+            terminated: false,
         };
         Ok(Instance {
             log,
@@ -279,6 +283,16 @@ impl<M: Model> Instance<M> {
             sim.parameters_dirty = false;
         }
         match sim.model.do_step(&mut sim.values, t, h, &self.log) {
+            Ok(StepOutcome::Terminated { at }) => {
+                let at = if at.is_nan() { t } else { at.clamp(t, t + h) };
+                sim.time = at;
+                sim.state = State::StepFailed;
+                sim.terminated = true;
+                self.log.warning(&format!(
+                    "fmi2DoStep at t={t}: the model ended the simulation at t={at} (fmi2Terminated)"
+                ));
+                Ok(fmi2Status::Discard)
+            }
             Ok(outcome) => {
                 sim.time = t + h;
                 Ok(if outcome == StepOutcome::Warning {
@@ -499,6 +513,11 @@ impl<M: Model> Instance<M> {
 
     pub fn last_successful_time(&self) -> f64 {
         self.sim.time
+    }
+
+    /// Whether the model ended the simulation (fmi2GetBooleanStatus(fmi2Terminated)).
+    pub fn terminated(&self) -> bool {
+        self.sim.terminated
     }
 
     pub fn snapshot(&self) -> Snapshot<M> {

@@ -24,11 +24,18 @@ pub struct ModelInfo {
 }
 
 /// How a step ended when it did not fail.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StepOutcome {
     Ok,
     /// The step completed but something was logged as a warning (fmi2Warning).
     Warning,
+    /// The model ended the simulation at `at` (clamped into the step): fmi2DoStep returns
+    /// fmi2Discard, fmi2GetRealStatus(fmi2LastSuccessfulTime) answers `at` and
+    /// fmi2GetBooleanStatus(fmi2Terminated) true, so the master stops there (FMI 2.0 section
+    /// 4.2.3). Further steps are refused; fmi2Terminate is allowed.
+    Terminated {
+        at: f64,
+    },
 }
 
 /// What fmi2Instantiate learned from the importer.

@@ -258,6 +258,10 @@ pub struct FmiError {
     /// After fmi2DoStep returned fmi2Discard: what fmi2GetRealStatus(fmi2LastSuccessfulTime)
     /// reported, if the FMU answered.
     pub last_successful_time: Option<f64>,
+    /// After fmi2DoStep returned fmi2Discard: fmi2GetBooleanStatus(fmi2Terminated) answered
+    /// true, i.e. the FMU ended the simulation itself (a model reaching its end, as fmpy reads
+    /// it). A master stops there without an error.
+    pub terminated: bool,
     /// The warning and error messages the FMU logged during this call, in order. Calls the
     /// importer refused without calling the FMU (e.g. slices of different lengths) carry the
     /// importer's reason here.

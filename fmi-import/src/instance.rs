@@ -5,8 +5,8 @@ use crate::fmu::FmuInner;
 use crate::library::Functions;
 use crate::logging::{LogConfig, LogState, callbacks};
 use fmi_abi::types::{
-    FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_LAST_SUCCESSFUL_TIME, FMI2_TRUE, fmi2Boolean,
-    fmi2CallbackFunctions, fmi2Component, fmi2FMUstate, fmi2Status, fmi2String,
+    FMI2_CO_SIMULATION, FMI2_FALSE, FMI2_LAST_SUCCESSFUL_TIME, FMI2_TERMINATED, FMI2_TRUE,
+    fmi2Boolean, fmi2CallbackFunctions, fmi2Component, fmi2FMUstate, fmi2Status, fmi2String,
 };
 use model_description::ModelDescription;
 use std::ffi::{CStr, CString, c_int};
@@ -207,6 +207,7 @@ impl Instance {
             status,
             time,
             last_successful_time: None,
+            terminated: false,
             messages: self.log().take_messages(),
         }
     }
@@ -222,6 +223,7 @@ impl Instance {
             status: fmi2Status::Error,
             time: self.time,
             last_successful_time: None,
+            terminated: false,
             messages: vec![message],
         }
     }
@@ -347,6 +349,7 @@ impl Instance {
         if e.status == fmi2Status::Discard {
             self.lifecycle = Lifecycle::StepFailed;
             e.last_successful_time = self.last_successful_time();
+            e.terminated = self.terminated() == Some(true);
             self.begin();
         }
         e
@@ -361,6 +364,15 @@ impl Instance {
             (self.fns.get_real_status)(self.component, FMI2_LAST_SUCCESSFUL_TIME, &mut t)
         };
         ((raw as u32) <= fmi2Status::Warning as u32).then_some(t)
+    }
+
+    /// fmi2GetBooleanStatus(fmi2Terminated): whether the FMU asks to end the simulation; None
+    /// if it does not answer with OK or Warning.
+    pub fn terminated(&mut self) -> Option<bool> {
+        let mut b: fmi2Boolean = FMI2_FALSE;
+        // SAFETY: FMI call on our live component; `b` is a valid out-pointer.
+        let raw = unsafe { (self.fns.get_boolean_status)(self.component, FMI2_TERMINATED, &mut b) };
+        ((raw as u32) <= fmi2Status::Warning as u32).then_some(b != FMI2_FALSE)
     }
 
     /// fmi2Terminate.

@@ -379,6 +379,12 @@ fn load_system(
 }
 
 fn report(summary: &orchestrator::master::RunSummary) {
+    if let Some(who) = &summary.ended_by {
+        eprintln!(
+            "'{who}' ended the simulation at t = {} s (fmi2DoStep returned fmi2Discard with fmi2Terminated): the run stops there",
+            summary.final_time
+        );
+    }
     let per_step = summary.wall.as_secs_f64() / summary.steps.max(1) as f64 * 1e6;
     eprintln!(
         "{} steps to t = {} s in {:.3} s ({:.3} us per step){}",

@@ -23,7 +23,7 @@
 use crate::record::Recorder;
 use crate::resolve::{Link, Plan, resolve};
 use crate::system::{Endpoint, Linear, System, Value};
-use fmi_import::{FmiError, Fmu, ImportError, Instance, LogConfig};
+use fmi_import::{FmiError, Fmu, ImportError, Instance, LogConfig, fmi2Status};
 use model_description::{BaseType, Causality, ModelDescription, VariableKind};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -96,6 +96,11 @@ pub struct RunSummary {
     pub table: Option<Table>,
     pub wall: Duration,
     pub final_time: f64,
+    /// The instance that ended the run before the stop time: its fmi2DoStep returned
+    /// fmi2Discard with fmi2GetBooleanStatus(fmi2Terminated) true. The run then ends cleanly,
+    /// as fmpy does: the rows until the last communication point, and one at the instance's
+    /// last successful time (`final_time`) when it reported one past that point.
+    pub ended_by: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -662,6 +667,9 @@ impl Cosimulation {
 
         let order = &self.plan.order;
         let mut failure: Option<FmiError> = None;
+        // The instance that ended the simulation, and its last successful time if past the
+        // last communication point.
+        let mut ended_by: Option<(String, Option<f64>)> = None;
         let mut interrupted = false;
         let mut k: u64 = 0;
         'steps: while k < steps {
@@ -706,7 +714,12 @@ impl Cosimulation {
                 Ok(())
             })();
             if let Err(e) = result {
-                failure = Some(e);
+                if e.status == fmi2Status::Discard && e.terminated {
+                    let at = e.last_successful_time.filter(|a| *a > t && a.is_finite());
+                    ended_by = Some((e.instance, at));
+                } else {
+                    failure = Some(e);
+                }
                 break 'steps;
             }
             k += 1;
@@ -728,6 +741,16 @@ impl Cosimulation {
         }
         if let Some(bar) = bar {
             bar.finish_and_clear();
+        }
+        let mut final_time = opts.start + k as f64 * opts.step;
+        // As fmpy does: a last row at the ending FMU's last successful time, with every
+        // component's outputs as they are (in a system, the others' at their last step).
+        if let Some((_, Some(at))) = &ended_by {
+            final_time = *at;
+            if let Some((rec, recorder, table)) = recording.as_mut() {
+                rec.sample(&mut instances).map_err(fmi)?;
+                keep(*at, &rec.row, recorder, table).map_err(|e| stopped(e, *at, recorder))?;
+            }
         }
         let (rows, results, table) = match recording {
             Some((_, recorder, table)) => {
@@ -765,12 +788,13 @@ impl Cosimulation {
             })?;
         }
         Ok(RunSummary {
-            steps,
+            steps: k,
             rows,
             results,
             table,
             wall: started.elapsed(),
-            final_time: opts.start + steps as f64 * opts.step,
+            final_time,
+            ended_by: ended_by.map(|(who, _)| who),
         })
     }
 }

@@ -345,3 +345,52 @@ fn endless_runs_are_refused() {
         assert!(err.contains(expected), "{err}");
     }
 }
+
+/// Issue 14: an FMU that ends the simulation itself (fmi2DoStep returns fmi2Discard and
+/// fmi2GetBooleanStatus(fmi2Terminated) answers true) ends the run cleanly, with every row
+/// until then kept and one at the FMU's last successful time, as fmpy does.
+#[test]
+fn an_fmu_that_ends_the_simulation_ends_the_run_cleanly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let run = orchestrator()
+        .arg("simulate")
+        .arg(common::fmu("Dahlquist"))
+        .args([
+            "--stop",
+            "1",
+            "--step",
+            "0.1",
+            "--quiet",
+            "--set",
+            "end_at=0.55",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("ended the simulation at t = 0.55 s"),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    let rows: Vec<(f64, f64)> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let mut f = l.split(',').map(|v| v.parse::<f64>().unwrap());
+            (f.next().unwrap(), f.next().unwrap())
+        })
+        .collect();
+    // t = 0, 0.1, ..., 0.5, then the last successful time 0.55; x = exp(-t) with k = 1.
+    assert_eq!(rows.len(), 7, "{rows:?}");
+    assert!(
+        (rows[5].0 - 0.5).abs() < 1e-12 && (rows[6].0 - 0.55).abs() < 1e-12,
+        "{rows:?}"
+    );
+    for (t, x) in rows {
+        assert!((x - (-t).exp()).abs() < 1e-12, "x({t}) = {x}");
+    }
+}

@@ -10,6 +10,7 @@ const X: u32 = 0;
 const K: u32 = 1;
 const U: u32 = 2;
 const X0: u32 = 3;
+const END_AT: u32 = 4;
 
 static VARIABLES: &[VarSpec] = &[
     VarSpec::real_output_calculated(X, "x", "1", "the state (x0 at the start)"),
@@ -22,6 +23,14 @@ static VARIABLES: &[VarSpec] = &[
         "added to the derivative, held over the step",
     ),
     VarSpec::real_parameter(X0, "x0", "1", 1.0, "initial state"),
+    VarSpec::real_parameter(
+        END_AT,
+        "end_at",
+        "s",
+        0.0,
+        "if positive: the model ends the simulation there (the step that passes it integrates up to it and returns fmi2Discard with fmi2Terminated), like a model reaching the end of its data",
+    )
+    .min(0.0),
 ];
 
 #[derive(Clone, Serialize, Deserialize)]
@@ -54,10 +63,17 @@ impl Model for Dahlquist {
     fn do_step(
         &mut self,
         v: &mut Values,
-        _t: f64,
+        t: f64,
         h: f64,
         _: &Logger,
     ) -> Result<StepOutcome, String> {
+        let end = v.real[END_AT as usize];
+        // Within a nanosecond of the end counts as reaching it (a master's clock rounding).
+        let (h, ends) = if end > 0.0 && t + h > end + 1e-9 {
+            ((end - t).max(0.0), true)
+        } else {
+            (h, false)
+        };
         let (x, k, u) = (v.real[X as usize], v.real[K as usize], v.real[U as usize]);
         v.real[X as usize] = if k > 0.0 {
             let e = (-k * h).exp();
@@ -65,6 +81,10 @@ impl Model for Dahlquist {
         } else {
             x + u * h
         };
+        if ends {
+            // Integrated up to the end: the outputs are those of the last successful time.
+            return Ok(StepOutcome::Terminated { at: t + h });
+        }
         Ok(StepOutcome::Ok)
     }
 }
