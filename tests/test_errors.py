@@ -141,3 +141,44 @@ def test_a_calibration_file_that_is_not_a_regular_file_is_refused_naming_it(make
     s.fmu.reset()
     assert s.initialize() == OK
     assert_still_steps(s, 0.0)
+
+
+def test_a_negative_speed_is_an_error_naming_the_input(make_slave):
+    """Issue 14: the model is for forward running; a negative speed is refused, not run."""
+    s = initialized(make_slave, "reverse")
+    s.set_real("speed", -3.0)
+    assert s.step(0.0, H) == ERROR
+    assert "'speed'" in last_error(s) and "-3" in last_error(s)
+
+
+def test_an_implausible_sample_is_skipped_not_integrated(make_slave, short_runs):
+    """Issue 14: one accelerometer sample of 1e300 m/s2 gave an alignment of 1e301 m; it is
+    skipped like a non-finite sample (with a warning naming it), and the estimate stays sane."""
+    s = initialized(make_slave, "huge")
+    signals = short_runs[0].signals
+    names = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y"]
+    for k in range(400):
+        values = [signals[n][k + 1] for n in names]
+        if k == 200:
+            values[0] = 1e300
+        for name, v in zip(names, values):
+            s.set_real(name, v)
+        assert s.step(k * H, H) == (WARNING if k == 200 else OK)
+    assert any("implausible" in m and "ws_acc_y" in m for m in s.log.messages(WARNING))
+    alignment, std = s.get_reals(["alignment", "alignment_std"])
+    assert abs(alignment) < 0.1 and 0 < std < 0.1, (alignment, std)
+
+
+def test_a_warning_repeated_every_step_is_logged_once_then_counted(make_slave):
+    """Issue 14: 2 s of NaN samples logged 2000 warnings; now the first in full, then the 10th,
+    100th and 1000th as counts, and the total at fmi2Terminate."""
+    s = initialized(make_slave, "nan-storm")
+    for k in range(2000):
+        s.set_real("ws_acc_y", math.nan)
+        assert s.step(k * H, H) == WARNING
+    warnings = s.log.messages(WARNING)
+    about_nan = [m for m in warnings if "non-finite sensor sample" in m]
+    assert len(about_nan) == 4, about_nan
+    assert s.get_integer("skipped_updates") == 2000
+    s.fmu.terminate()  # fmpy raises on an error status
+    assert any("2000 times in all" in m for m in s.log.messages(WARNING)), s.log.messages(WARNING)

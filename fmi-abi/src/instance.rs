@@ -234,6 +234,8 @@ impl<M: Model> Instance<M> {
             return Ok(()); // a second Terminate is harmless
         }
         self.require("fmi2Terminate", &[State::StepComplete, State::StepFailed])?;
+        let sim = &mut self.sim;
+        sim.model.terminate(&mut sim.values, &self.log);
         self.sim.state = State::Terminated;
         Ok(())
     }

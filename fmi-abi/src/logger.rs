@@ -157,3 +157,75 @@ impl Logger {
             .map_or(std::ptr::null_mut(), |c| c.component_environment)
     }
 }
+
+/// Warnings that can recur on every step (a sensor that keeps sending NaN, a speed that stays
+/// negative): the first occurrence is logged in full, then only the 10th, 100th, 1000th, ...
+/// as a count, and [`Repeats::report`] gives the totals (at fmi2Terminate). A 2 s run at 1 kHz
+/// with a broken sensor logs four lines, not 2000. Part of the model, so FMU state keeps it.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Repeats {
+    counts: std::collections::BTreeMap<String, u64>,
+}
+
+impl Repeats {
+    /// Counts one occurrence of the warning `key` and logs it when due; `message` is built only
+    /// for the first one.
+    pub fn warn(&mut self, log: &Logger, key: &str, message: impl FnOnce() -> String) {
+        let n = self.counts.entry(key.to_string()).or_insert(0);
+        *n += 1;
+        if *n == 1 {
+            log.warning(&format!(
+                "{} (further '{key}' warnings are counted: logged at the 10th, 100th, ... and in all at fmi2Terminate)",
+                message()
+            ));
+        } else if is_power_of_ten(*n) {
+            log.warning(&format!("'{key}': {n} times so far"));
+        }
+    }
+
+    /// How many times `key` occurred.
+    pub fn count(&self, key: &str) -> u64 {
+        self.counts.get(key).copied().unwrap_or(0)
+    }
+
+    /// Logs the total of every warning that occurred more than once.
+    pub fn report(&self, log: &Logger) {
+        for (key, n) in &self.counts {
+            if *n > 1 {
+                log.warning(&format!("'{key}': {n} times in all"));
+            }
+        }
+    }
+
+    pub fn clear(&mut self) {
+        self.counts.clear();
+    }
+}
+
+fn is_power_of_ten(mut n: u64) -> bool {
+    while n >= 10 && n % 10 == 0 {
+        n /= 10;
+    }
+    n == 1
+}
+
+#[cfg(test)]
+mod repeats_tests {
+    use super::*;
+
+    #[test]
+    fn counts_every_occurrence_and_names_the_powers_of_ten() {
+        assert!([1, 10, 100, 1000].iter().all(|n| is_power_of_ten(*n)));
+        assert!([2, 11, 20, 101, 0].iter().all(|n| !is_power_of_ten(*n)));
+        let mut r = Repeats::default();
+        let mut built = 0;
+        for _ in 0..2000 {
+            r.warn(&Logger::silent(), "nan", || {
+                built += 1;
+                "sensor NaN".into()
+            });
+        }
+        assert_eq!(r.count("nan"), 2000);
+        assert_eq!(built, 1, "the message is built once");
+    }
+}

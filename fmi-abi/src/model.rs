@@ -81,6 +81,9 @@ pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
         Ok(())
     }
 
+    /// fmi2Terminate: the simulation is over (e.g. to log what was counted during it).
+    fn terminate(&mut self, _values: &mut Values, _log: &Logger) {}
+
     /// Advances from `t` to `t + h` with the inputs in `values`, writing the outputs there.
     fn do_step(
         &mut self,

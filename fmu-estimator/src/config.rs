@@ -69,6 +69,9 @@ pub fn params_from(v: &Values) -> Params {
     }
 }
 
+/// The `calibration_file` parameter's default: the file shipped in the resources.
+pub const DEFAULT_CALIBRATION_FILE: &str = "calibration.toml";
+
 /// Where the calibration file named by the parameters is, if anywhere.
 fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
     let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
@@ -157,6 +160,15 @@ impl Config {
                         path.display()
                     ))),
                 },
+                // A file the user named must exist: running on without it would give results
+                // for a calibration they did not ask for.
+                Some(path) if v.string[vr::CALIBRATION_FILE as usize] != DEFAULT_CALIBRATION_FILE => {
+                    return Err(format!(
+                        "parameter 'calibration_file' = '{}': {} does not exist",
+                        v.string[vr::CALIBRATION_FILE as usize],
+                        path.display()
+                    ));
+                }
                 Some(path) => notes.push(Note::Warning(format!(
                     "calibration file {} not found: using the diagonal noise model from the FMI parameters",
                     path.display()

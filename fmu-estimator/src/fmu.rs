@@ -157,7 +157,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
     VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
     VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
-    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", "calibration.toml", "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute"),
+    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", crate::config::DEFAULT_CALIBRATION_FILE, "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute; a file other than the default that does not exist is an error"),
 ];
 
 /// The estimator's FMI model state. Everything here is part of a saved FMU state.
@@ -176,6 +176,8 @@ pub struct Estimator {
     outside: bool,
     /// The step size warned about, if any (once).
     step_warned: bool,
+    /// Warnings that recur per step, logged once and counted.
+    repeats: fmi_abi::logger::Repeats,
 }
 
 impl Estimator {
@@ -252,6 +254,7 @@ impl Model for Estimator {
             learned: None,
             outside: false,
             step_warned: false,
+            repeats: Default::default(),
         })
     }
 
@@ -288,8 +291,13 @@ impl Model for Estimator {
         self.holding = false;
         self.outside = false;
         self.step_warned = false;
+        self.repeats.clear();
         self.write_outputs(v);
         Ok(())
+    }
+
+    fn terminate(&mut self, _: &mut Values, log: &Logger) {
+        self.repeats.report(log);
     }
 
     fn do_step(
@@ -300,6 +308,7 @@ impl Model for Estimator {
         log: &Logger,
     ) -> Result<StepOutcome, String> {
         let speed = v.real[vr::SPEED as usize];
+        crate::plausible::speed(speed)?;
         let mut outcome = StepOutcome::Ok;
         if speed.is_finite() {
             v.real[vr::DISTANCE as usize] += speed * h;
@@ -313,19 +322,38 @@ impl Model for Estimator {
                 self.holding = true;
             }
             if !speed.is_finite() {
-                log.warning(&format!("non-finite speed {speed}: estimate held"));
+                self.repeats.warn(log, "non-finite speed", || {
+                    format!("non-finite speed {speed}: estimate held")
+                });
                 outcome = StepOutcome::Warning;
             }
             v.boolean[vr::UPDATED as usize] = false;
             return Ok(outcome);
         }
         self.holding = false;
-        let z = Vec4::new(
+        let mut x = [
             v.real[vr::WS_ACC_Y as usize],
             v.real[vr::WS_YAW_RATE as usize],
             v.real[vr::FRAME_ACC_Y as usize],
-            0.0,
-        );
+            // Read (and checked) only when the learned taps use it: unconnected it is 0.
+            if self.learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
+                v.real[vr::WS_ROLL_RATE as usize]
+            } else {
+                0.0
+            },
+        ];
+        let replaced = crate::plausible::sensors(&mut x);
+        let implausible = !replaced.is_empty();
+        if implausible {
+            self.repeats.warn(log, "implausible sensor sample", || {
+                format!(
+                    "implausible sensor sample ({}): skipped like a non-finite one",
+                    replaced.join(", ")
+                )
+            });
+            outcome = StepOutcome::Warning;
+        }
+        let z = Vec4::new(x[0], x[1], x[2], 0.0);
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
         if let Some(l) = self.learned.as_mut() {
             if !self.step_warned && (h - l.sample_step()).abs() > 0.01 * l.sample_step() {
@@ -351,30 +379,30 @@ impl Model for Estimator {
                 true
             }
             Err(Skip::NonFinite) => {
-                log.warning(&format!(
-                    "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
-                    z[0], z[1], z[2]
-                ));
+                if !implausible {
+                    self.repeats.warn(log, "non-finite sensor sample", || {
+                        format!(
+                            "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
+                            z[0], z[1], z[2]
+                        )
+                    });
+                }
                 outcome = StepOutcome::Warning;
                 false
             }
             Err(Skip::NotPositiveDefinite) => {
-                log.warning(
-                    "innovation covariance not positive definite: measurement update skipped",
-                );
+                self.repeats
+                    .warn(log, "innovation covariance not positive definite", || {
+                        "innovation covariance not positive definite: measurement update skipped"
+                            .into()
+                    });
                 outcome = StepOutcome::Warning;
                 false
             }
         };
         v.boolean[vr::UPDATED as usize] = updated;
         if let Some(l) = self.learned.as_mut() {
-            let x = [
-                z[0],
-                z[1],
-                z[2],
-                v.real[vr::WS_ROLL_RATE as usize],
-                core.alignment().0,
-            ];
+            let x = [x[0], x[1], x[2], x[3], core.alignment().0];
             l.step(v.real[vr::DISTANCE as usize], speed, &x);
             let (lo, hi) = l.speed_range();
             let outside = !(speed >= lo && speed <= hi);

@@ -28,6 +28,7 @@ pub mod model;
 pub mod observability;
 pub mod offline;
 pub mod params;
+pub mod plausible;
 pub mod prior;
 pub mod smoother;
 pub mod statespace;

@@ -178,7 +178,19 @@ pub fn process_learned(
     let mut step_of: Vec<Option<usize>> = Vec::with_capacity(samples.len());
     let mut steps = 0usize;
     let initial = core.alignment();
-    for s in samples {
+    for (k, s) in samples.iter().enumerate() {
+        crate::plausible::speed(s.speed).map_err(|e| format!("sample {}: {e}", k + 1))?;
+        // Implausible sensor values are skipped like non-finite ones, as in the FMU.
+        let mut x = [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate];
+        crate::plausible::sensors(&mut x);
+        let checked = Sample {
+            ws_acc_y: x[0],
+            ws_yaw_rate: x[1],
+            frame_acc_y: x[2],
+            ws_roll_rate: x[3],
+            ..*s
+        };
+        let s = &checked;
         if s.speed.is_finite() {
             distance += s.speed * h;
         }
