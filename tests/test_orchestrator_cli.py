@@ -338,3 +338,49 @@ def test_an_fmu_that_ends_the_simulation_ends_the_run_as_in_fmpy(tmp_path):
     assert theirs["time"][-1] == pytest.approx(0.55)
     assert ours["time"][-1] == pytest.approx(theirs["time"][-1])
     assert ours["Dahlquist.x"][-1] == pytest.approx(theirs["x"][-1], rel=1e-12)
+
+
+def test_export_ssp_runs_in_libcosim_without_a_step_and_matches_jacobi(tmp_path):
+    """Issue 14: libcosim (through libcosimpy) reads the step from the export's OSP annotation
+    (it crashed without an explicit step before); its fixed-step algorithm is Jacobi, so its
+    samples equal the orchestrator's --jacobi run. `run` reads the annotation back too."""
+    from libcosimpy.CosimEnums import CosimVariableType
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+    from libcosimpy.CosimObserver import CosimObserver
+
+    ssp = tmp_path / "standard.ssp"
+    oc.run("export-ssp", ssp, *oc.standard_fmu_args())
+    ssd = zipfile.ZipFile(ssp).read("SystemStructure.ssd").decode()
+    assert 'osp:FixedStepAlgorithm baseStepSize="0.001"' in ssd
+    assert 'oms:FixedStepMaster description="oms-ma" stepSize="0.001"' in ssd
+
+    log_output_level(CosimLogLevel.WARNING)
+    ex = CosimExecution.from_ssp_file(str(ssp))  # no step size given
+    observer = CosimObserver.create_time_series()
+    ex.add_observer(observer)
+    names = {("vehicle", "ws_acc_y"): CosimVariableType.REAL, ("estimator", "alignment"): CosimVariableType.REAL,
+             ("estimator", "rebuilds"): CosimVariableType.INTEGER}
+    refs = {}
+    for (component, variable), kind in names.items():
+        index = ex.slave_index_from_instance_name(component)
+        reference = {v.name.decode(): v.reference for v in ex.slave_variables(index)}[variable]
+        refs[component, variable] = (index, reference)
+        observer.start_time_series(index, reference, kind)
+    assert ex.simulate_until(int(0.5e9))  # nanoseconds
+
+    oc.run("run", ssp, "--stop", "0.5", "--jacobi", "--quiet", "--out", tmp_path / "jacobi")
+    ours = oc.read_results(tmp_path / "jacobi")
+    assert len(ours["time"]) == 501, "run stepped at the annotated 1 ms"
+    for component, variable in [("vehicle", "ws_acc_y"), ("estimator", "alignment")]:
+        times, _, values = observer.time_series_real_samples(*refs[component, variable], 0, 600)
+        n = len(values)
+        assert n >= 500
+        np.testing.assert_array_equal(times, np.arange(n) * 1_000_000)  # ns
+        # libcosim's steps are differences of a nanosecond clock (1 ms +- 1 ulp): the vehicle's
+        # contact dynamics carry that rounding up to about 1e-5 of the signal's rms in 0.5 s.
+        want = ours[f"{component}.{variable}"][:n]
+        rms = np.sqrt(np.mean(want**2))
+        np.testing.assert_allclose(values, want, rtol=0, atol=1e-4 * rms, err_msg=f"{component}.{variable}")
+    _, _, rebuilds = observer.time_series_integer_samples(*refs["estimator", "rebuilds"], 0, 600)
+    assert max(rebuilds) == 1, "libcosim's nanosecond clock does not rebuild the filter"

@@ -393,7 +393,10 @@ impl Reader<'_> {
         };
         let (components, connections) = self.system(system)?;
         let experiment = match root.child("DefaultExperiment") {
-            None => Experiment::default(),
+            None => Experiment {
+                step: self.annotated_step(None, system)?,
+                ..Experiment::default()
+            },
             Some(de) => {
                 let start = self.optional_double(de, "startTime", None)?.unwrap_or(0.0);
                 let stop = self.optional_double(de, "stopTime", None)?;
@@ -413,7 +416,7 @@ impl Reader<'_> {
                 Experiment {
                     start,
                     stop,
-                    step: None,
+                    step: self.annotated_step(Some(de), system)?,
                 }
             }
         };
@@ -423,6 +426,57 @@ impl Reader<'_> {
             connections,
             experiment,
         })
+    }
+
+    /// The communication step other masters' annotations give: the Open Simulation Platform's
+    /// `osp:FixedStepAlgorithm baseStepSize` in the DefaultExperiment (libcosim), else
+    /// OMSimulator's `oms:FixedStepMaster stepSize` on the system. Must be positive and finite.
+    fn annotated_step(
+        &self,
+        de: Option<&Element>,
+        system: &Element,
+    ) -> Result<Option<f64>, SspError> {
+        let annotations = |e: &'_ Element, kind: &str| -> Vec<Element> {
+            e.child("Annotations")
+                .into_iter()
+                .flat_map(|a| a.children_named("Annotation"))
+                .filter(|a| a.value("type") == Some(kind))
+                .cloned()
+                .collect()
+        };
+        let find = |e: &Element, path: &[&str]| -> Option<Element> {
+            let mut at = e.clone();
+            for name in path {
+                at = at.child(name)?.clone();
+            }
+            Some(at)
+        };
+        let osp = de
+            .map(|de| annotations(de, "com.opensimulationplatform"))
+            .unwrap_or_default()
+            .iter()
+            .find_map(|a| find(a, &["Algorithm", "FixedStepAlgorithm"]))
+            .map(|e| (e, "baseStepSize"));
+        let oms = || {
+            annotations(system, "org.openmodelica")
+                .iter()
+                .find_map(|a| {
+                    find(
+                        a,
+                        &["Annotations", "SimulationInformation", "FixedStepMaster"],
+                    )
+                    .or_else(|| find(a, &["SimulationInformation", "FixedStepMaster"]))
+                })
+                .map(|e| (e, "stepSize"))
+        };
+        let Some((element, attribute)) = osp.or_else(oms) else {
+            return Ok(None);
+        };
+        match self.optional_double(&element, attribute, None)? {
+            Some(h) if h > 0.0 && h.is_finite() => Ok(Some(h)),
+            Some(_) => Err(self.invalid(&element, attribute, "a positive finite step", None)),
+            None => Ok(None),
+        }
     }
 
     fn system(&self, system: &Element) -> Result<(Vec<Component>, Vec<Connection>), SspError> {

@@ -16,6 +16,12 @@ use crate::system::{Component, System, Value};
 const NS_SSD: &str = "http://ssp-standard.org/SSP1/SystemStructureDescription";
 const NS_SSC: &str = "http://ssp-standard.org/SSP1/SystemStructureCommon";
 const NS_SSV: &str = "http://ssp-standard.org/SSP1/SystemStructureParameterValues";
+/// The Open Simulation Platform's annotations (libcosim reads the step from them; it matches
+/// the prefixes `ssc:` and `osp:` literally).
+const NS_OSP: &str = "http://opensimulationplatform.com/SSP/OSPAnnotations";
+/// OMSimulator's annotations (it needs the system's FixedStepMaster to load a co-simulation).
+const NS_OMS: &str =
+    "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd";
 
 pub fn write_ssp(system: &System, out: &Path) -> Result<(), SspError> {
     // resources/<component>.fmu, with the name made safe as a file name and as a URI.
@@ -269,7 +275,7 @@ pub fn to_ssd(
     );
     let _ = write!(
         x,
-        "\n    xmlns:ssd=\"{NS_SSD}\"\n    xmlns:ssc=\"{NS_SSC}\"\n    xmlns:ssv=\"{NS_SSV}\">\n"
+        "\n    xmlns:ssd=\"{NS_SSD}\"\n    xmlns:ssc=\"{NS_SSC}\"\n    xmlns:ssv=\"{NS_SSV}\"\n    xmlns:osp=\"{NS_OSP}\"\n    xmlns:oms=\"{NS_OMS}\">\n"
     );
     x.push_str("  <ssd:System");
     attr(&mut x, "name", &system.name);
@@ -352,6 +358,18 @@ pub fn to_ssd(
         }
         x.push_str("    </ssd:Connections>\n");
     }
+    // The communication step: the system's, else the first FMU's default (what `run` uses).
+    let step = system.experiment.step.or_else(|| {
+        mds.first()
+            .and_then(|md| md.default_experiment.as_ref())
+            .and_then(|d| d.step_size)
+    });
+    if let Some(step) = step {
+        let step = format_f64(step);
+        x.push_str("    <ssd:Annotations>\n      <ssc:Annotation type=\"org.openmodelica\">\n        <oms:Annotations>\n          <oms:SimulationInformation>\n            <oms:FixedStepMaster description=\"oms-ma\"");
+        attr(&mut x, "stepSize", &step);
+        x.push_str(" absoluteTolerance=\"1e-4\" relativeTolerance=\"1e-4\"/>\n          </oms:SimulationInformation>\n        </oms:Annotations>\n      </ssc:Annotation>\n    </ssd:Annotations>\n");
+    }
     x.push_str("  </ssd:System>\n");
 
     let e = &system.experiment;
@@ -360,6 +378,14 @@ pub fn to_ssd(
     if let Some(stop) = e.stop {
         attr(&mut x, "stopTime", &format_f64(stop));
     }
-    x.push_str("/>\n</ssd:SystemStructureDescription>\n");
+    match step {
+        None => x.push_str("/>\n"),
+        Some(step) => {
+            x.push_str(">\n    <ssd:Annotations>\n      <ssc:Annotation type=\"com.opensimulationplatform\">\n        <osp:Algorithm>\n          <osp:FixedStepAlgorithm");
+            attr(&mut x, "baseStepSize", &format_f64(step));
+            x.push_str("/>\n        </osp:Algorithm>\n      </ssc:Annotation>\n    </ssd:Annotations>\n  </ssd:DefaultExperiment>\n");
+        }
+    }
+    x.push_str("</ssd:SystemStructureDescription>\n");
     Ok(x)
 }
