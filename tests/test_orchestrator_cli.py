@@ -384,3 +384,70 @@ def test_export_ssp_runs_in_libcosim_without_a_step_and_matches_jacobi(tmp_path)
         np.testing.assert_allclose(values, want, rtol=0, atol=1e-4 * rms, err_msg=f"{component}.{variable}")
     _, _, rebuilds = observer.time_series_integer_samples(*refs["estimator", "rebuilds"], 0, 600)
     assert max(rebuilds) == 1, "libcosim's nanosecond clock does not rebuild the filter"
+
+
+def test_an_output_directory_has_a_manifest_and_no_stale_files(chain, tmp_path):
+    """Issue 14: manifest.json traces a result (command line, --set, each FMU's GUID and
+    SHA-256, time, files); a later run into the same directory removes the files of the earlier
+    one it would otherwise leave stale (the standard case's metrics.json beside a new results.csv)."""
+    import hashlib
+    import json
+
+    out = tmp_path / "out"
+    oc.run("run", "--stop", "5", "--quiet", "--out", out, "--set", "vehicle.track_seed=3", *oc.standard_fmu_args())
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["settings"] == ["vehicle.track_seed=3"]
+    assert "--stop" in manifest["command"] and manifest["program"].startswith("orchestrator ")
+    assert manifest["time_utc"].endswith("Z") and len(manifest["time_utc"]) == 20
+    assert manifest["files"] == ["results.csv", "results.units.csv", "metrics.json"]
+    for record in manifest["fmus"]:
+        path = oc.fmus()["RailVehicle" if record["component"] == "vehicle" else "AlignmentEstimator"]
+        assert record["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+        guid = zipfile.ZipFile(path).read("modelDescription.xml").decode().split('guid="')[1].split('"')[0]
+        assert record["guid"] == guid
+    assert (out / "metrics.json").exists()
+
+    oc.run("run", chain, "--step", "0.1", "--quiet", "--out", out)
+    assert not (out / "metrics.json").exists(), "the earlier run's metrics would describe another run"
+    assert oc.read_results(out).columns[1:] != []
+    assert json.loads((out / "manifest.json").read_text())["files"] == ["results.csv", "results.units.csv"]
+
+
+def test_a_second_run_into_a_busy_output_directory_is_refused(tmp_path):
+    """Issue 14: two runs into one directory mixed their rows; the second now stops at once with
+    exit 1, naming the directory, and the first finishes untouched."""
+    import signal
+    import subprocess
+    import time
+
+    out = tmp_path / "out"
+    first = subprocess.Popen([str(oc.orchestrator_binary()), "simulate", str(oc.fmus()["Dahlquist"]),
+                              "--stop", "1000000", "--step", "0.001", "--quiet", "--out", str(out)],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 60
+        while not (out / "results.csv.partial").exists():
+            assert time.monotonic() < deadline and first.poll() is None, "the first run did not start"
+            time.sleep(0.02)
+        p = oc.run("simulate", oc.fmus()["Dahlquist"], "--stop", "1", "--step", "0.1", "--quiet",
+                   "--out", out, check=1)
+        assert "being written by another run" in p.stderr and str(out) in p.stderr, p.stderr
+    finally:
+        first.send_signal(signal.SIGINT)
+        first.wait(timeout=60)
+    assert first.returncode == 130
+    rows = (out / "results.csv").read_text().splitlines()
+    assert all(len(r.split(",")) == 2 for r in rows), "whole rows of the first run only"
+
+
+def test_smooth_refuses_to_replace_a_symlink(tmp_path):
+    """Issue 14: `smooth --out` given a symlink (or a device) refuses it instead of replacing it."""
+    csv = tmp_path / "recorded.csv"
+    csv.write_text("time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n" + "".join(f"{k * 1e-3},20,0,0,0\n" for k in range(3000)))
+    target = tmp_path / "target.csv"
+    target.write_text("keep me\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(target)
+    p = oc.run("smooth", csv, "--out", link, check=None)
+    assert p.returncode != 0 and "symbolic link" in p.stderr and str(link) in p.stderr, p.stderr
+    assert link.is_symlink() and target.read_text() == "keep me\n"

@@ -21,6 +21,7 @@
 pub mod info;
 pub mod input;
 pub mod master;
+pub mod outdir;
 pub mod record;
 pub mod resolve;
 pub mod simulate;

@@ -413,12 +413,58 @@ fn run(args: RunArgs) -> Result<(), RunError> {
     if args.jacobi {
         opts.algorithm = Algorithm::Jacobi;
     }
+    let fmus: Vec<(&str, &Path)> = system
+        .components
+        .iter()
+        .map(|c| (c.name.as_str(), c.source.as_path()))
+        .collect();
+    let files: &[&str] = if is_standard {
+        &["results.csv", "results.units.csv", "metrics.json"]
+    } else {
+        &["results.csv", "results.units.csv"]
+    };
+    let _out = hold_output(&args.common, files, &fmus, &args.set)?;
     let summary = cosim.run(&opts)?;
     report(&summary);
     if is_standard && let Some(results) = &summary.results {
         standard_case_metrics(results)?;
     }
     Ok(())
+}
+
+/// The output directory of `run` or `simulate` (none with --no-record): locked for this
+/// process, cleared of the previous run's outputs, its output files checked (no symlink, FIFO or
+/// device is replaced) and the manifest written before the run, so that even a failed run's
+/// partial results can be traced (`orchestrator::outdir`).
+fn hold_output(
+    common: &Common,
+    files: &[&str],
+    fmus: &[(&str, &Path)],
+    settings: &[String],
+) -> Result<Option<orchestrator::outdir::OutputDir>, RunError> {
+    use orchestrator::outdir::{Manifest, OutputDir, fmu_record, refuse_special, rfc3339};
+    if common.no_record {
+        return Ok(None);
+    }
+    let io = |e: std::io::Error| RunError::Io(e.to_string());
+    let out = OutputDir::open(&common.out).map_err(io)?;
+    for f in files {
+        refuse_special(&out.path().join(f)).map_err(io)?;
+    }
+    let manifest = Manifest {
+        program: concat!("orchestrator ", env!("CARGO_PKG_VERSION")).into(),
+        command: std::env::args().collect(),
+        settings: settings.to_vec(),
+        fmus: fmus
+            .iter()
+            .map(|(c, p)| fmu_record(c, p))
+            .collect::<Result<_, _>>()
+            .map_err(io)?,
+        time_utc: rfc3339(std::time::SystemTime::now()),
+        files: files.iter().map(|f| f.to_string()).collect(),
+    };
+    out.write_manifest(&manifest).map_err(io)?;
+    Ok(Some(out))
 }
 
 /// The standard case's accuracy: `metrics.json` beside results.csv, and the table on stdout.
@@ -512,6 +558,12 @@ fn simulate(args: SimulateArgs) -> Result<(), RunError> {
         progress: !args.common.quiet,
         log: log_config(&args.common),
     };
+    let _out = hold_output(
+        &args.common,
+        &["results.csv", "results.units.csv"],
+        &[("fmu", args.fmu.as_path())],
+        &args.set,
+    )?;
     let summary = orchestrator::simulate::simulate(&args.fmu, signals.as_ref(), &settings, &opts)?;
     report(&summary);
     Ok(())

@@ -129,6 +129,8 @@ pub fn smooth_file(
     calibration: Option<&Path>,
     learned: Option<&Path>,
 ) -> Result<Processed, String> {
+    // Refused before any work: a symlink, FIFO or device given as --out is never replaced.
+    crate::outdir::refuse_special(output).map_err(|e| e.to_string())?;
     let (time, h, samples) = read_samples(input)?;
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;
@@ -141,7 +143,8 @@ pub fn smooth_file(
     let learned = learned
         .map(|f| learned_columns(f, &samples, h, &out.distance))
         .transpose()?;
-    let tmp = output.with_extension("csv.partial");
+    // Per process: two commands writing the same output never share a temporary file.
+    let tmp = output.with_extension(format!("csv.{}.partial", std::process::id()));
     std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
         .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
     std::fs::rename(&tmp, output).map_err(|e| {

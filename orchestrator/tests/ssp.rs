@@ -688,7 +688,7 @@ fn write_then_read_gives_the_same_system() {
 }
 
 #[test]
-fn to_ssd_works_without_fmus_and_drops_the_step() {
+fn to_ssd_works_without_fmus_and_keeps_the_step_in_the_annotations() {
     let system = System {
         name: "s".into(),
         components: vec![component("a", PathBuf::from("/x/a.fmu"), vec![])],
@@ -705,10 +705,16 @@ fn to_ssd_works_without_fmus_and_drops_the_step() {
     })
     .unwrap();
     assert!(ssd.contains(r#"source="fmus/a.fmu""#), "{ssd}");
+    // SSP 1.0 has no step: it goes in the annotations libcosim and OMSimulator read.
     assert!(
-        ssd.contains(r#"<ssd:DefaultExperiment startTime="0"/>"#),
+        ssd.contains(r#"<ssd:DefaultExperiment startTime="0">"#),
         "{ssd}"
     );
+    assert!(
+        ssd.contains(r#"<osp:FixedStepAlgorithm baseStepSize="0.001"/>"#),
+        "{ssd}"
+    );
+    assert!(ssd.contains(r#"stepSize="0.001""#), "{ssd}");
     assert!(!ssd.contains("<ssd:Connections"), "{ssd}");
     // And reads back (with the FMU where the source says).
     let dir = tempfile::tempdir().unwrap();
@@ -723,7 +729,7 @@ fn to_ssd_works_without_fmus_and_drops_the_step() {
         Experiment {
             start: 0.0,
             stop: None,
-            step: None
+            step: Some(1e-3)
         }
     );
     assert_eq!(back.components[0].name, "a");
