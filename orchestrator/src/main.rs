@@ -446,7 +446,12 @@ fn hold_output(
     if common.no_record {
         return Ok(None);
     }
-    let io = |e: std::io::Error| RunError::Io(e.to_string());
+    let io = |e: std::io::Error| {
+        RunError::Io(format!(
+            "cannot write results in {} (nothing was run): {e}",
+            common.out.display()
+        ))
+    };
     let out = OutputDir::open(&common.out).map_err(io)?;
     for f in files {
         refuse_special(&out.path().join(f)).map_err(io)?;

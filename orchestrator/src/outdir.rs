@@ -19,11 +19,25 @@ pub const LOCK: &str = ".orchestrator.lock";
 /// The manifest's name inside the output directory.
 pub const MANIFEST: &str = "manifest.json";
 
-/// An output directory held by this process.
+/// An output directory held by this process. Dropping it removes the lock file, and the
+/// manifest too if no results were written (the run failed before it started): a directory
+/// the run could not use is left as it was found.
 pub struct OutputDir {
     dir: PathBuf,
     /// Holds the lock until dropped.
     _lock: File,
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        let wrote = ["results.csv", "results.csv.partial"]
+            .iter()
+            .any(|f| self.dir.join(f).exists());
+        if !wrote {
+            let _ = std::fs::remove_file(self.dir.join(MANIFEST));
+        }
+        let _ = std::fs::remove_file(self.dir.join(LOCK));
+    }
 }
 
 /// One FMU a result was made with.
@@ -53,10 +67,7 @@ impl OutputDir {
     /// manifest before. Errors name the directory and what is wrong.
     pub fn open(dir: &Path) -> io::Result<OutputDir> {
         let named = |what: &str, e: io::Error| {
-            io::Error::new(
-                e.kind(),
-                format!("output directory {}: {what}: {e}", dir.display()),
-            )
+            io::Error::new(e.kind(), format!("cannot {what} {}: {e}", dir.display()))
         };
         if let Ok(m) = std::fs::metadata(dir)
             && !m.is_dir()
@@ -64,12 +75,12 @@ impl OutputDir {
             return Err(io::Error::new(
                 io::ErrorKind::AlreadyExists,
                 format!(
-                    "output directory {}: it exists and is not a directory",
+                    "cannot create the directory {}: a file of that name exists",
                     dir.display()
                 ),
             ));
         }
-        std::fs::create_dir_all(dir).map_err(|e| named("cannot create it", e))?;
+        std::fs::create_dir_all(dir).map_err(|e| named("create the directory", e))?;
         let lock_path = dir.join(LOCK);
         refuse_special(&lock_path)?;
         let lock = OpenOptions::new()
@@ -77,7 +88,7 @@ impl OutputDir {
             .truncate(false)
             .write(true)
             .open(&lock_path)
-            .map_err(|e| named("cannot create its lock file", e))?;
+            .map_err(|e| named("create the lock file in", e))?;
         match lock.try_lock() {
             Ok(()) => {}
             Err(std::fs::TryLockError::WouldBlock) => {
@@ -90,7 +101,7 @@ impl OutputDir {
                     ),
                 ));
             }
-            Err(std::fs::TryLockError::Error(e)) => return Err(named("cannot lock it", e)),
+            Err(std::fs::TryLockError::Error(e)) => return Err(named("lock", e)),
         }
         let out = OutputDir {
             dir: dir.to_path_buf(),
