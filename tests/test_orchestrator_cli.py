@@ -451,3 +451,63 @@ def test_smooth_refuses_to_replace_a_symlink(tmp_path):
     p = oc.run("smooth", csv, "--out", link, check=None)
     assert p.returncode != 0 and "symbolic link" in p.stderr and str(link) in p.stderr, p.stderr
     assert link.is_symlink() and target.read_text() == "keep me\n"
+
+
+def test_simulate_input_holds_discrete_inputs_and_takes_integers_and_booleans(tmp_path):
+    """Issue 14: discrete Real, Integer and Boolean inputs are held between rows (fmpy does the
+    same; they were interpolated, or refused), component-prefixed and quoted column names are
+    accepted, and Integer and Boolean outputs are written as whole numbers."""
+    import fmpy
+
+    feed = oc.fmus()["Feedthrough"]
+    signals = tmp_path / "signals.csv"
+    signals.write_text('\ufeff"time","feed.u",ud,n_in,flag_in\n0,0,0,0,0\n1,10,10,5,true\n2,20,20,7,false\n')
+    out = tmp_path / "out"
+    oc.run("simulate", feed, "--input", signals, "--stop", "2", "--step", "0.25", "--quiet", "--out", out)
+    r = oc.read_results(out)
+    t = np.asarray(r["time"])
+    # y = u (continuous: interpolated at the start of each step, feedthrough), yd = ud held.
+    np.testing.assert_allclose(r["Feedthrough.y"][1:], 10 * t[:-1] + 0 * t[1:], atol=1e-12)
+    held = np.floor(t[:-1] + 1e-12) * 10
+    np.testing.assert_array_equal(r["Feedthrough.yd"][1:], held)
+    np.testing.assert_array_equal(r["Feedthrough.n_out"][1:], np.array([0, 5, 7])[np.floor(t[:-1] + 1e-12).astype(int)])
+    np.testing.assert_array_equal(r["Feedthrough.flag_out"][1:], (np.floor(t[:-1] + 1e-12) == 1).astype(float))
+    rows = (out / "results.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    last = dict(zip(header, rows[-1].split(",")))
+    # The last step (from 1.75 s) read the row of t = 1.
+    assert last["Feedthrough.n_out"] == "5" and last["Feedthrough.flag_out"] == "1", last
+
+    # fmpy, the oracle, holds the discrete ones the same way.
+    dtype = [("time", float), ("u", float), ("ud", float), ("n_in", np.int32), ("flag_in", np.bool_)]
+    table = np.array([(0, 0, 0, 0, False), (1, 10, 10, 5, True), (2, 20, 20, 7, False)], dtype=dtype)
+    theirs = fmpy.simulate_fmu(str(feed), stop_time=2.0, step_size=0.25, output_interval=0.25, input=table,
+                               output=["yd", "n_out", "flag_out"])
+    np.testing.assert_array_equal(theirs["yd"][1:], r["Feedthrough.yd"][1:len(theirs)])
+    np.testing.assert_array_equal(theirs["n_out"][1:], r["Feedthrough.n_out"][1:len(theirs)])
+
+
+def test_simulate_replay_feeds_a_record_back_in_step(tmp_path):
+    """Issue 14: a recorded results.csv replayed through `simulate --input` is one step late;
+    `--replay` replays it exactly: the estimator alone, fed the vehicle columns of a standard
+    run, reproduces that run's alignment bit for bit."""
+    run_dir = tmp_path / "run"
+    oc.run("run", "--stop", "1", "--quiet", "--out", run_dir, "--set", "estimator.estimator=1",
+           "--record", "vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y,vehicle.forward_speed,estimator.alignment",
+           *oc.standard_fmu_args())
+    rec = oc.read_results(run_dir)
+    signals = tmp_path / "signals.csv"
+    names = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed"]
+    cols = [rec[f"vehicle.{n if n != 'speed' else 'forward_speed'}"] for n in names]
+    lines = ["time," + ",".join(names)] + [",".join(repr(float(x)) for x in (t, *row))
+                                          for t, *row in zip(rec["time"], *cols)]
+    signals.write_text("\n".join(lines) + "\n")
+    est = oc.fmus()["AlignmentEstimator"]
+    for replay, exact in [(True, True), (False, False)]:
+        out = tmp_path / f"replay_{replay}"
+        args = ["simulate", est, "--input", signals, "--stop", "1", "--step", "0.001", "--quiet",
+                "--set", "estimator=1", "--out", out] + (["--replay"] if replay else [])
+        oc.run(*args)
+        got = oc.read_results(out)["AlignmentEstimator.alignment"]
+        same = np.array_equal(got, rec["estimator.alignment"])
+        assert same == exact, (replay, np.max(np.abs(got - rec["estimator.alignment"])))

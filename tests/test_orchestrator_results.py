@@ -76,7 +76,7 @@ def test_values_equal_fmpy_readings(chain, tmp_path):
     same FMUs stepped the same way (Real, Integer and Boolean columns)."""
     oc.run("run", chain, "--step", "0.05", "--out", tmp_path)
     r = oc.read_results(tmp_path)
-    assert r.columns == ["time", "feed.y", "feed.steps", "feed.flag_out", "plant.x"]
+    assert r.columns == ["time", "feed.y", "feed.steps", "feed.yd", "feed.n_out", "feed.flag_out", "plant.x"]
     f = oc.fmus()
     py = pm.run_system([pm.Comp("plant", f["Dahlquist"], {"k": 0.7}),
                         pm.Comp("feed", f["Feedthrough"], {"gain": 1.0 / 3.0, "offset": -0.1, "flag_in": True})],

@@ -200,6 +200,13 @@ impl VarSpec {
         v
     }
 
+    /// A Real that changes only at communication points (a sampled or switched signal):
+    /// masters hold it between them rather than interpolate it.
+    pub const fn discrete(mut self) -> Self {
+        self.variability = Variability::Discrete;
+        self
+    }
+
     /// Parameters a master may change between steps.
     pub const fn tunable(mut self) -> Self {
         self.variability = Variability::Tunable;

@@ -18,6 +18,7 @@
 // `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod csv;
 pub mod info;
 pub mod input;
 pub mod master;

@@ -276,9 +276,15 @@ struct RunArgs {
 struct SimulateArgs {
     /// The .fmu file.
     fmu: PathBuf,
-    /// Input signals: CSV with a `time` column and one column per input variable.
+    /// Input signals: CSV with a `time` column and one column per input variable (Real
+    /// continuous inputs interpolated; discrete, Integer, Enumeration and Boolean ones held).
     #[arg(long)]
     input: Option<PathBuf>,
+    /// Replay a recorded results.csv exactly: the value set at t is the row of t + h (a
+    /// recorded row t + h holds what the consumer read for the step from t). Without it the
+    /// inputs are the rows at t, one step later than in the recorded run.
+    #[arg(long, requires = "input")]
+    replay: bool,
     #[command(flatten)]
     common: Common,
     /// Set a parameter before initialization: variable=value (repeatable).
@@ -569,7 +575,13 @@ fn simulate(args: SimulateArgs) -> Result<(), RunError> {
         &[("fmu", args.fmu.as_path())],
         &args.set,
     )?;
-    let summary = orchestrator::simulate::simulate(&args.fmu, signals.as_ref(), &settings, &opts)?;
+    let summary = orchestrator::simulate::simulate(
+        &args.fmu,
+        signals.as_ref(),
+        &settings,
+        &opts,
+        args.replay,
+    )?;
     report(&summary);
     Ok(())
 }

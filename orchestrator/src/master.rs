@@ -44,8 +44,12 @@ pub fn stop_requested() -> bool {
     STOP.load(Ordering::Relaxed)
 }
 
-/// Fills the buffer with (value reference, value) pairs for the first component at time `t`.
-pub type ExternalInputs<'a> = dyn Fn(f64, &mut Vec<(u32, f64)>) + 'a;
+/// One value for an input of the first component: its type, value reference and value (an
+/// Integer or Enumeration as a whole number, a Boolean as 0 or 1).
+pub type ExternalValue = (BaseType, u32, f64);
+
+/// Fills the buffer with the first component's input values at time `t`.
+pub type ExternalInputs<'a> = dyn Fn(f64, &mut Vec<ExternalValue>) + 'a;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Algorithm {
@@ -456,7 +460,7 @@ impl Cosimulation {
 
     /// Runs the system; see the module docs.
     pub fn run(&self, opts: &RunOptions) -> Result<RunSummary, RunError> {
-        self.run_with_inputs(opts, &|_, out: &mut Vec<(u32, f64)>| out.clear())
+        self.run_with_inputs(opts, &|_, out: &mut Vec<ExternalValue>| out.clear())
     }
 
     /// Runs the system with external Real inputs of the first component: before the step from
@@ -526,14 +530,22 @@ impl Cosimulation {
         let mut recording = if opts.out_dir.is_some() || opts.collect {
             let rec = Recording::new(&self.system, &mds, opts.record.as_deref())?;
             let recorder = match &opts.out_dir {
-                Some(dir) => Some(Recorder::create(dir, &rec.columns, &rec.units).map_err(
-                    |e| {
+                Some(dir) => {
+                    let mut r = Recorder::create(dir, &rec.columns, &rec.units).map_err(|e| {
                         RunError::Io(format!(
                             "cannot write results in {} (nothing was run): {e}",
                             dir.display()
                         ))
-                    },
-                )?),
+                    })?;
+                    let integral: Vec<usize> = rec
+                        .integer
+                        .iter()
+                        .chain(&rec.boolean)
+                        .flat_map(|(_, cols)| cols.iter().copied())
+                        .collect();
+                    r.set_integral(&integral);
+                    Some(r)
+                }
                 None => None,
             };
             let table = opts.collect.then(|| Table {
@@ -575,12 +587,19 @@ impl Cosimulation {
         for inst in instances.iter_mut() {
             inst.enter_initialization_mode().map_err(fmi)?;
         }
-        let mut ext: Vec<(u32, f64)> = Vec::new();
+        let mut ext: Vec<ExternalValue> = Vec::new();
         let set_external =
-            |inst: &mut Instance, ext: &mut Vec<(u32, f64)>, t: f64| -> Result<(), FmiError> {
+            |inst: &mut Instance, ext: &mut Vec<ExternalValue>, t: f64| -> Result<(), FmiError> {
                 external(t, ext);
-                for &(vr, x) in ext.iter() {
-                    inst.set_real(&[vr], &[x])?;
+                for &(base, vr, x) in ext.iter() {
+                    match base {
+                        BaseType::Real => inst.set_real(&[vr], &[x])?,
+                        BaseType::Integer | BaseType::Enumeration => {
+                            inst.set_integer(&[vr], &[x as i32])?
+                        }
+                        BaseType::Boolean => inst.set_boolean(&[vr], &[x != 0.0])?,
+                        BaseType::String => {}
+                    }
                 }
                 Ok(())
             };

@@ -31,6 +31,8 @@ pub struct Recorder {
     partial: PathBuf,
     path: PathBuf,
     columns: usize,
+    /// Columns of Integer, Enumeration or Boolean variables: written as whole numbers.
+    integral: Vec<bool>,
     pub rows: u64,
     finished: bool,
 }
@@ -112,9 +114,20 @@ impl Recorder {
             partial,
             path,
             columns: columns.len(),
+            integral: vec![false; columns.len()],
             rows: 0,
             finished: false,
         })
+    }
+
+    /// Marks the columns (by index, without the time column) of Integer, Enumeration and
+    /// Boolean variables, written as `3` and `1` rather than `3.0` and `1.0`.
+    pub fn set_integral(&mut self, columns: &[usize]) {
+        for c in columns {
+            if let Some(f) = self.integral.get_mut(*c) {
+                *f = true;
+            }
+        }
     }
 
     /// Writes one row: time, then `values` (as many as columns).
@@ -123,9 +136,14 @@ impl Recorder {
         let mut buf = ryu::Buffer::new();
         self.line.clear();
         push_f64(&mut self.line, time, &mut buf);
-        for &v in values {
+        for (&v, &integral) in values.iter().zip(&self.integral) {
             self.line.push(b',');
-            push_f64(&mut self.line, v, &mut buf);
+            if integral && v.is_finite() {
+                self.line
+                    .extend_from_slice((v as i64).to_string().as_bytes());
+            } else {
+                push_f64(&mut self.line, v, &mut buf);
+            }
         }
         self.line.push(b'\n');
         self.out

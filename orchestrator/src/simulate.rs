@@ -1,13 +1,28 @@
 //! `orchestrator simulate FMU --input signals.csv`: one FMU driven by recorded input signals,
-//! like `fmpy simulate`. The input file is a CSV whose first column is `time` and whose other
-//! columns are named after input variables of the FMU; at each communication point `t` the
-//! inputs are set to the signals linearly interpolated at `t` (held beyond the last row), then
-//! the FMU steps to `t + h`. Every output is recorded. Times must be finite and must not go
-//! backwards; signal values are any number `f64` parses (`nan` and `inf` included, so that an
+//! like `fmpy simulate`. The input file is a CSV ([`crate::csv`]: quoted names, a BOM, comments
+//! and `component.`-prefixed names accepted, duplicated names refused) whose first column is
+//! `time` and whose other columns are named after input variables of the FMU.
+//!
+//! | input variable | value at a communication point `t` |
+//! |---|---|
+//! | Real, continuous | the signal linearly interpolated at `t` (held beyond the last row) |
+//! | Real, discrete (or fixed/tunable) | the last row at or before `t`, held (as fmpy) |
+//! | Integer, Enumeration | the last row at or before `t`, held; must be a whole number |
+//! | Boolean | the last row at or before `t`, held; `0`/`1` or `false`/`true` |
+//!
+//! Then the FMU steps to `t + h`. Every output is recorded. Times must be finite and must not go
+//! backwards; Real values are any number `f64` parses (`nan` and `inf` included, so that an
 //! FMU's handling of bad samples can be driven). Errors name the file, the line and the column.
+//!
+//! Timing: the value set at `t` is what the FMU reads for the step from `t` to `t + h`. A
+//! recorded `results.csv` of a Gauss-Seidel run holds in row `t + h` the producer's output that
+//! the consumer read for that step; replayed as it is, it reaches the consumer one step late.
+//! `--replay` reads the signals one step ahead (`t` takes the row of `t + h`), so that a record
+//! replays exactly. A time within 1e-9 (relative) of a row's time takes that row's value.
 
-use crate::master::{Cosimulation, RunError, RunOptions, RunSummary};
+use crate::master::{Cosimulation, ExternalValue, RunError, RunOptions, RunSummary};
 use crate::system::{Component, Experiment, System};
+use model_description::{BaseType, Variability};
 use std::path::Path;
 
 /// Input signals: a time column and one column per input.
@@ -26,68 +41,45 @@ impl Signals {
         Self::parse(&text).map_err(|e| format!("input file {}: {e}", path.display()))
     }
 
+    /// The row whose time is `t` to within a master clock's rounding (1e-9 relative), if any:
+    /// a time computed as `start + k h` or `t + h` must meet the row recorded for it.
+    fn row_at(&self, t: f64) -> Option<usize> {
+        let tol = 1e-9 * t.abs().max(1.0);
+        let i = self.time.partition_point(|&x| x < t - tol);
+        (i < self.time.len() && (self.time[i] - t).abs() <= tol).then_some(i)
+    }
+
+    /// Column `c` held: the value of the last row at or before `t` (the first row before it).
+    pub fn held(&self, c: usize, t: f64) -> f64 {
+        if let Some(i) = self.row_at(t) {
+            // The last of several rows at the same time, as `at` takes.
+            let last = self.time.partition_point(|&x| x <= self.time[i]) - 1;
+            return self.columns[c][last];
+        }
+        let i = self.time.partition_point(|&x| x <= t);
+        self.columns[c][i.saturating_sub(1)]
+    }
+
     pub fn parse(text: &str) -> Result<Signals, String> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-        let (header_index, header) = lines.next().ok_or("the file is empty")?;
-        let names: Vec<String> = header
-            .split(',')
-            .map(|s| s.trim().trim_matches('"').to_string())
-            .collect();
-        if names.first().map(String::as_str) != Some("time") {
+        let csv = crate::csv::Csv::parse_finite(text, &["time"])?;
+        if csv.names.first().map(String::as_str) != Some("time") {
             return Err(format!(
                 "line {}: the first column must be 'time', found '{}'",
-                header_index + 1,
-                names.first().map(String::as_str).unwrap_or("")
+                csv.header_line,
+                csv.names.first().map(String::as_str).unwrap_or("")
             ));
         }
-        let mut time = vec![];
-        let mut columns = vec![vec![]; names.len() - 1];
-        for (i, line) in lines {
-            let fields: Vec<&str> = line.split(',').collect();
-            if fields.len() != names.len() {
+        let time = csv.columns[0].clone();
+        // A NaN or infinite time (refused by the reader) would break the interpolation's
+        // ordering; the signal values themselves may be anything, NaN included, to drive an
+        // FMU's handling of bad samples.
+        for (k, t) in time.iter().enumerate() {
+            if k > 0 && *t < time[k - 1] {
                 return Err(format!(
-                    "line {}: {} fields, the header has {}",
-                    i + 1,
-                    fields.len(),
-                    names.len()
+                    "line {}: time {t} goes backwards (previous {})",
+                    csv.lines[k],
+                    time[k - 1]
                 ));
-            }
-            let mut values = Vec::with_capacity(fields.len());
-            for (j, f) in fields.iter().enumerate() {
-                values.push(f.trim().parse::<f64>().map_err(|_| {
-                    format!(
-                        "line {}, column '{}': '{}' is not a number",
-                        i + 1,
-                        names[j],
-                        f.trim()
-                    )
-                })?);
-            }
-            // A NaN or infinite time would break the interpolation's ordering (and a NaN
-            // slips through every comparison); the signal values themselves may be anything,
-            // NaN included, to drive an FMU's handling of bad samples.
-            if !values[0].is_finite() {
-                return Err(format!(
-                    "line {}, column 'time': '{}' is not a finite time",
-                    i + 1,
-                    fields[0].trim()
-                ));
-            }
-            if let Some(&last) = time.last()
-                && values[0] < last
-            {
-                return Err(format!(
-                    "line {}: time {} goes backwards (previous {last})",
-                    i + 1,
-                    values[0]
-                ));
-            }
-            time.push(values[0]);
-            for (c, v) in columns.iter_mut().zip(&values[1..]) {
-                c.push(*v);
             }
         }
         if time.is_empty() {
@@ -95,14 +87,19 @@ impl Signals {
         }
         Ok(Signals {
             time,
-            names: names[1..].to_vec(),
-            columns,
+            names: csv.names[1..].to_vec(),
+            columns: csv.columns[1..].to_vec(),
         })
     }
 
-    /// Column `c` linearly interpolated at `t`, held constant outside the time range.
+    /// Column `c` linearly interpolated at `t`, held constant outside the time range; a row's
+    /// own value at its time (to within a clock's rounding).
     pub fn at(&self, c: usize, t: f64) -> f64 {
         let (ts, xs) = (&self.time, &self.columns[c]);
+        if let Some(i) = self.row_at(t) {
+            let last = ts.partition_point(|&x| x <= ts[i]) - 1;
+            return xs[last];
+        }
         if t <= ts[0] {
             return xs[0];
         }
@@ -125,6 +122,7 @@ pub fn simulate(
     signals: Option<&Signals>,
     settings: &[(String, String)],
     opts: &RunOptions,
+    replay: bool,
 ) -> Result<RunSummary, RunError> {
     let name = fmu
         .file_stem()
@@ -149,32 +147,78 @@ pub fn simulate(
         None => cosim.run(opts),
         Some(s) => {
             let md = cosim.model_descriptions()[0].clone();
-            let mut vrs = vec![];
-            for n in &s.names {
-                let v = md.variable(n).ok_or_else(|| {
-                    RunError::Config(format!(
-                        "input column '{n}': {} has no variable of that name",
-                        fmu.display()
-                    ))
-                })?;
-                if v.causality != model_description::Causality::Input
-                    || v.kind.base_type() != model_description::BaseType::Real
-                {
+            let mut inputs = vec![];
+            for (c, n) in s.names.iter().enumerate() {
+                // `component.variable` as a results.csv names it: the part after the prefix.
+                let v = md
+                    .variable(n)
+                    .or_else(|| n.rsplit_once('.').and_then(|(_, bare)| md.variable(bare)))
+                    .ok_or_else(|| {
+                        RunError::Config(format!(
+                            "input column '{n}': {} has no variable of that name",
+                            fmu.display()
+                        ))
+                    })?;
+                if v.causality != model_description::Causality::Input {
                     return Err(RunError::Config(format!(
-                        "input column '{n}': the variable is not a Real input of {}",
+                        "input column '{n}': '{}' is not an input of {}",
+                        v.name,
                         fmu.display()
                     )));
                 }
-                vrs.push(v.value_reference);
+                let base = v.kind.base_type();
+                let hold = match base {
+                    BaseType::Real => v.variability != Variability::Continuous,
+                    BaseType::Integer | BaseType::Enumeration | BaseType::Boolean => {
+                        check_discrete(s, c, base)?;
+                        true
+                    }
+                    BaseType::String => {
+                        return Err(RunError::Config(format!(
+                            "input column '{n}': '{}' is a String input, which a CSV of numbers cannot drive",
+                            v.name
+                        )));
+                    }
+                };
+                inputs.push((c, base, v.value_reference, hold));
             }
-            cosim.run_with_inputs(opts, &|t: f64, out: &mut Vec<(u32, f64)>| {
+            // Replaying a record: the value set at t is the row of t + h.
+            let lead = if replay { opts.step } else { 0.0 };
+            cosim.run_with_inputs(opts, &|t: f64, out: &mut Vec<ExternalValue>| {
                 out.clear();
-                for (c, vr) in vrs.iter().enumerate() {
-                    out.push((*vr, s.at(c, t)));
+                let t = t + lead;
+                for &(c, base, vr, hold) in &inputs {
+                    let x = if hold { s.held(c, t) } else { s.at(c, t) };
+                    out.push((base, vr, x));
                 }
             })
         }
     }
+}
+
+/// An Integer, Enumeration or Boolean column holds whole numbers (0 or 1 for a Boolean) within
+/// the 32-bit range FMI 2.0 gives them.
+fn check_discrete(s: &Signals, c: usize, base: BaseType) -> Result<(), RunError> {
+    let ok = |x: f64| match base {
+        BaseType::Boolean => x == 0.0 || x == 1.0,
+        _ => x.fract() == 0.0 && x >= i32::MIN as f64 && x <= i32::MAX as f64,
+    };
+    if let Some(k) = s.columns[c].iter().position(|x| !ok(*x)) {
+        return Err(RunError::Config(format!(
+            "input column '{}', row {} (t = {}): {} is not a valid {} value{}",
+            s.names[c],
+            k + 1,
+            s.time[k],
+            s.columns[c][k],
+            base.as_str(),
+            if base == BaseType::Boolean {
+                " (0, 1, false or true)"
+            } else {
+                " (a whole number)"
+            }
+        )));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -13,30 +13,17 @@
 use crate::record::push_f64;
 use crate::study::learned::LearnedSmoother;
 use crate::study::metrics::resample;
-use crate::study::standard::Columns;
 use fmu_estimator::offline::{self, Processed, Sample};
 use std::path::Path;
 
-/// The column named `name`, bare or after any `component.` prefix.
-fn find<'a>(cols: &'a Columns, names: &[&str], file: &Path) -> Result<&'a [f64], String> {
-    for (i, n) in cols.names.iter().enumerate() {
-        let bare = n.rsplit('.').next().unwrap_or(n);
-        if names.contains(&n.as_str()) || names.contains(&bare) {
-            return Ok(&cols.data[i]);
-        }
-    }
-    Err(format!(
-        "{}: no column named {} (columns: {})",
-        file.display(),
-        names.join(" or "),
-        cols.names.join(", ")
-    ))
-}
-
 /// Reads the samples and the step from a CSV file.
 pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String> {
-    let cols = Columns::read(path)?;
-    let time = find(&cols, &["time"], path)?;
+    let cols = crate::csv::Csv::read(path)?;
+    let find = |names: &[&str]| {
+        cols.column(names)
+            .map_err(|e| format!("{}: {e}", path.display()))
+    };
+    let time = find(&["time"])?;
     if time.len() < 3 {
         return Err(format!("{}: fewer than 3 rows", path.display()));
     }
@@ -57,10 +44,10 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
             ));
         }
     }
-    let speed = find(&cols, &["speed", "forward_speed"], path)?;
-    let acc = find(&cols, &["ws_acc_y"], path)?;
-    let yaw = find(&cols, &["ws_yaw_rate"], path)?;
-    let frame = find(&cols, &["frame_acc_y"], path)?;
+    let speed = find(&["speed", "forward_speed"])?;
+    let acc = find(&["ws_acc_y"])?;
+    let yaw = find(&["ws_yaw_rate"])?;
+    let frame = find(&["frame_acc_y"])?;
     // A first row at the start time holds initial values, not the end of a step.
     let samples = Sample::from_columns(&speed[1..], &acc[1..], &yaw[1..], &frame[1..]);
     Ok((time[1..].to_vec(), h, samples))

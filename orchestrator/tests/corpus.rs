@@ -261,6 +261,14 @@ const CSV: &[(&str, &[&str])] = &[
     ),
     ("ragged_row.csv", &[": line 3: 2 fields, the header has 3"]),
     (
+        "duplicate_column.csv",
+        &[": line 1: column 'u' appears twice (columns 2 and 3)"],
+    ),
+    (
+        "unclosed_quote.csv",
+        &[": line 3: field 2 opens a quote it never closes"],
+    ),
+    (
         "not_a_number.csv",
         &[": line 3, column 'v': 'two' is not a number"],
     ),

@@ -308,6 +308,9 @@ fn csv_line() -> impl Strategy<Value = String> {
         1 => Just("# comment".to_string()),
         1 => Just(String::new()),
         1 => Just("time,u,v".to_string()),
+        1 => Just("\u{feff}\"time\",\"c.u\",v".to_string()),
+        1 => Just("time,u,u".to_string()),
+        1 => Just("0,\"1,5\",\"2".to_string()),
         1 => "\\PC{0,20}",
     ]
 }

@@ -2,10 +2,11 @@
 //! standard system (evaluation), in-process through the master, with the variables the
 //! analysis needs kept in memory.
 
-use crate::master::{Algorithm, Cosimulation, RunOptions, Table};
+use crate::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
 use crate::system::{Component, Endpoint, Experiment, System, Value};
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
+use model_description::BaseType;
 use std::path::PathBuf;
 
 /// The two FMUs of the studies, and the user's settings for each, applied to every run before
@@ -215,10 +216,13 @@ pub fn vehicle_run_driven(
         .map(|v| v.value_reference)
         .ok_or("the vehicle FMU has no 'speed' input")?;
     let summary = cosim
-        .run_with_inputs(&options(stop, record), &|t, out: &mut Vec<(u32, f64)>| {
-            out.clear();
-            out.push((speed_vr, speed(t)));
-        })
+        .run_with_inputs(
+            &options(stop, record),
+            &|t, out: &mut Vec<ExternalValue>| {
+                out.clear();
+                out.push((BaseType::Real, speed_vr, speed(t)));
+            },
+        )
         .map_err(|e| e.to_string())?;
     summary.table.ok_or_else(|| "no table was collected".into())
 }

@@ -24,28 +24,13 @@ pub struct Columns {
 }
 
 impl Columns {
+    /// Reads a results.csv with the one CSV reader ([`crate::csv`]).
     pub fn read(path: &Path) -> Result<Columns, String> {
-        let text = crate::input::read_text(path, crate::input::CSV_LIMIT)
-            .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-        let mut lines = text.lines();
-        let names: Vec<String> = lines
-            .next()
-            .ok_or_else(|| format!("{} is empty", path.display()))?
-            .split(',')
-            .map(str::to_string)
-            .collect();
-        let mut data = vec![Vec::new(); names.len()];
-        for (i, line) in lines.enumerate() {
-            for (j, f) in line.split(',').enumerate() {
-                let v = f.parse::<f64>().map_err(|_| {
-                    format!("{} line {}: '{f}' is not a number", path.display(), i + 2)
-                })?;
-                data.get_mut(j)
-                    .ok_or_else(|| format!("{} line {}: too many fields", path.display(), i + 2))?
-                    .push(v);
-            }
-        }
-        Ok(Columns { names, data })
+        let csv = crate::csv::Csv::read(path)?;
+        Ok(Columns {
+            names: csv.names,
+            data: csv.columns,
+        })
     }
 
     pub fn column(&self, name: &str) -> Result<&[f64], String> {

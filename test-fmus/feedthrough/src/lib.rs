@@ -1,7 +1,9 @@
 //! `y = gain * u + offset` with direct feedthrough (the output follows the input without a step),
 //! plus a way to fail on purpose: when the step starts at or after `fail_at` the FMU returns
 //! fmi2Error with a message. Used to test masters: algebraic-loop detection (two of these
-//! in a ring) and error handling mid-run.
+//! in a ring) and error handling mid-run. `ud` (discrete Real), `n_in` (Integer) and `flag_in`
+//! (Boolean) are passed through to `yd`, `n_out` and `flag_out` at each step, for testing how
+//! a master sets inputs of each kind.
 
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
@@ -11,7 +13,11 @@ const Y: u32 = 1;
 const GAIN: u32 = 2;
 const OFFSET: u32 = 3;
 const FAIL_AT: u32 = 4;
+const UD: u32 = 5;
+const YD: u32 = 6;
 const COUNT: u32 = 0;
+const N_IN: u32 = 1;
+const N_OUT: u32 = 2;
 const FLAG_IN: u32 = 0;
 const FLAG_OUT: u32 = 1;
 
@@ -28,6 +34,17 @@ static VARIABLES: &[VarSpec] = &[
         "fmi2DoStep from this time on returns fmi2Error",
     ),
     VarSpec::integer_output(COUNT, "steps", 0, "steps taken"),
+    VarSpec::real_input(
+        UD,
+        "ud",
+        "1",
+        0.0,
+        "a discrete Real input (a sampled signal)",
+    )
+    .discrete(),
+    VarSpec::real_output(YD, "yd", "1", 0.0, "ud, passed through at each step").discrete(),
+    VarSpec::integer_input(N_IN, "n_in", 0, "an Integer input"),
+    VarSpec::integer_output(N_OUT, "n_out", 0, "n_in, passed through at each step"),
     VarSpec::boolean_input(FLAG_IN, "flag_in", false, "a Boolean input"),
     VarSpec::boolean_output(
         FLAG_OUT,
@@ -96,6 +113,8 @@ impl Model for Feedthrough {
         update(v);
         v.integer[COUNT as usize] += 1;
         v.boolean[FLAG_OUT as usize] = v.boolean[FLAG_IN as usize];
+        v.real[YD as usize] = v.real[UD as usize];
+        v.integer[N_OUT as usize] = v.integer[N_IN as usize];
         Ok(StepOutcome::Ok)
     }
 }
