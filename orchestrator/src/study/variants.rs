@@ -190,57 +190,46 @@ impl Output {
 }
 
 /// The learned filter (estimator FMU default) beside the paper's filter: causal and fixed lag,
-/// with three sensors and with the roll-rate gyroscope.
+/// with the robust and the nominal-only taps, and with the roll-rate gyroscope.
 pub fn learned_variants() -> Vec<Variant> {
-    let learned = |name: &str, roll: bool, output: Output| Variant {
+    // Estimator 2 with `extra` settings, judged on `output`.
+    let learned = |name: &str, extra: (&str, &str), output: Output| Variant {
         output,
         ..variant(
             name,
-            &[
-                ("estimator", "2".into()),
-                ("use_roll_rate", roll.to_string()),
-            ],
+            &[("estimator", "2".into()), (extra.0, extra.1.to_string())],
             false,
         )
     };
+    let three = ("use_roll_rate", "false");
+    let nominal = ("tap_file", "learned-nominal.taps");
+    let roll = ("use_roll_rate", "true");
     vec![
         variant(
             "paper's filter (estimator 1)",
             &[("estimator", "1".into())],
             false,
         ),
-        learned("learned, causal (FMU default)", false, Output::Alignment),
+        learned("learned, causal (FMU default)", three, Output::Alignment),
         learned(
             "learned, fixed lag 10 m (alignment_lagged)",
-            false,
+            three,
             Output::Lagged,
         ),
-        Variant {
-            output: Output::Alignment,
-            ..variant(
-                "learned, causal, nominal-only taps (tap_file learned-nominal.taps)",
-                &[
-                    ("estimator", "2".into()),
-                    ("tap_file", "learned-nominal.taps".into()),
-                ],
-                false,
-            )
-        },
-        Variant {
-            output: Output::Lagged,
-            ..variant(
-                "learned, fixed lag 10 m, nominal-only taps",
-                &[
-                    ("estimator", "2".into()),
-                    ("tap_file", "learned-nominal.taps".into()),
-                ],
-                false,
-            )
-        },
-        learned("learned + roll-rate gyro, causal", true, Output::Alignment),
+        learned(
+            "learned, causal, nominal-only taps (tap_file learned-nominal.taps)",
+            nominal,
+            Output::Alignment,
+        ),
+        learned(
+            "learned, fixed lag 10 m, nominal-only taps",
+            nominal,
+            Output::Lagged,
+        ),
+        learned("learned + roll-rate gyro, causal", roll, Output::Alignment),
         learned(
             "learned + roll-rate gyro, fixed lag 10 m",
-            true,
+            roll,
             Output::Lagged,
         ),
     ]
