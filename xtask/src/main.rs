@@ -313,6 +313,6 @@ fn demo(extra: Vec<String>) -> Result<()> {
     study("all", "held-out track seeds 1-5; calibration on seed 101")?;
     study(
         "variants",
-        "beyond the paper: priors, steady-state gain, RTS smoother, variable speed",
+        "beyond the paper: the estimator FMU's learned filter (default) beside the paper's filter, then priors, steady-state gain, RTS smoother, variable speed",
     )
 }
