@@ -355,14 +355,15 @@ impl Model for Estimator {
         }
         let z = Vec4::new(x[0], x[1], x[2], 0.0);
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
-        if let Some(l) = self.learned.as_mut() {
-            if !self.step_warned && (h - l.sample_step()).abs() > 0.01 * l.sample_step() {
-                log.warning(&format!(
+        if let Some(l) = self.learned.as_mut()
+            && !self.step_warned
+            && (h - l.sample_step()).abs() > 0.01 * l.sample_step()
+        {
+            log.warning(&format!(
                     "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",
                     l.sample_step()
                 ));
-                self.step_warned = true;
-            }
+            self.step_warned = true;
         }
         let filter_speed = if self.design_speed > 0.0 {
             self.design_speed

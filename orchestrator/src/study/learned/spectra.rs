@@ -171,7 +171,7 @@ mod tests {
         let g = band_power(&band, ds).unwrap();
         let weight = |f: f64| g(f) * g(f);
         let mut c = Correlations::new(1, 20, 0);
-        c.add(&[a.clone()], &b, &weight, &[], ds);
+        c.add(std::slice::from_ref(&a), &b, &weight, &[], ds);
         let (fa, fb) = (
             bandpass(&a, ds, &band).unwrap(),
             bandpass(&b, ds, &band).unwrap(),
