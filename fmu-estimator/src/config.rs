@@ -8,10 +8,10 @@ use crate::core::Core;
 use crate::discretize::Scheme;
 use crate::engine::{Engine, Gain};
 use crate::filter::{Mat4, Vec4, Vec7};
-use crate::fmu::vr;
 use crate::params::Params;
 use crate::prior::{AlignmentModel, Spectrum};
 use crate::statespace::{BodyNoise, StateSpace};
+use crate::variables::vr;
 use fmi_abi::Values;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
@@ -69,8 +69,7 @@ pub fn params_from(v: &Values) -> Params {
     }
 }
 
-/// The `calibration_file` parameter's default: the file shipped in the resources.
-pub const DEFAULT_CALIBRATION_FILE: &str = "calibration.toml";
+pub use crate::variables::DEFAULT_CALIBRATION_FILE;
 
 /// Where the calibration file named by the parameters is, if anywhere.
 fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
@@ -90,7 +89,7 @@ fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
 pub fn parameter_mismatches(v: &Values, file: &BTreeMap<String, f64>) -> Vec<String> {
     let mut differ = vec![];
     for (name, &value) in file {
-        let Some(spec) = crate::fmu::VARIABLES
+        let Some(spec) = crate::variables::VARIABLES
             .iter()
             .find(|s| s.name == name && s.base() == fmi_abi::variables::Base::Real)
         else {
@@ -274,7 +273,7 @@ mod tests {
 
     fn warnings(calibration_text: &str) -> Vec<String> {
         let path = calibration::tests::write("config", calibration_text);
-        let mut v = Values::from_table(crate::fmu::VARIABLES);
+        let mut v = Values::from_table(crate::variables::VARIABLES);
         v.string[vr::CALIBRATION_FILE as usize] = path.to_str().unwrap().into();
         let (_, notes) = Config::from_values(&v, None).unwrap();
         notes

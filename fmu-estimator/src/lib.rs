@@ -32,6 +32,7 @@ pub mod plausible;
 pub mod prior;
 pub mod smoother;
 pub mod statespace;
+pub mod variables;
 
 pub use fmu::Estimator;
 

@@ -8,6 +8,7 @@ pub mod learned;
 pub mod metrics;
 pub mod optimize;
 pub mod plot;
+pub mod records;
 pub mod runs;
 pub mod standard;
 pub mod variants;

@@ -73,9 +73,9 @@ pub use split::{causal_hybrid, highpass, hybrid};
 pub use training::{kalker_label, learn, provenance, training_runs, validation};
 
 use super::metrics::{BandMetrics, bandpass, butter, evaluate, filtfilt};
+use super::records::{Record, estimate};
 use super::runs::STEP;
 use super::standard::{DS, TRIM};
-use super::variants::{Record, estimate};
 use fmu_estimator::offline::Sample;
 use sci_rs::signal::filter::design::FilterBandType;
 use sci_rs::signal::filter::sosfilt_dyn;

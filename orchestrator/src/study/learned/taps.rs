@@ -33,9 +33,9 @@
 
 use super::spectra::{Correlations, band_power};
 use crate::study::metrics::{BANDS, Band, evaluate};
+use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
-use crate::study::variants::record_table;
 use crate::system::Value;
 use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
@@ -154,7 +154,7 @@ fn run(
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
-fn on_grid(rec: &crate::study::variants::Record) -> Result<GridRun, String> {
+fn on_grid(rec: &Record) -> Result<GridRun, String> {
     let values = offline::settings(&[])?;
     let (config, _) = offline::config(&values, None)?;
     let out = offline::process(&config, STEP, &rec.samples, false)?;

@@ -2,8 +2,8 @@
 //! (module docs of [`super`], step 6).
 
 use super::{LearnedSmoother, Lookahead, Partner};
+use crate::study::records::{Record, record};
 use crate::study::runs::{Fmus, STEP, STOP, seeded};
-use crate::study::variants::{Record, record};
 
 /// The training runs of [`learn`]: `stop` s of the vehicle on track `seed` at `speed` (its
 /// default, 20 m/s, if `None`), once per Kalker-coefficient scale in `kalker_scales` (1: the vehicle as it is; training on

@@ -1,0 +1,155 @@
+//! The estimator FMU's variable table: every value reference and variable, with its default
+//! and description, in one place (the role of `config.h` in the Modelica Reference-FMUs). The
+//! FMI layer (`fmu`), the configuration (`config`) and offline processing (`offline`) all read
+//! it; it depends on none of them.
+
+use crate::params::Params;
+use crate::prior::Spectrum;
+use fmi_abi::VarSpec;
+
+/// The `calibration_file` parameter's default: the file shipped in the resources.
+pub const DEFAULT_CALIBRATION_FILE: &str = "calibration.toml";
+
+/// Real value references.
+pub mod vr {
+    pub const WS_ACC_Y: u32 = 0;
+    pub const WS_YAW_RATE: u32 = 1;
+    pub const FRAME_ACC_Y: u32 = 2;
+    pub const SPEED: u32 = 3;
+    pub const ALIGNMENT: u32 = 4;
+    pub const ALIGNMENT_STD: u32 = 5;
+    pub const DISTANCE: u32 = 6;
+    pub const EST_Y: u32 = 7;
+    pub const EST_PSI: u32 = 8;
+    pub const EST_Y_F: u32 = 9;
+    pub const EST_VY: u32 = 10;
+    pub const EST_PSI_RATE: u32 = 11;
+    pub const EST_VY_F: u32 = 12;
+    pub const NIS: u32 = 13;
+    pub const M: u32 = 14;
+    pub const I: u32 = 15;
+    pub const L: u32 = 16;
+    pub const L_S: u32 = 17;
+    pub const ALPHA: u32 = 18;
+    pub const R_0: u32 = 19;
+    pub const M_F: u32 = 20;
+    pub const F11: u32 = 21;
+    pub const F22: u32 = 22;
+    pub const F23: u32 = 23;
+    pub const F33: u32 = 24;
+    pub const KX: u32 = 25;
+    pub const CX: u32 = 26;
+    pub const KY: u32 = 27;
+    pub const CY: u32 = 28;
+    pub const G: u32 = 29;
+    pub const SIGMA_ACC_WS: u32 = 30;
+    pub const SIGMA_YAW_RATE: u32 = 31;
+    pub const SIGMA_ACC_FRAME: u32 = 32;
+    pub const SIGMA_XI: u32 = 33;
+    pub const Q_ACC_WS: u32 = 34;
+    pub const Q_YAW_ACC: u32 = 35;
+    pub const Q_ACC_FRAME: u32 = 36;
+    pub const Q_XI: u32 = 37;
+    pub const P0_XI: u32 = 38;
+    pub const MIN_SPEED: u32 = 39;
+    pub const PRIOR_A: u32 = 40;
+    pub const PRIOR_OMEGA_R: u32 = 41;
+    pub const PRIOR_OMEGA_C: u32 = 42;
+    pub const PRIOR_SIGMA_XI: u32 = 43;
+    pub const EST_XI_RATE: u32 = 44;
+    pub const DESIGN_SPEED: u32 = 45;
+    pub const WS_ROLL_RATE: u32 = 46;
+    pub const LAG: u32 = 47;
+    pub const ALIGNMENT_LAGGED: u32 = 48;
+    pub const ALIGNMENT_LAGGED_STD: u32 = 49;
+    pub const DISTANCE_LAGGED: u32 = 50;
+    pub const ALIGNMENT_KALMAN: u32 = 51;
+    // Integer
+    pub const DISCRETIZATION: u32 = 0;
+    pub const SKIPPED_UPDATES: u32 = 1;
+    pub const REBUILDS: u32 = 2;
+    pub const ALIGNMENT_MODEL: u32 = 3;
+    pub const GAIN: u32 = 4;
+    pub const ESTIMATOR: u32 = 5;
+    pub const ACTIVE_ESTIMATOR: u32 = 6;
+    // Boolean
+    pub const USE_CALIBRATION_FILE: u32 = 0;
+    pub const UPDATED: u32 = 1;
+    pub const P0_STATIONARY: u32 = 2;
+    pub const USE_ROLL_RATE: u32 = 3;
+    // String
+    pub const CALIBRATION_FILE: u32 = 0;
+    pub const TAP_FILE: u32 = 1;
+}
+
+const P: Params = Params::DEFAULTS;
+const P_SIGMA_XI: f64 = crate::params::PRIOR_SIGMA_XI;
+
+/// The variable table: the single source of the FMU's interface (see `fmi_abi::variables`).
+pub static VARIABLES: &[VarSpec] = &[
+    VarSpec::real_input(vr::WS_ACC_Y, "ws_acc_y", "m/s2", 0.0, "Wheelset lateral acceleration (accelerometer on the axle box)"),
+    VarSpec::real_input(vr::WS_YAW_RATE, "ws_yaw_rate", "rad/s", 0.0, "Wheelset yaw angular velocity (gyroscope)"),
+    VarSpec::real_input(vr::FRAME_ACC_Y, "frame_acc_y", "m/s2", 0.0, "Bogie frame lateral acceleration above the wheelset (accelerometer)"),
+    VarSpec::real_input(vr::SPEED, "speed", "m/s", 20.0, "Forward speed of the vehicle; below min_speed the estimate is held"),
+    VarSpec::real_output(vr::ALIGNMENT, "alignment", "m", 0.0, "Estimated lateral alignment of the track at the wheelset"),
+    VarSpec::real_output_calculated(vr::ALIGNMENT_STD, "alignment_std", "m", "Standard deviation of the alignment estimate (square root of P[7,7])"),
+    VarSpec::real_output(vr::DISTANCE, "distance", "m", 0.0, "Distance travelled, integrated from speed (rectangle rule, speed sampled at the end of each step)"),
+    VarSpec::real_output(vr::EST_Y, "est_y", "m", 0.0, "Estimated wheelset lateral displacement from the ideal track centre line"),
+    VarSpec::real_output(vr::EST_PSI, "est_psi", "rad", 0.0, "Estimated wheelset yaw angle"),
+    VarSpec::real_output(vr::EST_Y_F, "est_y_f", "m", 0.0, "Estimated suspended frame lateral displacement"),
+    VarSpec::real_output(vr::EST_VY, "est_vy", "m/s", 0.0, "Estimated wheelset lateral velocity"),
+    VarSpec::real_output(vr::EST_PSI_RATE, "est_psi_rate", "rad/s", 0.0, "Estimated wheelset yaw rate"),
+    VarSpec::real_output(vr::EST_VY_F, "est_vy_f", "m/s", 0.0, "Estimated suspended frame lateral velocity"),
+    VarSpec::real_output(vr::NIS, "nis", "1", 0.0, "Normalized innovation squared of the last update (chi-square with 4 degrees of freedom when the filter is consistent)"),
+    VarSpec::real_parameter(vr::M, "m", "kg", P.m, "Wheelset mass (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::I, "I", "kg.m2", P.i, "Wheelset yaw moment of inertia (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::L, "l", "m", P.l, "Half the distance between the wheel-rail contact points (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::L_S, "l_s", "m", P.l_s, "Half the distance between the longitudinal primary suspension elements (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::ALPHA, "alpha", "1", P.alpha, "Nominal conicity of the wheel treads (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::R_0, "r_0", "m", P.r_0, "Rolling radius of the centred wheelset; Table 2 prints 0.85 m, the wheel diameter (see docs)").min(0.0),
+    VarSpec::real_parameter(vr::M_F, "m_f", "kg", P.m_f, "Suspended mass carried by the wheelset: quarter car body plus half bogie frame (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F11, "f11", "N", P.f11, "Kalker longitudinal creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F22, "f22", "N", P.f22, "Kalker lateral creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F23, "f23", "N.m", P.f23, "Kalker lateral/spin creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::F33, "f33", "N.m2", P.f33, "Kalker spin creep coefficient per wheel (Table 2, or the calibration file)").min(0.0),
+    VarSpec::real_parameter(vr::KX, "kx", "N/m", P.kx, "Longitudinal primary stiffness per side at +/- l_s (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::CX, "cx", "N.s/m", P.cx, "Longitudinal primary damping per side at +/- l_s (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::KY, "ky", "N/m", P.ky, "Lateral primary stiffness, wheelset to frame (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::CY, "cy", "N.s/m", P.cy, "Lateral primary damping, wheelset to frame (identified; Table 2 until calibrated)").min(0.0),
+    VarSpec::real_parameter(vr::G, "g", "m/s2", P.g, "Gravitational acceleration (gravitational stiffness W alpha / l)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_ACC_WS, "sigma_acc_ws", "m/s2", 0.01, "Noise sigma of the wheelset accelerometer (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_YAW_RATE, "sigma_yaw_rate", "rad/s", 0.0005, "Noise sigma of the gyroscope (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_ACC_FRAME, "sigma_acc_frame", "m/s2", 0.01, "Noise sigma of the frame accelerometer (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::SIGMA_XI, "sigma_xi", "m", 0.005, "Sigma of the virtual measurement alignment = 0 (R, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_ACC_WS, "q_acc_ws", "m2/s3", 1e-4, "Intensity of the white acceleration noise on the wheelset (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_YAW_ACC, "q_yaw_acc", "1", 1e-4, "Intensity of the white yaw acceleration noise on the wheelset [rad2/s3] (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_ACC_FRAME, "q_acc_frame", "m2/s3", 1e-4, "Intensity of the white acceleration noise on the frame (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::Q_XI, "q_xi", "1", 1e-5, "Intensity of the alignment random walk [m2/s] (Q, diagonal model)").min(0.0),
+    VarSpec::real_parameter(vr::P0_XI, "p0_xi", "m", 0.005, "Initial standard deviation of the alignment estimate").min(0.0),
+    VarSpec::real_parameter(vr::MIN_SPEED, "min_speed", "m/s", 0.5, "Below this speed the filter holds its estimate (creep terms divide by the speed)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_A, "prior_a", "m.rad", Spectrum::GERMAN_LOW.a, "Amplitude A of the alignment spectrum the 8-state priors assume (railway.md section 3; German low disturbance)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_OMEGA_R, "prior_omega_r", "rad/m", Spectrum::GERMAN_LOW.omega_r, "Lower corner wavenumber of the alignment spectrum (alignment_model 3)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_OMEGA_C, "prior_omega_c", "rad/m", Spectrum::GERMAN_LOW.omega_c, "Upper corner wavenumber of the alignment spectrum (alignment_models 2 and 3)").min(0.0),
+    VarSpec::real_parameter(vr::PRIOR_SIGMA_XI, "prior_sigma_xi", "m", P_SIGMA_XI, "Sigma of the virtual measurement alignment = 0 for alignment_models 2 and 3; 0 switches it off (tuned on the calibration seed)").min(0.0),
+    VarSpec::real_output(vr::EST_XI_RATE, "est_xi_rate", "m/s", 0.0, "Estimated rate of change of the alignment seen by the wheelset (alignment_models 2 and 3; 0 otherwise)"),
+    VarSpec::real_parameter(vr::DESIGN_SPEED, "design_speed", "m/s", 0.0, "0: the filter's matrices follow the speed input at every step; > 0: they are built once for this speed, as in the paper (the input still drives the distance)").min(0.0),
+    VarSpec::integer_parameter(vr::ALIGNMENT_MODEL, "alignment_model", 1, "Alignment prior: 1 the paper's random walk; 2 integrated random walk; 3 shaping filter of the track spectrum").min(1.0).max(3.0),
+    VarSpec::integer_parameter(vr::GAIN, "gain", 1, "1: time-varying Kalman gain; 2: steady-state gain from the discrete algebraic Riccati equation (constant speed)").min(1.0).max(2.0),
+    VarSpec::integer_parameter(vr::DISCRETIZATION, "discretization", 1, "1: the paper's second-order Taylor scheme; 2: exact (matrix exponential)").min(1.0).max(2.0),
+    VarSpec::integer_output(vr::SKIPPED_UPDATES, "skipped_updates", 0, "Steps whose measurement update was skipped (non-finite sample or singular innovation covariance)"),
+    VarSpec::integer_output(vr::REBUILDS, "rebuilds", 0, "How many times F, H and Q were rebuilt (on a change of speed or step size)"),
+    VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
+    VarSpec::boolean_parameter(vr::P0_STATIONARY, "p0_stationary", true, "Start the time-varying filter from the stationary covariance at the first step's speed (no start-up transient); false: from p0_xi and typical body amplitudes, as the paper"),
+    VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
+    VarSpec::real_input(vr::WS_ROLL_RATE, "ws_roll_rate", "rad/s", 0.0, "Wheelset roll angular velocity (gyroscope), optional: read only when use_roll_rate is true"),
+    VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
+    VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
+    VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
+    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (trained at Kalker 100 % and 50 %, robust to wear), learned-nominal.taps (Kalker 100 % only)"),
+    VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; over the first lag + 1 m the causal estimate made at distance_lagged, outside the taps' speed range the Kalman estimate)"),
+    VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
+    VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
+    VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
+    VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
+    VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", DEFAULT_CALIBRATION_FILE, "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute; a file other than the default that does not exist is an error"),
+];
