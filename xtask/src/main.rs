@@ -1,8 +1,9 @@
 //! Project automation, run as `cargo xtask <command>` (an alias in .cargo/config.toml):
 //!
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
-//! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo test, packaging, the Python
-//!   harness (tests/, run with pytest in `.venv`, created on demand), and a summary;
+//! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo fmt --check, cargo clippy
+//!   with warnings denied, cargo test, packaging, the Python harness (tests/, run with pytest in
+//!   `.venv`, created on demand), and a summary;
 //! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
 //!   the estimator variants
 //!   through the orchestrator.
@@ -23,7 +24,7 @@ usage: cargo xtask <command>
 commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
-                               cargo test --workspace, packaging, pytest tests/ in .venv
+                               cargo fmt --check, clippy -D warnings, cargo test --workspace, packaging, pytest tests/ in .venv
   demo [-- <study args>]       package the FMUs, run the standard case and the studies through the orchestrator
   help                         this text";
 
@@ -169,6 +170,27 @@ fn test(o: TestOptions) -> Result<bool> {
         }
     };
     if o.rust {
+        // Style and lints are part of the suite: a change that breaks them fails CI.
+        stages.push(timed("cargo fmt --all -- --check", || {
+            let mut cmd = workspace::cargo();
+            cmd.args(["fmt", "--all", "--", "--check"]);
+            workspace::run(&mut cmd)
+        }));
+        stages.push(timed(
+            "cargo clippy --workspace --all-targets -- -D warnings",
+            || {
+                let mut cmd = workspace::cargo();
+                cmd.args([
+                    "clippy",
+                    "--workspace",
+                    "--all-targets",
+                    "--",
+                    "-D",
+                    "warnings",
+                ]);
+                workspace::run(&mut cmd)
+            },
+        ));
         stages.push(timed("cargo test --workspace", || {
             let mut cmd = workspace::cargo();
             cmd.args(["test", "--workspace"]);
