@@ -62,6 +62,7 @@ unsafe fn handle<'a, M: Model>(c: fmi2Component) -> Option<&'a mut Handle<M>> {
     if unsafe { (*h).magic } != const { model_magic(M::INFO.guid) } {
         return None;
     }
+    // SAFETY: the tag matched: `h` is one of our live handles.
     Some(unsafe { &mut *h })
 }
 
@@ -71,18 +72,22 @@ unsafe fn with<M: Model>(
     function: &str,
     f: impl FnOnce(&mut Instance<M>) -> Result<fmi2Status, fmi2Status>,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `handle` checks the tag.
     let Some(h) = (unsafe { handle::<M>(c) }) else {
         return fmi2Status::Error;
     };
     let inst: *mut Instance<M> = &mut h.inst;
     // After fmi2Fatal nothing but fmi2FreeInstance (which does not come through here).
+    // SAFETY: `inst` points into the live handle `h`, borrowed for this call only.
     if let Err(s) = unsafe { &*inst }.refuse_if_fatal(function) {
         return s;
     }
+    // SAFETY: `inst` points into the live handle `h`, borrowed for this call only.
     match catch_unwind(AssertUnwindSafe(|| f(unsafe { &mut *inst }))) {
         Ok(Ok(s)) | Ok(Err(s)) => s,
         Err(payload) => {
             let text = panic_text(payload.as_ref());
+            // SAFETY: `inst` points into the live handle `h`, borrowed for this call only.
             let inst = unsafe { &mut *inst };
             let _ = catch_unwind(AssertUnwindSafe(|| {
                 inst.poison(&format!(
@@ -110,6 +115,7 @@ unsafe fn slice<'a, T>(
             .error(&format!("{function}: {what} is NULL but nvr = {n}"));
         return Err(fmi2Status::Error);
     }
+    // SAFETY: `p` is non-NULL (checked above) and, by the FMI contract, points to `n` values.
     Ok(unsafe { std::slice::from_raw_parts(p, n) })
 }
 
@@ -128,6 +134,7 @@ unsafe fn slice_mut<'a, T>(
             .error(&format!("{function}: {what} is NULL but nvr = {n}"));
         return Err(fmi2Status::Error);
     }
+    // SAFETY: `p` is non-NULL (checked above) and, by the FMI contract, points to `n` values.
     Ok(unsafe { std::slice::from_raw_parts_mut(p, n) })
 }
 
@@ -135,6 +142,7 @@ unsafe fn string_arg(p: fmi2String) -> Option<String> {
     if p.is_null() {
         return None;
     }
+    // SAFETY: the pointer is NULL (handled) or a NUL-terminated string, as FMI requires of string arguments.
     Some(unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned())
 }
 
@@ -165,8 +173,10 @@ pub unsafe fn instantiate<M: Model>(
         let callbacks = if functions.is_null() {
             None
         } else {
+            // SAFETY: `functions` is non-NULL (checked) and points to the importer's callback struct (FMI contract).
             Some(unsafe { *functions })
         };
+        // SAFETY: the pointer is NULL (handled) or a NUL-terminated string, as FMI requires of string arguments.
         let name = unsafe { string_arg(instance_name) }.unwrap_or_default();
         let log = Logger::new(callbacks, &name, logging_on != 0);
         if instance_name.is_null() {
@@ -179,6 +189,7 @@ pub unsafe fn instantiate<M: Model>(
             ));
             return std::ptr::null_mut();
         }
+        // SAFETY: the pointer is NULL (handled) or a NUL-terminated string, as FMI requires of string arguments.
         match unsafe { string_arg(guid) } {
             Some(g) if g.trim() == M::INFO.guid => {}
             Some(g) => {
@@ -193,6 +204,7 @@ pub unsafe fn instantiate<M: Model>(
                 return std::ptr::null_mut();
             }
         }
+        // SAFETY: the pointer is NULL (handled) or a NUL-terminated string, as FMI requires of string arguments.
         let location = unsafe { string_arg(resource_location) };
         let resources = location.as_deref().and_then(resource_dir);
         if resources.is_none() {
@@ -225,8 +237,10 @@ pub unsafe fn instantiate<M: Model>(
 /// # Safety
 /// `c` is NULL or an instance of ours not yet freed.
 pub unsafe fn free_instance<M: Model>(c: fmi2Component) {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `handle` checks the tag.
     if let Some(h) = unsafe { handle::<M>(c) } {
         h.magic = 0;
+        // SAFETY: `h` came from `Box::into_raw` in fmi2Instantiate and its tag was live; it is cleared first, so a second free finds no instance.
         let boxed = unsafe { Box::from_raw(h as *mut Handle<M>) };
         let _ = catch_unwind(AssertUnwindSafe(move || drop(boxed)));
     }
@@ -240,6 +254,7 @@ pub unsafe fn set_debug_logging<M: Model>(
     n: usize,
     categories: *const fmi2String,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetDebugLogging", |inst| {
             let cats = slice(inst, categories, n, "categories", "fmi2SetDebugLogging")?;
@@ -270,6 +285,7 @@ pub unsafe fn setup_experiment<M: Model>(
     stop_defined: fmi2Boolean,
     stop: f64,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetupExperiment", |inst| {
             ok(inst.setup_experiment(start, (stop_defined != 0).then_some(stop)))
@@ -280,6 +296,7 @@ pub unsafe fn setup_experiment<M: Model>(
 /// # Safety
 /// FMI contract.
 pub unsafe fn enter_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2EnterInitializationMode", |inst| {
             ok(inst.enter_initialization_mode())
@@ -290,6 +307,7 @@ pub unsafe fn enter_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Statu
 /// # Safety
 /// FMI contract.
 pub unsafe fn exit_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2ExitInitializationMode", |inst| {
             ok(inst.exit_initialization_mode())
@@ -300,12 +318,14 @@ pub unsafe fn exit_initialization_mode<M: Model>(c: fmi2Component) -> fmi2Status
 /// # Safety
 /// FMI contract.
 pub unsafe fn terminate<M: Model>(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe { with::<M>(c, "fmi2Terminate", |inst| ok(inst.terminate())) }
 }
 
 /// # Safety
 /// FMI contract.
 pub unsafe fn reset<M: Model>(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe { with::<M>(c, "fmi2Reset", |inst| ok(inst.reset())) }
 }
 
@@ -317,6 +337,7 @@ pub unsafe fn get_real<M: Model>(
     n: usize,
     value: *mut f64,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetReal", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetReal")?;
@@ -334,6 +355,7 @@ pub unsafe fn get_integer<M: Model>(
     n: usize,
     value: *mut c_int,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetInteger", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetInteger")?;
@@ -351,6 +373,7 @@ pub unsafe fn get_boolean<M: Model>(
     n: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetBoolean", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetBoolean")?;
@@ -373,6 +396,7 @@ pub unsafe fn get_string<M: Model>(
     n: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetString", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2GetString")?;
@@ -392,6 +416,7 @@ pub unsafe fn set_real<M: Model>(
     n: usize,
     value: *const f64,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetReal", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetReal")?;
@@ -409,6 +434,7 @@ pub unsafe fn set_integer<M: Model>(
     n: usize,
     value: *const c_int,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetInteger", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetInteger")?;
@@ -426,6 +452,7 @@ pub unsafe fn set_boolean<M: Model>(
     n: usize,
     value: *const fmi2Boolean,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetBoolean", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetBoolean")?;
@@ -446,6 +473,7 @@ pub unsafe fn set_string<M: Model>(
     n: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetString", |inst| {
             let vr = slice(inst, vr, n, "vr", "fmi2SetString")?;
@@ -474,12 +502,14 @@ pub unsafe fn do_step<M: Model>(
     h: f64,
     _no_set_prior: fmi2Boolean,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe { with::<M>(c, "fmi2DoStep", |inst| inst.do_step(t, h)) }
 }
 
 /// # Safety
 /// FMI contract.
 pub unsafe fn cancel_step<M: Model>(c: fmi2Component) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2CancelStep", |inst| {
             inst.log.error(
@@ -493,6 +523,7 @@ pub unsafe fn cancel_step<M: Model>(c: fmi2Component) -> fmi2Status {
 /// # Safety
 /// FMI contract.
 pub unsafe fn unsupported<M: Model>(c: fmi2Component, function: &str, why: &str) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, function, |inst| {
             inst.log
@@ -505,6 +536,7 @@ pub unsafe fn unsupported<M: Model>(c: fmi2Component, function: &str, why: &str)
 /// # Safety
 /// FMI contract.
 pub unsafe fn get_status<M: Model>(c: fmi2Component, kind: c_int, value: *mut c_int) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetStatus", |inst| {
             inst.check_status_query("fmi2GetStatus")?;
@@ -523,6 +555,7 @@ pub unsafe fn get_real_status<M: Model>(
     kind: c_int,
     value: *mut f64,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetRealStatus", |inst| {
             inst.check_status_query("fmi2GetRealStatus")?;
@@ -544,6 +577,7 @@ pub unsafe fn get_integer_status<M: Model>(
     _kind: c_int,
     value: *mut c_int,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetIntegerStatus", |inst| {
             inst.check_status_query("fmi2GetIntegerStatus")?;
@@ -560,6 +594,7 @@ pub unsafe fn get_boolean_status<M: Model>(
     kind: c_int,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetBooleanStatus", |inst| {
             inst.check_status_query("fmi2GetBooleanStatus")?;
@@ -585,6 +620,7 @@ pub unsafe fn get_string_status<M: Model>(
     _kind: c_int,
     value: *mut fmi2String,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetStringStatus", |inst| {
             inst.check_status_query("fmi2GetStringStatus")?;
@@ -595,14 +631,20 @@ pub unsafe fn get_string_status<M: Model>(
 }
 
 /// The state box behind `s`, if it is one of this model's.
+///
+/// # Safety
+/// `s` must be NULL or a pointer the caller got from our fmi2GetFMUstate or
+/// fmi2DeSerializeFMUstate (the FMI contract); the tag is still checked.
 unsafe fn state_box<'a, M: Model>(s: fmi2FMUstate) -> Option<&'a mut StateBox<M>> {
     if s.is_null() {
         return None;
     }
     let b = s as *mut StateBox<M>;
+    // SAFETY: per the contract above `b` points to readable memory at least one u64 long.
     if unsafe { (*b).magic } != const { model_magic(M::INFO.guid) } {
         return None;
     }
+    // SAFETY: the tag matched: `b` is one of our live state boxes.
     Some(unsafe { &mut *b })
 }
 
@@ -616,6 +658,7 @@ fn new_state<M: Model>(snap: Snapshot<M>) -> fmi2FMUstate {
 /// # Safety
 /// FMI contract.
 pub unsafe fn get_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2GetFMUstate", |inst| {
             let slot = slice_mut(inst, state, 1, "FMUstate", "fmi2GetFMUstate")?;
@@ -642,6 +685,7 @@ pub unsafe fn get_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstate
 /// # Safety
 /// FMI contract.
 pub unsafe fn set_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstate) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SetFMUstate", |inst| match state_box::<M>(state) {
             Some(b) => ok(inst.restore(&b.snap)),
@@ -657,6 +701,7 @@ pub unsafe fn set_fmu_state<M: Model>(c: fmi2Component, state: fmi2FMUstate) -> 
 /// # Safety
 /// FMI contract.
 pub unsafe fn free_fmu_state<M: Model>(c: fmi2Component, state: *mut fmi2FMUstate) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2FreeFMUstate", |inst| {
             if state.is_null() || (*state).is_null() {
@@ -686,6 +731,7 @@ pub unsafe fn serialized_fmu_state_size<M: Model>(
     state: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SerializedFMUstateSize", |inst| {
             let out = slice_mut(inst, size, 1, "size", "fmi2SerializedFMUstateSize")?;
@@ -717,6 +763,7 @@ pub unsafe fn serialize_fmu_state<M: Model>(
     bytes: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2SerializeFMUstate", |inst| {
             let Some(b) = state_box::<M>(state) else {
@@ -756,6 +803,7 @@ pub unsafe fn deserialize_fmu_state<M: Model>(
     size: usize,
     state: *mut fmi2FMUstate,
 ) -> fmi2Status {
+    // SAFETY: `c` is NULL or an instance of ours (FMI contract); `with` checks its tag and contains panics.
     unsafe {
         with::<M>(c, "fmi2DeSerializeFMUstate", |inst| {
             let data = slice(
@@ -812,6 +860,7 @@ macro_rules! export_fmu {
                 n: usize,
                 cats: *const fmi2String,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_debug_logging::<M>(c, on, n, cats) }
             }
             #[unsafe(no_mangle)]
@@ -824,10 +873,12 @@ macro_rules! export_fmu {
                 visible: fmi2Boolean,
                 logging_on: fmi2Boolean,
             ) -> fmi2Component {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::instantiate::<M>(name, ty, guid, res, functions, visible, logging_on) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::free_instance::<M>(c) }
             }
             #[unsafe(no_mangle)]
@@ -839,22 +890,27 @@ macro_rules! export_fmu {
                 stop_defined: fmi2Boolean,
                 stop: f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::setup_experiment::<M>(c, tol_defined, tol, start, stop_defined, stop) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::enter_initialization_mode::<M>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::exit_initialization_mode::<M>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::terminate::<M>(c) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::reset::<M>(c) }
             }
             #[unsafe(no_mangle)]
@@ -864,6 +920,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *mut f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_real::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -873,6 +930,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *mut c_int,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_integer::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -882,6 +940,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *mut fmi2Boolean,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_boolean::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -891,6 +950,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *mut fmi2String,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_string::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -900,6 +960,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *const f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_real::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -909,6 +970,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *const c_int,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_integer::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -918,6 +980,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *const fmi2Boolean,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_boolean::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -927,6 +990,7 @@ macro_rules! export_fmu {
                 n: usize,
                 v: *const fmi2String,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_string::<M>(c, vr, n, v) }
             }
             #[unsafe(no_mangle)]
@@ -934,6 +998,7 @@ macro_rules! export_fmu {
                 c: fmi2Component,
                 s: *mut fmi2FMUstate,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
@@ -941,6 +1006,7 @@ macro_rules! export_fmu {
                 c: fmi2Component,
                 s: fmi2FMUstate,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::set_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
@@ -948,6 +1014,7 @@ macro_rules! export_fmu {
                 c: fmi2Component,
                 s: *mut fmi2FMUstate,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::free_fmu_state::<M>(c, s) }
             }
             #[unsafe(no_mangle)]
@@ -956,6 +1023,7 @@ macro_rules! export_fmu {
                 s: fmi2FMUstate,
                 size: *mut usize,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::serialized_fmu_state_size::<M>(c, s, size) }
             }
             #[unsafe(no_mangle)]
@@ -965,6 +1033,7 @@ macro_rules! export_fmu {
                 bytes: *mut fmi2Byte,
                 size: usize,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::serialize_fmu_state::<M>(c, s, bytes, size) }
             }
             #[unsafe(no_mangle)]
@@ -974,6 +1043,7 @@ macro_rules! export_fmu {
                 size: usize,
                 s: *mut fmi2FMUstate,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::deserialize_fmu_state::<M>(c, bytes, size, s) }
             }
             #[unsafe(no_mangle)]
@@ -986,6 +1056,7 @@ macro_rules! export_fmu {
                 _dv_known: *const f64,
                 _dv_unknown: *mut f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe {
                     x::unsupported::<M>(
                         c,
@@ -1002,6 +1073,7 @@ macro_rules! export_fmu {
                 _order: *const c_int,
                 _v: *const f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe {
                     x::unsupported::<M>(
                         c,
@@ -1018,6 +1090,7 @@ macro_rules! export_fmu {
                 _order: *const c_int,
                 _v: *mut f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe {
                     x::unsupported::<M>(
                         c,
@@ -1033,10 +1106,12 @@ macro_rules! export_fmu {
                 h: f64,
                 no_prior: fmi2Boolean,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::do_step::<M>(c, t, h, no_prior) }
             }
             #[unsafe(no_mangle)]
             pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::cancel_step::<M>(c) }
             }
             #[unsafe(no_mangle)]
@@ -1045,6 +1120,7 @@ macro_rules! export_fmu {
                 kind: c_int,
                 v: *mut c_int,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
@@ -1053,6 +1129,7 @@ macro_rules! export_fmu {
                 kind: c_int,
                 v: *mut f64,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_real_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
@@ -1061,6 +1138,7 @@ macro_rules! export_fmu {
                 kind: c_int,
                 v: *mut c_int,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_integer_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
@@ -1069,6 +1147,7 @@ macro_rules! export_fmu {
                 kind: c_int,
                 v: *mut fmi2Boolean,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_boolean_status::<M>(c, kind, v) }
             }
             #[unsafe(no_mangle)]
@@ -1077,6 +1156,7 @@ macro_rules! export_fmu {
                 kind: c_int,
                 v: *mut fmi2String,
             ) -> fmi2Status {
+                // SAFETY: the importer passes arguments as the FMI 2.0 function requires; the callee checks NULLs and the instance tag.
                 unsafe { x::get_string_status::<M>(c, kind, v) }
             }
         }
