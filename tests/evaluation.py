@@ -1,7 +1,7 @@
 """Running the estimator FMU on a synthetic run with fmpy, and scoring it like the paper.
 
 Why a module: the accuracy tests and the demo must score the estimate the same way: a
-zero-phase Butterworth band-pass on the distance grid (railway.md section 3: a public UIC 518
+zero-phase Butterworth band-pass on the distance grid (docs/references.md section 3: a public UIC 518
 implementation filters forward and backward), then J = rms(estimate - truth) and
 Jrel = J / rms(truth).
 """

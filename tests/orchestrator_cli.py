@@ -130,7 +130,7 @@ def assert_close(a, b, rtol: float = 1e-12, atol: float = 1e-300, what: str = ""
     return float(rel_diff(a, b).max()) if a.size else 0.0
 
 
-# ---- SSP 1.0 system descriptions written by hand (masters.md section 3) -----------------------
+# ---- SSP 1.0 system descriptions written by hand (docs/references.md section 8.3) -----------------------
 
 SSD_HEADER = """<?xml version="1.0" encoding="UTF-8"?>
 <ssd:SystemStructureDescription version="1.0" name={name}

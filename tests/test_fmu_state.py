@@ -1,5 +1,5 @@
 """Saved FMU states and fmi2Reset: replaying from a restored state, from a serialized state, or
-after a reset must reproduce the outputs bit for bit (fmi.md section 7, items 6 and 7). A
+after a reset must reproduce the outputs bit for bit (docs/references.md section 7.7, items 6 and 7). A
 master that reruns a Kalman filter from a saved state relies on exactly this."""
 
 from __future__ import annotations

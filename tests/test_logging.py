@@ -1,4 +1,4 @@
-"""What the FMU hands the importer's logger (fmi.md section 7, item 4): our componentEnvironment
+"""What the FMU hands the importer's logger (docs/references.md section 7.7, items 4): our componentEnvironment
 back (the router in fmi_harness finds the instance's sink by it), the instance name, a declared
 non-NULL category, and the message text intact even when it contains '%' (the FMU must pass it
 as an argument of a "%s" format, never as the format)."""

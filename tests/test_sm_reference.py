@@ -49,7 +49,7 @@ def test_a_laterally_shifted_track_shifts_the_vehicle_rigidly():
 
 
 def test_lightly_damped_hunting_mode_at_20_m_per_s():
-    """railway.md section 5 quotes a lightly damped SM mode near 1.2 Hz at 20 m/s. That value
+    """docs/references.md section 5 quotes a lightly damped SM mode near 1.2 Hz at 20 m/s. That value
     comes from Table 2 as printed (r_0 = 0.85 m); with the FMU's r_0 = 0.425 m the same mode is
     at 1.71 Hz. In both cases it is the one pair with damping ratio below 0.2 and lies within
     10 % of the Klingel frequency of the wheelset."""
@@ -64,7 +64,7 @@ def test_lightly_damped_hunting_mode_at_20_m_per_s():
 
 @pytest.mark.parametrize("band, rms_mm", [((3.0, 25.0), 0.71), ((25.0, 70.0), 1.20), ((70.0, 200.0), 1.91)])
 def test_spectrum_gives_the_published_band_rms(band, rms_mm):
-    """railway.md section 3: the low-disturbance alignment spectrum (one-sided, angular
+    """docs/references.md section 3: the low-disturbance alignment spectrum (one-sided, angular
     wavenumber) holds 0.71 / 1.20 / 1.91 mm rms in D1 / D2 / D3."""
     integral, _ = quad(sm.alignment_spectrum, 2 * np.pi / band[1], 2 * np.pi / band[0], limit=200)
     assert np.sqrt(integral) * 1e3 == pytest.approx(rms_mm, abs=0.006)

@@ -1,6 +1,6 @@
 //! Messages to the importer's logger, the way every importer can take them.
 //!
-//! Lessons from importers (fmi.md section 7.4): pass the caller's componentEnvironment back
+//! Lessons from importers (docs/references.md section 7.7): pass the caller's componentEnvironment back
 //! unchanged, pass our own copy of the instance name, never pass a NULL category (OMSimulator
 //! crashes on one), and pass the text through "%s" so '%' in a message is never a conversion.
 //! A NULL callback structure or NULL logger simply means nobody listens.

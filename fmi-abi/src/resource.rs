@@ -1,4 +1,4 @@
-//! fmuResourceLocation, as importers actually send it (fmi.md section 5).
+//! fmuResourceLocation, as importers actually send it (docs/references.md section 7.5).
 //!
 //! fmpy sends `file:///tmp/x/resources` percent-encoded without a trailing slash, the FMI
 //! Library `file://` + an absolute path, fmusim adds a trailing slash, and some tools send

@@ -1,5 +1,5 @@
 //! The units our FMUs use, with their SI base-unit exponents, so that every unit a variable
-//! names is defined in UnitDefinitions (fmi.md section 3).
+//! names is defined in UnitDefinitions (docs/references.md section 7.3).
 
 use model_description::{BaseUnit, Unit};
 

@@ -26,7 +26,7 @@
 //! - `Q = h diag(0, 0, 0, q_acc_ws, q_yaw_acc, q_acc_frame, q_xi)`: white accelerations of
 //!   intensity `q_*` [m2/s3 or rad2/s3] on the three bodies and a random walk of intensity
 //!   `q_xi` [m2/s] on the alignment. The `q_xi` default comes from the low-disturbance German
-//!   alignment spectrum (railway.md section 3): alignment slope about 4.5e-4 rms, so at 20 m/s
+//!   alignment spectrum (docs/references.md section 3): alignment slope about 4.5e-4 rms, so at 20 m/s
 //!   `dxi/dt` is about 9e-3 m/s rms with a correlation time of about 0.06 s (1 / (Oc V)),
 //!   `q_xi = 2 sigma^2 tau`, about 1e-5 m2/s.
 //! - The acceleration intensities (1e-4 for all three bodies) were chosen by a coarse sweep on

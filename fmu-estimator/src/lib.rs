@@ -1,5 +1,5 @@
 //! The lateral-alignment estimator of Muñoz, Ros & Escalona ("Estimation of lateral track
-//! irregularity through Kalman filtering techniques", `shared/seed/`), as an FMI 2.0
+//! irregularity through Kalman filtering techniques", docs/references.md), as an FMI 2.0
 //! co-simulation FMU.
 //!
 //! - [`params`]: the simplified model's parameters (Table 2) and their sources;

@@ -8,7 +8,7 @@
 //! from above (leading side turning left). The alignment `xi` displaces both rails laterally
 //! (constant gauge), so the wheelset's displacement relative to the rails is `u = y - xi`.
 //! The rails do not move, so no creepage contains `d(xi)/dt`: the alignment enters only through
-//! the contact geometry (rolling radii and gravitational stiffness), `shared/reference/railway.md`
+//! the contact geometry (rolling radii and gravitational stiffness), `docs/references.md`
 //! section 1.
 //!
 //! # Energies (Lagrange)
@@ -41,7 +41,7 @@
 //! `-W alpha u / l`, where `W = (m + m_f) g` is the load the wheels carry (wheelset plus
 //! suspended mass). The paper writes `2 alpha g (m - m_f) / l`, which with Table 2 masses would
 //! be a *destabilizing* stiffness; we use the derived, restoring `W alpha / l` (the textbook
-//! value, railway.md section 4). The yaw gravitational stiffness `-W alpha l` (railway.md
+//! value, docs/references.md section 4). The yaw gravitational stiffness `-W alpha l` (docs/references.md
 //! section 4) is about 0.3 % of the suspension yaw stiffness `2 kx l_s^2` with Table 2 values
 //! (3.6e3 against 1.15e6 N m/rad) and is left out, as in the paper.
 //!
@@ -187,7 +187,7 @@ mod tests {
         };
         let rel_error = |v: f64| {
             let eig = state_matrix(&p, v).complex_eigenvalues();
-            // The free wheelset is unstable at every speed (railway.md section 5).
+            // The free wheelset is unstable at every speed (docs/references.md section 5).
             assert!(
                 eig.iter().any(|e| e.re > 0.0 && e.im.abs() > 0.0),
                 "no unstable mode at {v} m/s"
@@ -205,7 +205,7 @@ mod tests {
         );
     }
 
-    /// The 11.22 m Klingel wavelength of railway.md section 5 follows from our r_0 = 0.425 m.
+    /// The 11.22 m Klingel wavelength of docs/references.md section 5 follows from our r_0 = 0.425 m.
     #[test]
     fn klingel_wavelength_with_table_2_geometry() {
         let p = Params::default();

@@ -1,5 +1,5 @@
 //! Observability by the Popov-Belevitch-Hautus (PBH) test: the pair (F, H) is observable iff
-//! `rank [lambda I - F; H] = n` at every eigenvalue `lambda` of `F`. railway.md section 1 warns
+//! `rank [lambda I - F; H] = n` at every eigenvalue `lambda` of `F`. docs/references.md section 1 warns
 //! that the power-series matrix `[H; H F; ...; H F^6]` of this model is so badly scaled that a
 //! numeric rank routine reports 4 for an observable system; the PBH test works on one
 //! well-conditioned matrix per eigenvalue instead.

@@ -1,11 +1,11 @@
 //! The simplified model's parameters (the paper's Table 2) and their checks.
 //!
 //! Sources: every default is Table 2 of Muñoz, Ros & Escalona, "Estimation of lateral track
-//! irregularity through Kalman filtering techniques" (`shared/seed/`), except two:
+//! irregularity through Kalman filtering techniques" (docs/references.md), except two:
 //! - `r_0 = 0.425 m`. Table 2 prints 0.85 m, which is the diameter of an ML95-family wheel
-//!   (about 850 mm, `shared/reference/railway.md` section 2), not a plausible rolling radius.
+//!   (about 850 mm, `docs/references.md` section 2), not a plausible rolling radius.
 //!   With 0.425 m the free-wheelset (Klingel) wavelength 2 pi sqrt(r0 l / alpha) is 11.22 m,
-//!   the value railway.md section 5 checks. The vehicle FMU must use the same radius.
+//!   the value docs/references.md section 5 checks. The vehicle FMU must use the same radius.
 //! - `g = 9.81 m/s2`, exposed so the Klingel test can switch gravitational stiffness off.
 //!
 //! kx, cx, ky, cy are the paper's identified equivalents; they are re-identified against our

@@ -11,7 +11,7 @@
 //!    short-wave asymptote of the measured track spectra: the prior says *how smooth* the
 //!    alignment is, not how large. Its variance grows without bound, so the virtual measurement
 //!    (`prior_sigma_xi`) keeps it finite.
-//! 3. **Spectrum shaping filter**: the German alignment spectrum of railway.md section 3,
+//! 3. **Spectrum shaping filter**: the German alignment spectrum of docs/references.md section 3,
 //!    `S(Omega) = A Oc^2 / ((Omega^2 + Or^2)(Omega^2 + Oc^2))` (one-sided, m^2/(rad/m)), is
 //!    exactly the output spectrum of the second-order filter
 //!    `xi'' + (Or + Oc) xi' + Or Oc xi = w(s)` driven by white noise `w` along the track:
@@ -40,7 +40,7 @@
 //!
 //! # Sources
 //! `A = 2.119e-7 m rad`, `Or = 0.0206 rad/m`, `Oc = 0.8246 rad/m`: the low-disturbance German
-//! alignment spectrum, railway.md section 3 (the same constants in four public codes). The
+//! alignment spectrum, docs/references.md section 3 (the same constants in four public codes). The
 //! vehicle FMU's default track uses the same spectrum; a track of another quality calls for the
 //! matching `prior_a` (high disturbance: 6.125e-7).
 
@@ -57,7 +57,7 @@ pub enum AlignmentModel {
     Shaping(Spectrum),
 }
 
-/// The alignment spectrum's constants (railway.md section 3).
+/// The alignment spectrum's constants (docs/references.md section 3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Spectrum {
     /// Amplitude `A` [m rad].

@@ -19,7 +19,7 @@
 //!    Both bodies are steel of the same elastic constants ([`Material`]).
 //! 2. **Kalker's coefficients** ([`kalker_c`], [`creep_coefficients`]): `f11 = G a b C11`,
 //!    `f22 = G a b C22`, `f23 = G (ab)^1.5 C23`, `f33 = G (ab)^2 C33` with `G` the *shear*
-//!    modulus (railway.md section 4; Kalker 1990). The `C`s are interpolated in Kalker's table
+//!    modulus (docs/references.md section 4; Kalker 1990). The `C`s are interpolated in Kalker's table
 //!    (see below for the sources and the interpolation).
 //! 3. **Load scaling** ([`CreepLaw`]): for a fixed geometry the ellipse shape does not depend
 //!    on the load, and `a, b ~ N^(1/3)`; hence `f11, f22 ~ N^(2/3)`, `f23 ~ N`,
@@ -30,16 +30,16 @@
 //!    knife-edge assumption of the paper.
 //! 4. **Saturation** ([`saturate`]): Shen, Hedrick & Elkins, "A comparison of alternative
 //!    creep force models for rail vehicle dynamic analysis", Proc. 8th IAVSD Symposium
-//!    (Cambridge MA, 1983), Swets & Zeitlinger 1984, pp. 591-605; as stated in railway.md
+//!    (Cambridge MA, 1983), Swets & Zeitlinger 1984, pp. 591-605; as stated in docs/references.md
 //!    section 4. The spin moment is scaled by the same factor as the forces (documented on
 //!    [`saturate`]; a modelling choice).
 //! 5. **Flange** ([`flange_force`]): the simplest stop, a dead band (about 9 mm) then a
-//!    linear spring (10-15 MN/m) (railway.md section 4). The paper's estimator assumes no
+//!    linear spring (10-15 MN/m) (docs/references.md section 4). The paper's estimator assumes no
 //!    flange contact; the stop only keeps the simulated wheelset on the track.
 //!
 //! # Sign conventions
 //!
-//! Creepages and forces as in railway.md section 4: `Fx = -f11 nu_x`,
+//! Creepages and forces as in docs/references.md section 4: `Fx = -f11 nu_x`,
 //! `Fy = -f22 nu_y - f23 phi`, `Mz = f23 nu_y - f33 phi`; the forces act on the wheel and
 //! oppose the creepage. Lengths in m, forces in N.
 //!
@@ -49,15 +49,15 @@
 //!   open-source CONTACT program of Vollebregt & Kalker (github.com/eve70a/CONTACT,
 //!   `src/m_hertz.f90`, subroutine `linrol`, Apache-2.0). A C++ port of that routine seen in
 //!   another public repository has C23 = 1.15 at a/b = 0.8, nu = 0.25, a typo: the Fortran
-//!   original and railway.md both give 1.25.
-//! - C33 at nu = 0.25: railway.md section 4 (its rows a/b = 0.2 .. 1, b/a = 0.8 .. 0.2).
-//!   C33 at nu = 0 and 0.5 and at the rows railway.md omits: Kalker's published table
+//!   original and docs/references.md both give 1.25.
+//! - C33 at nu = 0.25: docs/references.md section 4 (its rows a/b = 0.2 .. 1, b/a = 0.8 .. 0.2).
+//!   C33 at nu = 0 and 0.5 and at the rows docs/references.md omits: Kalker's published table
 //!   (Kalker 1967 thesis, reproduced in Kalker 1990 and in the rail-vehicle-dynamics
 //!   textbooks), entered from that table; CONTACT does not carry C33 and no searchable public
 //!   transcription of those entries was found, so they are the least verified numbers here.
-//!   They are consistent with the worked example of railway.md (f33 = 34.5 N m^2 at nu = 0.3
+//!   They are consistent with the worked example of docs/references.md (f33 = 34.5 N m^2 at nu = 0.3
 //!   is reproduced to 0.3 %, which uses the nu = 0.5 column with weight 0.2), and every nu =
-//!   0.25 entry agrees with railway.md.
+//!   0.25 entry agrees with docs/references.md.
 //! - Interpolation: piecewise linear in `g = min(a/b, b/a)` on each half of the table (the
 //!   variable in which the table has uniform steps; both halves share the circular row, so the
 //!   result is continuous across a/b = 1), then linear in nu between the columns; rows and
@@ -68,7 +68,7 @@
 //!
 //! - m, n = 2.731 / 0.493 at 30 deg and 1.486 / 0.717 at 60 deg;
 //!   K(0.5) = 1.854074677, E(0.5) = 1.350643881.
-//! - railway.md worked example (N 40 kN, r0 0.43 m, coned tread, crown 0.30 m, steel):
+//! - docs/references.md worked example (N 40 kN, r0 0.43 m, coned tread, crown 0.30 m, steel):
 //!   a = 5.11 mm, b = 4.02 mm; f11 7.56 MN, f22 6.78 MN, f23 13.6 kN m, f33 34.5 N m^2 at
 //!   nu = 0.3. This module gives a = 5.106 mm, b = 4.017 mm (a/b = 1.271), f11 = 7.612 MN
 //!   (+0.7 %), f22 = 6.793 MN (+0.2 %), f23 = 13.62 kN m (+0.2 %), f33 = 34.39 N m^2 (-0.3 %).

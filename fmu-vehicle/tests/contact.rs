@@ -1,5 +1,5 @@
 //! Tests of the wheel-rail contact module against the independent oracles of
-//! /work/shared/reference/railway.md sections 4-5 and analytic properties.
+//! /work/docs/references.md sections 4-5 and analytic properties.
 
 use fmu_vehicle::contact::*;
 
@@ -7,7 +7,7 @@ fn rel(x: f64, y: f64) -> f64 {
     (x - y).abs() / y.abs()
 }
 
-/// railway.md section 4 worked example: N 40 kN, r0 0.43 m, coned tread, rail crown 0.30 m.
+/// docs/references.md section 4 worked example: N 40 kN, r0 0.43 m, coned tread, rail crown 0.30 m.
 fn worked_example() -> (ContactGeometry, Material, f64) {
     (ContactGeometry::coned(0.43, 0.30), Material::STEEL, 40e3)
 }
@@ -48,7 +48,7 @@ fn elliptic_integrals_known_values() {
 fn hertz_coefficients_table() {
     let (m30, n30) = hertz_coefficients(30f64.to_radians());
     let (m60, n60) = hertz_coefficients(60f64.to_radians());
-    // Tabulated to 3 decimals (railway.md section 4).
+    // Tabulated to 3 decimals (docs/references.md section 4).
     assert!((m30 - 2.731).abs() < 0.0015, "m(30) = {m30}");
     assert!((n30 - 0.493).abs() < 0.0015, "n(30) = {n30}");
     assert!((m60 - 1.486).abs() < 0.0015, "m(60) = {m60}");
@@ -193,7 +193,7 @@ fn material_moduli() {
 
 // ---------------------------------------------------------------- Kalker
 
-/// railway.md section 4, nu = 0.25: (a/b, [C11, C22, C23, C33]).
+/// docs/references.md section 4, nu = 0.25: (a/b, [C11, C22, C23, C33]).
 #[allow(clippy::approx_constant)] // 3.14 is a table entry, not pi
 const RAILWAY_MD_NU_025: [(f64, [f64; 4]); 9] = [
     (0.2, [3.37, 2.63, 0.603, 4.27]),
@@ -208,7 +208,7 @@ const RAILWAY_MD_NU_025: [(f64, [f64; 4]); 9] = [
 ];
 
 #[test]
-fn kalker_table_reproduces_railway_md_at_nu_025() {
+fn kalker_table_reproduces_references_at_nu_025() {
     for (a_over_b, expect) in RAILWAY_MD_NU_025 {
         let c = kalker_c(a_over_b, 0.25);
         for q in 0..4 {
@@ -301,7 +301,7 @@ fn creep_coefficients_worked_example() {
     assert!(rel(f.f22, 6.78e6) < 0.02, "f22 = {}", f.f22);
     assert!(rel(f.f23, 13.6e3) < 0.02, "f23 = {}", f.f23);
     assert!(rel(f.f33, 34.5) < 0.02, "f33 = {}", f.f33);
-    // Using E instead of G would overstate by 2 (1 + nu) = 2.6 (railway.md's warning).
+    // Using E instead of G would overstate by 2 (1 + nu) = 2.6 (docs/references.md's warning).
     assert!(f.f11 < 8e6);
 }
 

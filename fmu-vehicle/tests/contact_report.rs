@@ -1,4 +1,4 @@
-//! The numbers this module reports (run with `--nocapture` to print them): the railway.md
+//! The numbers this module reports (run with `--nocapture` to print them): the docs/references.md
 //! worked example and the ML95-like metro case, against the paper's Table 2.
 
 use fmu_vehicle::contact::*;
@@ -32,7 +32,7 @@ fn line(label: &str, el: Ellipse, f: CreepCoefficients, mat: &Material) {
 fn report_worked_example() {
     let mat = Material::STEEL;
     let (el, f) = coefficients(0.43, 0.30, 40e3, &mat);
-    line("railway.md example (40 kN, r0 0.43)", el, f, &mat);
+    line("docs/references.md example (40 kN, r0 0.43)", el, f, &mat);
     println!(
         "  vs oracle: f11 {:+.2} %, f22 {:+.2} %, f23 {:+.2} %, f33 {:+.2} %",
         100.0 * (f.f11 / 7.56e6 - 1.0),

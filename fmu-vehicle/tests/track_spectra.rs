@@ -1,5 +1,5 @@
 //! The irregularity spectra against independent figures: quadrature of the PSD functions over
-//! the EN 13848 bands against the band RMS values of railway.md section 3, the FMI codes, and
+//! the EN 13848 bands against the band RMS values of docs/references.md section 3, the FMI codes, and
 //! the structural relations between the channels.
 
 use fmu_vehicle::track::{Spectrum, psd_alignment, psd_cross_level, psd_vertical};
@@ -23,11 +23,11 @@ fn band_rms_mm(psd: impl Fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
 
 const BANDS: [(f64, f64); 3] = [(3.0, 25.0), (25.0, 70.0), (70.0, 200.0)];
 
-/// railway.md section 3: "Band RMS implied by the alignment spectra: low 0.71 / 1.20 / 1.91 mm,
+/// docs/references.md section 3: "Band RMS implied by the alignment spectra: low 0.71 / 1.20 / 1.91 mm,
 /// high 1.21 / 2.03 / 3.24 mm in D1 / D2 / D3; vertical low 0.98 / 1.65 / 2.63 mm". The figures
 /// are rounded to 0.01 mm, so they are matched within 0.006 mm.
 #[test]
-fn german_band_rms_match_railway_md() {
+fn german_band_rms_match_references() {
     type Psd = Box<dyn Fn(f64) -> f64>;
     let cases: [(&str, Psd, [f64; 3]); 3] = [
         (
@@ -49,7 +49,7 @@ fn german_band_rms_match_railway_md() {
     for (name, psd, expected) in cases {
         for ((lo, hi), want) in BANDS.iter().zip(expected) {
             let got = band_rms_mm(&psd, *lo, *hi);
-            eprintln!("{name} {lo}-{hi} m: {got:.4} mm (railway.md {want})");
+            eprintln!("{name} {lo}-{hi} m: {got:.4} mm (docs/references.md {want})");
             assert!(
                 (got - want).abs() < 0.006,
                 "{name} {lo}-{hi} m: {got} mm, expected {want}"
@@ -58,11 +58,11 @@ fn german_band_rms_match_railway_md() {
     }
 }
 
-/// The FRA alignment spectrum is railway.md's `0.25 A Oc^2 / (O^2 (O^2 + Oc^2))` cm^2/(rad/m)
+/// The FRA alignment spectrum is docs/references.md's `0.25 A Oc^2 / (O^2 (O^2 + Oc^2))` cm^2/(rad/m)
 /// with `Oc = 0.8245`, `A = 0.0762` (class 5) / `0.0339` (class 6) cm^2 rad/m, in m^2/(rad/m);
 /// vertical uses the class's A_v (0.2095 / 0.0339). Checked point by point, and the long-wave
 /// growth as `1/O^2` (no roll-off wavenumber, unlike the German `Or`: the variance integral
-/// diverges at `O -> 0`) that makes band-limiting necessary. (railway.md says "grow as 1/O^4";
+/// diverges at `O -> 0`) that makes band-limiting necessary. (docs/references.md says "grow as 1/O^4";
 /// that is the short-wave decay, `O >> Oc`.)
 #[test]
 fn fra_forms_and_units() {

@@ -1,4 +1,4 @@
-//! Synthesized tracks: band RMS against railway.md's figures, reproducibility and extension,
+//! Synthesized tracks: band RMS against docs/references.md's figures, reproducibility and extension,
 //! interpolation accuracy, and the channel switches and harmonic alignment.
 
 use fmu_vehicle::track::{Irregularity, Spectrum, Track, TrackSpec, psd_cross_level};
@@ -69,7 +69,7 @@ fn check(name: &str, got: [f64; 3], oracle: [f64; 3]) {
     }
 }
 
-/// German low: alignment and vertical against railway.md section 3 (0.71 / 1.20 / 1.91 mm and
+/// German low: alignment and vertical against docs/references.md section 3 (0.71 / 1.20 / 1.91 mm and
 /// 0.98 / 1.65 / 2.63 mm), cross-level against quadrature of its PSD.
 #[test]
 fn band_rms_german_low() {
@@ -102,7 +102,7 @@ fn band_rms_german_low() {
     );
 }
 
-/// German high alignment, another seed: 1.21 / 2.03 / 3.24 mm (railway.md).
+/// German high alignment, another seed: 1.21 / 2.03 / 3.24 mm (docs/references.md).
 #[test]
 fn band_rms_german_high() {
     let spec = TrackSpec {

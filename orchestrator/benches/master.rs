@@ -3,7 +3,7 @@
 //! from `cargo xtask fmu`, and .venv from `cargo xtask test` for the fmpy comparison).
 //!
 //! System: Dahlquist -> Feedthrough (one Real connection), 1e5 steps of 1e-4 s: the workload of
-//! shared/reference/masters.md section 2. Printed, each as the median of 5 runs:
+//! docs/references.md section 8.2. Printed, each as the median of 5 runs:
 //! - a bare loop over the same two instances (doStep, getReal, setReal, doStep): the FMUs' own
 //!   cost plus the FFI calls, the floor any master pays;
 //! - our master without recording, and with CSV recording of the two connected variables;

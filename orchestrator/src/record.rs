@@ -2,7 +2,7 @@
 //! variable named `component.variable`, and `results.units.csv` beside it with the same header
 //! and one row of units (so the data file stays a plain one-header CSV that every tool reads).
 //!
-//! Recording costs more than stepping in every master measured (masters.md section 2), so the
+//! Recording costs more than stepping in every master measured (docs/references.md section 8.2), so the
 //! writer formats floats with `ryu` (shortest round-trip representation) into one reused line
 //! buffer and writes through a large `BufWriter`. Rows are written as they come: when a run
 //! fails, everything recorded so far is flushed and kept. The file is written as

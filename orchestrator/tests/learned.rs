@@ -50,7 +50,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
         let j = jrel(m, band);
         assert!(j < bound, "{what} {band} Jrel {j}, bound {bound}");
     };
-    // The paper's D1 Jrel is 0.48 (railway.md section 1); the Kalman smoother misses it on this
+    // The paper's D1 Jrel is 0.48 (docs/references.md section 1); the Kalman smoother misses it on this
     // vehicle (cross-level, docs/cross-level.md).
     below("learned", &alone, "D1", 0.48);
     below("hybrid", &hybrid, "D1", 0.48);

@@ -32,7 +32,7 @@ impl CreepForces {
 }
 
 /// Kalker's linear law: `Fx = -f11 nu_x`, `Fy = -f22 nu_y - f23 phi`,
-/// `Mz = f23 nu_y - f33 phi` (railway.md section 4).
+/// `Mz = f23 nu_y - f33 phi` (docs/references.md section 4).
 #[inline]
 pub fn linear_creep(c: &CreepCoefficients, nu: &Creepages) -> CreepForces {
     CreepForces {

@@ -20,7 +20,7 @@
 //! (`A + B = p0 E(e) / (E* b)` and `N = 2 pi a b p0 / 3` from Johnson eq. 3.46 give these.)
 //! The major axis lies along the direction of the smaller curvature sum. This reproduces the
 //! classical tabulated coefficients (m, n = 2.731 / 0.493 at 30 deg, 1.486 / 0.717 at 60 deg;
-//! railway.md section 4; D. H. Cooper, "Tables of Hertzian contact-stress coefficients",
+//! docs/references.md section 4; D. H. Cooper, "Tables of Hertzian contact-stress coefficients",
 //! Coordinated Science Laboratory report, Univ. of Illinois, August 1968, which also notes
 //! errors in Hertz's own tables).
 

@@ -17,7 +17,7 @@ type Row = [[f64; 3]; 4];
 ///
 /// C11, C22, C23: Kalker (1990) Table E.3 as transcribed in the open-source CONTACT
 /// (eve70a/CONTACT, `src/m_hertz.f90`, subroutine `linrol`, Apache-2.0).
-/// C33: nu = 0.25 from railway.md section 4 (rows a/b = 0.2, 0.4, ..., 1.0 there); the other
+/// C33: nu = 0.25 from docs/references.md section 4 (rows a/b = 0.2, 0.4, ..., 1.0 there); the other
 /// entries from Kalker's published table (Kalker 1967 thesis / 1990 Table E.3) as reproduced
 /// in the rail-dynamics textbooks; CONTACT's `linrol` does not carry C33, and no searchable
 /// public transcription of those entries was found (see the module docs).

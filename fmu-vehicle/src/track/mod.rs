@@ -19,7 +19,7 @@
 //!
 //! [`psd_alignment`], [`psd_vertical`] and [`psd_cross_level`] give one-sided PSDs in angular
 //! wavenumber, m^2/(rad/m): German low/high disturbance (constants as in four public codes,
-//! railway.md section 3) and FRA classes 5 and 6 (converted from cm^2/(rad/m)). The German
+//! docs/references.md section 3) and FRA classes 5 and 6 (converted from cm^2/(rad/m)). The German
 //! cross-level spectrum is published for the cross-level *angle* (units 1/(rad/m), `b = 0.75` m);
 //! it is converted to the height difference by the factor `(2 b)^2`, which makes it agree in
 //! form with the FRA cross-level spectrum (see [`psd_cross_level`]). Band RMS implied by the

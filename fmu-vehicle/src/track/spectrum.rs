@@ -52,7 +52,7 @@ impl Spectrum {
 /// German cross-level spectrum.
 pub const HALF_CONTACT_DISTANCE: f64 = 0.75;
 
-// German spectra (ORE B176 family as used in vehicle dynamics), railway.md section 3 [src]:
+// German spectra (ORE B176 family as used in vehicle dynamics), docs/references.md section 3 [src]:
 // one-sided, angular wavenumber, m^2/(rad/m), A in m^2 rad/m.
 const GER_OC: f64 = 0.8246;
 const GER_OR: f64 = 0.0206;
@@ -67,10 +67,10 @@ const CM2_TO_M2: f64 = 1e-4;
 /// Spectrum constants: `(A_a, A_v, Omega_s)`; German in m^2 rad/m, FRA in cm^2 rad/m.
 fn constants(spec: Spectrum) -> (f64, f64, f64) {
     match spec {
-        // railway.md section 3 [src: four public codes]; same Os for both levels.
+        // docs/references.md section 3 [src: four public codes]; same Os for both levels.
         Spectrum::GermanLow => (2.119e-7, 4.032e-7, GER_OS),
         Spectrum::GermanHigh => (6.125e-7, 1.080e-6, GER_OS),
-        // A_a from railway.md [src]; A_v = 0.2095 / 0.0339 cm^2 rad/m as in the public
+        // A_a from docs/references.md [src]; A_v = 0.2095 / 0.0339 cm^2 rad/m as in the public
         // TTB-2D tool (Cantero, SoftwareX 20, 2022, profile options "FRAv2", classes 1-6:
         // 1.2107 1.0181 0.6816 0.5376 0.2095 0.0339); Omega_s = 0.8209 / 0.4380 rad/m from
         // the FRA class table [lit, not found in a public code in this session].

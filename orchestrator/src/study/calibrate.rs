@@ -266,7 +266,7 @@ pub const XI_SCALES: [f64; 5] = [1.0, 1e1, 1e2, 1e3, 1e4];
 /// variance and the alignment's process noise to its true increments; against our vehicle this
 /// shrinks the estimate to a fraction of the truth (a diagnosis found gains of 0.2-0.35 at
 /// 20-80 m with good coherence). How strongly the virtual measurement pulls decides the long
-/// wavelengths (railway.md section 1), so its weight is a calibration choice, made here on the
+/// wavelengths (docs/references.md section 1), so its weight is a calibration choice, made here on the
 /// calibration track by a grid over [`VIRTUAL_SCALES`] x [`XI_SCALES`].
 pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, String> {
     use rayon::prelude::*;

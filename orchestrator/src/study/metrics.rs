@@ -7,7 +7,7 @@
 //! 2. Each is filtered by a zero-phase Butterworth band-pass between the band's wavelengths:
 //!    order 4 (8 poles in second-order sections), designed in spatial frequency `1/m` with the
 //!    sampling rate `1/ds`, applied forward and backward (`sosfiltfilt`, odd padding, as
-//!    scipy's default), as the public UIC 518 implementation does (railway.md section 3).
+//!    scipy's default), as the public UIC 518 implementation does (docs/references.md section 3).
 //! 3. The first and last `trim` metres (default 10 m) are dropped, where the forward-backward
 //!    filter starts and stops.
 //! 4. `J = rms(estimate - truth)` and `Jrel = J / rms(truth)`.

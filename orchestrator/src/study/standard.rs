@@ -1,6 +1,6 @@
 //! The standard case's evaluation: from the results of a run of the standard system
 //! (vehicle -> estimator), the accuracy in each band, written as `metrics.json` and printed
-//! beside the paper's Table (railway.md section 1).
+//! beside the paper's Table (docs/references.md section 1).
 
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use std::path::Path;
