@@ -11,7 +11,7 @@
 //! - [`fmu`]: the FMI variable table and what each FMI phase does.
 //!
 //! The FMU's variables are listed in `documentation/index.html` inside the packaged FMU and in
-//! the README.
+//! `docs/estimator-fmu.md`.
 
 // `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -1,5 +1,5 @@
 #![allow(clippy::result_large_err)]
-//! The `orchestrator` command line. See `orchestrator --help` and the README.
+//! The `orchestrator` command line. See `orchestrator --help` and `docs/orchestrator.md`.
 //!
 //! Exit codes: 0 success; 1 an I/O failure (results cannot be written); 2 bad input (a file,
 //! the system description, a connection, a parameter, the command line); 3 an FMU failed during

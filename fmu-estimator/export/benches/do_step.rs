@@ -1,7 +1,7 @@
 //! The cost of one estimator step through the real C entry points (the symbols the packaged
 //! FMU exports), as an importer pays it: `fmi2DoStep` alone, and the usual master loop of
 //! `fmi2SetReal` (4 inputs) + `fmi2DoStep` + `fmi2GetReal` (2 outputs). Run with
-//! `cargo bench -p fmu-estimator-export`; the figures are recorded in the README.
+//! `cargo bench -p fmu-estimator-export`; the figures are recorded in `docs/estimator-fmu.md`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use fmi_abi::types::*;

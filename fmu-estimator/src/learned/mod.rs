@@ -7,7 +7,7 @@
 //! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
 //!
 //! How the taps are fitted (`orchestrator study taps`, `orchestrator/src/study/learned/`) and
-//! what they reach is in `docs/cross-level.md` sections 5-6 and the README.
+//! what they reach is in `docs/cross-level.md` sections 5-6 and `docs/accuracy.md`.
 
 pub mod bank;
 pub mod grid;
