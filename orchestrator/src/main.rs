@@ -985,6 +985,7 @@ fn study_variants(a: &StudyArgs) -> Result<(), RunError> {
         .map_err(|e| RunError::Io(format!("cannot create {}: {e}", a.out.display())))?;
     let json = serde_json::json!({
         "calibration_seed": a.calibration_seed,
+        "seeds": a.seeds,
         "tuned": tuned,
         "constant_speed": at_constant,
         "no_vertical_irregularity": at_flat,

@@ -289,8 +289,10 @@ fn run_pytest(
 }
 
 /// The main job: packages the FMUs, builds the orchestrator, runs the standard case through it
-/// (loading the .fmu files; it prints the accuracy table beside the paper's and writes
-/// metrics.json), then the paper's studies on held-out track seeds.
+/// (loading the .fmu files; it writes results.csv and metrics.json), the paper's studies and
+/// the variants on held-out track seeds, each command's output in a log beside its results;
+/// then prints one table, the headline: the estimator FMU's estimators beside the paper, mean
+/// over the held-out seeds, and where the full reports are.
 fn demo(extra: Vec<String>) -> Result<()> {
     let packaged = package::build_and_package()?;
     let find = |id: &str| {
@@ -303,9 +305,17 @@ fn demo(extra: Vec<String>) -> Result<()> {
     let (vehicle, estimator) = (find("RailVehicle")?, find("AlignmentEstimator")?);
     let orchestrator = build_orchestrator()?;
     let out = workspace::target_dir()?.join("demo");
-    println!(
-        "\n==> orchestrator run (standard case: RailVehicle.fmu -> AlignmentEstimator.fmu, 20 s at 1 ms)"
-    );
+    let study_dir = out.join("study");
+    std::fs::create_dir_all(&study_dir)
+        .with_context(|| format!("cannot create {}", study_dir.display()))?;
+    // Each step's own output goes to a log; the screen gets one line per step.
+    let logged = |what: &str, cmd: &mut Command, log: &std::path::Path| -> Result<()> {
+        println!("==> {what} (log: {})", log.display());
+        let file = std::fs::File::create(log)
+            .with_context(|| format!("cannot create {}", log.display()))?;
+        cmd.stdout(file.try_clone()?).stderr(file);
+        workspace::run(cmd).with_context(|| format!("see {}", log.display()))
+    };
     let mut run = Command::new(&orchestrator);
     run.arg("run")
         .arg("--vehicle")
@@ -315,10 +325,13 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg("--out")
         .arg(&out)
         .arg("--quiet");
-    workspace::run(&mut run)?;
+    logged(
+        "orchestrator run: the standard case, RailVehicle.fmu -> AlignmentEstimator.fmu, 20 s at 1 ms",
+        &mut run,
+        &out.join("run.log"),
+    )?;
     // The studies share the FMUs, the output directory and the extra arguments.
     let study = |command: &str, what: &str| {
-        println!("\n==> orchestrator study {command} ({what})");
         let mut study = Command::new(&orchestrator);
         study
             .arg("study")
@@ -328,13 +341,67 @@ fn demo(extra: Vec<String>) -> Result<()> {
             .arg("--estimator")
             .arg(&estimator)
             .arg("--out")
-            .arg(out.join("study"))
+            .arg(&study_dir)
+            .arg("--quiet")
             .args(&extra);
-        workspace::run(&mut study)
+        logged(
+            &format!("orchestrator study {command}: {what}"),
+            &mut study,
+            &study_dir.join(format!("{command}.log")),
+        )
     };
-    study("all", "held-out track seeds 1-5; calibration on seed 101")?;
+    study("all", "the paper's cases on held-out track seeds")?;
     study(
         "variants",
-        "beyond the paper: the estimator FMU's learned filter (default) beside the paper's filter, then priors, steady-state gain, RTS smoother, variable speed",
-    )
+        "the estimator FMU's estimators and the filter's options",
+    )?;
+    headline(&study_dir.join("variants.json"))?;
+    println!(
+        "\nFull reports: {} (the paper's cases) and {} (the estimators and options); the standard run: {}",
+        study_dir.join("report.md").display(),
+        study_dir.join("variants.md").display(),
+        out.join("results.csv").display()
+    );
+    Ok(())
+}
+
+/// The paper's Jrel for the standard case, whole / D1 / D2 / D3 (its results table).
+const PAPER: [f64; 4] = [0.25, 0.48, 0.26, 0.15];
+
+/// Prints the headline table from `study variants`' JSON: the standard case's estimator-FMU rows
+/// (mean Jrel over the held-out seeds) under the paper's.
+fn headline(json: &std::path::Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(json).with_context(|| format!("cannot read {}", json.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", json.display()))?;
+    let seeds: Vec<String> = v["seeds"]
+        .as_array()
+        .map(|a| a.iter().map(|s| s.to_string()).collect())
+        .unwrap_or_default();
+    let rows = v["estimator_fmu"]["standard"]
+        .as_array()
+        .with_context(|| format!("{}: no estimator_fmu.standard table", json.display()))?;
+    println!(
+        "\nAlignment accuracy, standard case (20 s at 20 m/s), Jrel mean over held-out track seeds {}:\n",
+        seeds.join(", ")
+    );
+    println!("| estimator | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |");
+    println!("|---|---|---|---|---|");
+    let fmt = |x: &[f64]| {
+        x.iter()
+            .map(|j| format!("{j:.3}"))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    };
+    println!("| the paper (its own vehicle) | {} |", fmt(&PAPER));
+    for r in rows {
+        let name = r["name"].as_str().unwrap_or("?");
+        let bands: Vec<f64> = r["bands"]
+            .as_array()
+            .map(|b| b.iter().filter_map(|x| x[1].as_f64()).collect())
+            .unwrap_or_default();
+        println!("| {name} | {} |", fmt(&bands));
+    }
+    Ok(())
 }
