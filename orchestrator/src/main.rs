@@ -419,6 +419,8 @@ fn run(args: RunArgs) -> Result<(), RunError> {
     if args.jacobi {
         opts.algorithm = Algorithm::Jacobi;
     }
+    // The standard case is evaluated from the recorded table in memory, not read back.
+    opts.collect = is_standard;
     let fmus: Vec<(&str, &Path)> = system
         .components
         .iter()
@@ -432,8 +434,8 @@ fn run(args: RunArgs) -> Result<(), RunError> {
     let _out = hold_output(&args.common, files, &fmus, &args.set)?;
     let summary = cosim.run(&opts)?;
     report(&summary);
-    if is_standard && let Some(results) = &summary.results {
-        standard_case_metrics(results)?;
+    if is_standard && let (Some(results), Some(table)) = (&summary.results, &summary.table) {
+        standard_case_metrics(table, results)?;
     }
     Ok(())
 }
@@ -478,10 +480,13 @@ fn hold_output(
     Ok(Some(out))
 }
 
-/// The standard case's accuracy: `metrics.json` beside results.csv, and the table on stdout.
-fn standard_case_metrics(results: &Path) -> Result<(), RunError> {
+/// The standard case's accuracy from the run's table in memory: `metrics.json` beside
+/// `results`, and the table on stdout.
+fn standard_case_metrics(
+    cols: &orchestrator::master::Table,
+    results: &Path,
+) -> Result<(), RunError> {
     use orchestrator::study::standard;
-    let cols = standard::Columns::read(results).map_err(RunError::Io)?;
     let m = match standard::evaluate_results(&cols) {
         Ok(m) => m,
         Err(e) => {

@@ -89,6 +89,21 @@ impl Table {
             .position(|c| c == name)
             .map(|i| self.data[i].as_slice())
     }
+
+    /// The column `name`, or an error naming it.
+    pub fn require(&self, name: &str) -> Result<&[f64], String> {
+        self.column(name)
+            .ok_or_else(|| format!("the results have no column '{name}'"))
+    }
+
+    /// A results.csv read back (the one CSV reader, [`crate::csv`]).
+    pub fn read_csv(path: &std::path::Path) -> Result<Table, String> {
+        let csv = crate::csv::Csv::read(path)?;
+        Ok(Table {
+            columns: csv.names,
+            data: csv.columns,
+        })
+    }
 }
 
 #[derive(Debug, Clone)]

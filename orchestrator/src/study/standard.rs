@@ -3,7 +3,7 @@
 //! beside the paper's Table (docs/references.md section 1).
 
 use super::metrics::{BANDS, BandMetrics, evaluate};
-use std::path::Path;
+use crate::master::Table;
 
 /// The paper's standard case, J [mm] / Jrel per band (its Tables 3 and 4).
 pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [
@@ -17,41 +17,16 @@ pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [
 pub const DS: f64 = 0.05;
 pub const TRIM: f64 = 10.0;
 
-/// Named columns of a results.csv.
-pub struct Columns {
-    pub names: Vec<String>,
-    pub data: Vec<Vec<f64>>,
-}
-
-impl Columns {
-    /// Reads a results.csv with the one CSV reader ([`crate::csv`]).
-    pub fn read(path: &Path) -> Result<Columns, String> {
-        let csv = crate::csv::Csv::read(path)?;
-        Ok(Columns {
-            names: csv.names,
-            data: csv.columns,
-        })
-    }
-
-    pub fn column(&self, name: &str) -> Result<&[f64], String> {
-        self.names
-            .iter()
-            .position(|n| n == name)
-            .map(|i| self.data[i].as_slice())
-            .ok_or_else(|| format!("results have no column '{name}'"))
-    }
-}
-
 /// The band metrics of a standard-case run: the estimator's alignment (against its own
 /// distance) and the vehicle's true alignment (against the vehicle's distance). The first row
 /// (t = start, before any step) is left out.
-pub fn evaluate_results(cols: &Columns) -> Result<BandMetrics, String> {
+pub fn evaluate_results(cols: &Table) -> Result<BandMetrics, String> {
     let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
     evaluate(
-        &skip(cols.column("estimator.distance")?),
-        &skip(cols.column("estimator.alignment")?),
-        &skip(cols.column("vehicle.distance")?),
-        &skip(cols.column("vehicle.alignment")?),
+        &skip(cols.require("estimator.distance")?),
+        &skip(cols.require("estimator.alignment")?),
+        &skip(cols.require("vehicle.distance")?),
+        &skip(cols.require("vehicle.alignment")?),
         DS,
         TRIM,
     )
@@ -59,13 +34,13 @@ pub fn evaluate_results(cols: &Columns) -> Result<BandMetrics, String> {
 
 /// The band metrics of the estimator's fixed-lag output (`alignment_lagged` against
 /// `distance_lagged`), when the results hold it and the estimator made one (`lag` > 0).
-pub fn evaluate_lagged(cols: &Columns) -> Option<Result<BandMetrics, String>> {
+pub fn evaluate_lagged(cols: &Table) -> Option<Result<BandMetrics, String>> {
     let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
     let (d, a) = (
-        cols.column("estimator.distance_lagged").ok()?,
-        cols.column("estimator.alignment_lagged").ok()?,
+        cols.column("estimator.distance_lagged")?,
+        cols.column("estimator.alignment_lagged")?,
     );
-    let dist = cols.column("estimator.distance").ok()?;
+    let dist = cols.column("estimator.distance")?;
     // distance_lagged == distance: no lagged output (lag 0 or estimator 1).
     if d.iter().zip(dist).all(|(a, b)| a == b) {
         return None;
@@ -74,8 +49,8 @@ pub fn evaluate_lagged(cols: &Columns) -> Option<Result<BandMetrics, String>> {
         evaluate(
             &skip(d),
             &skip(a),
-            &skip(cols.column("vehicle.distance")?),
-            &skip(cols.column("vehicle.alignment")?),
+            &skip(cols.require("vehicle.distance")?),
+            &skip(cols.require("vehicle.alignment")?),
             DS,
             TRIM,
         )
