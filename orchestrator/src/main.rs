@@ -487,14 +487,14 @@ fn standard_case_metrics(
     results: &Path,
 ) -> Result<(), RunError> {
     use orchestrator::study::standard;
-    let m = match standard::evaluate_results(&cols) {
+    let m = match standard::evaluate_results(cols) {
         Ok(m) => m,
         Err(e) => {
             eprintln!("no accuracy metrics: {e}");
             return Ok(());
         }
     };
-    let lagged = match standard::evaluate_lagged(&cols) {
+    let lagged = match standard::evaluate_lagged(cols) {
         Some(Ok(l)) => Some(l),
         Some(Err(e)) => {
             eprintln!("no accuracy metrics for the lagged output: {e}");
