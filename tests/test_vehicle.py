@@ -219,3 +219,22 @@ def test_impossible_parameters_are_refused_naming_them(make_vehicle, setting, wo
     assert initialize(s, **setting) == ERROR
     errors = [r.message for r in s.log.records if r.status == ERROR]
     assert any(word in m for m in errors), s.log.records
+
+
+def test_a_vehicle_that_leaves_the_track_stops_with_an_error_naming_it(tmp_path):
+    """A physically impossible state stops the run: with its Kalker coefficients halved the
+    ML95 hunts at 30 m/s until its leading wheelset is 0.37 m off the track (the model's flange
+    is a spring, so nothing else stops it). The FMU returns fmi2Error once the wheelset is past
+    the flange clearance by a flange width (39 mm), the master exits 3 keeping the rows until
+    then; at 25 m/s the same vehicle runs on."""
+    import orchestrator_cli as oc
+
+    fmu = oc.fmus()["RailVehicle"]
+    out = tmp_path / "out"
+    p = oc.run("simulate", fmu, "--stop", "20", "--quiet", "--set", "kalker_scale=0.5", "--set", "speed=30",
+               "--out", out, "--record", "ws_y,alignment", check=3)
+    assert "derailed" in p.stderr and "hunting" in p.stderr and "30 m/s" in p.stderr, p.stderr
+    r = oc.read_results(out)
+    relative = np.abs(r["RailVehicle.ws_y"] - r["RailVehicle.alignment"])
+    assert 5.0 < r.time[-1] < 20.0 and relative.max() <= 0.039 + 1e-9
+    oc.run("simulate", fmu, "--stop", "20", "--quiet", "--no-record", "--set", "kalker_scale=0.5", "--set", "speed=25")

@@ -136,14 +136,19 @@ fn run(
     let stop = (distance / speed).clamp(20.0, MAX_STOP).round();
     let mut settings = seeded(seed);
     settings.push(("kalker_scale".into(), Value::Real(kalker)));
-    let (rec, table) = record_table(
+    let (rec, table) = match record_table(
         fmus,
         settings,
         stop,
         Some(&move |_| speed),
         roll.then_some(ROLL),
         &[WS_Y],
-    )?;
+    ) {
+        Ok(r) => r,
+        // The vehicle FMU stops a run in which it leaves the track: no running condition.
+        Err(e) if e.contains(fmu_vehicle::fmu::DERAILED) => return Ok(None),
+        Err(e) => return Err(e),
+    };
     let ws_y = table
         .column(&format!("vehicle.{WS_Y}"))
         .ok_or("no column vehicle.ws_y")?;
