@@ -53,6 +53,7 @@ impl Estimator {
                 o[vr::ALIGNMENT_LAGGED_STD as usize] = e.lagged_std;
                 o[vr::DISTANCE_LAGGED as usize] = distance - l.lag();
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = e.active;
+                v.real[vr::CONTACT_SCALE as usize] = l.contact_scale();
             }
             None => {
                 o[vr::ALIGNMENT as usize] = xi;
@@ -61,6 +62,7 @@ impl Estimator {
                 o[vr::ALIGNMENT_LAGGED_STD as usize] = std;
                 o[vr::DISTANCE_LAGGED as usize] = distance;
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = crate::learned::ACTIVE_PAPER;
+                v.real[vr::CONTACT_SCALE as usize] = 0.0;
             }
         }
         let o = &mut v.real;

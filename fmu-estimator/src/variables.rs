@@ -64,6 +64,7 @@ pub mod vr {
     pub const ALIGNMENT_LAGGED_STD: u32 = 49;
     pub const DISTANCE_LAGGED: u32 = 50;
     pub const ALIGNMENT_KALMAN: u32 = 51;
+    pub const CONTACT_SCALE: u32 = 52;
     // Integer
     pub const DISCRETIZATION: u32 = 0;
     pub const SKIPPED_UPDATES: u32 = 1;
@@ -145,11 +146,12 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
     VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
-    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (trained at Kalker 100 % and 50 %, robust to wear), learned-nominal.taps (Kalker 100 % only)"),
+    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (orchestrator study taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (taps per contact condition, Kalker 100, 75 and 50 %, blended by the estimated contact_scale), learned-nominal.taps (Kalker 100 % only)"),
     VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; over the first lag + 1 m the causal estimate made at distance_lagged, outside the taps' speed range the Kalman estimate)"),
     VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
     VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
     VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
+    VarSpec::real_output(vr::CONTACT_SCALE, "contact_scale", "1", 0.0, "The wheel-rail contact's Kalker-coefficient scale as the learned filter estimates it from the sensors (1: nominal creep coefficients, 0.5: halved, as worn wheels and rails); it blends the taps fitted per condition. 0 when the tap bank has no contact model (learned-nominal.taps, estimator 1)"),
     VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", DEFAULT_CALIBRATION_FILE, "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute; a file other than the default that does not exist is an error"),
 ];

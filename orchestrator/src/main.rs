@@ -128,9 +128,13 @@ struct TapsArgs {
     /// Speeds of the bank [m/s].
     #[arg(long, value_delimiter = ',', default_value = "5,10,15,20,25,30")]
     speeds: Vec<f64>,
-    /// Kalker-coefficient scales of the training runs (one run each).
-    #[arg(long, value_delimiter = ',', default_value = "1,0.5")]
+    /// Kalker-coefficient scales of the training runs (one run each): each condition gets its
+    /// own taps, blended at run time by the contact model fitted with them.
+    #[arg(long, value_delimiter = ',', default_value = "1,0.75,0.5")]
     kalker_scales: Vec<f64>,
+    /// One set of taps fitted on every condition's runs at once, no contact model.
+    #[arg(long)]
+    pooled: bool,
     /// Lags of the fixed-lag entries [m].
     #[arg(long, value_delimiter = ',', default_value = "10")]
     lags: Vec<f64>,
@@ -1083,6 +1087,7 @@ fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
     let mut o = Options::shipped();
     o.speeds = a.speeds.clone();
     o.kalker_scales = a.kalker_scales.clone();
+    o.per_condition = !a.pooled;
     o.lags = a.lags.clone();
     o.roll_rate = !a.no_roll_rate;
     o.training_seed = a.seed;
@@ -1091,6 +1096,7 @@ fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
     if (
         o.speeds.clone(),
         o.kalker_scales.clone(),
+        o.per_condition,
         o.lags.clone(),
         o.roll_rate,
         o.training_seed,
@@ -1098,6 +1104,7 @@ fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
     ) != (
         defaults.speeds,
         defaults.kalker_scales,
+        defaults.per_condition,
         defaults.lags,
         defaults.roll_rate,
         defaults.training_seed,
@@ -1110,10 +1117,20 @@ fn study_taps(a: &TapsArgs) -> Result<(), RunError> {
     create_parent(&a.out)?;
     std::fs::write(&a.out, bank.to_bytes())
         .map_err(|e| RunError::Io(format!("cannot write {}: {e}", a.out.display())))?;
+    for m in bank.contact.iter().flat_map(|c| &c.speeds) {
+        println!(
+            "{:>5} m/s contact model: rms error of the Kalker scale on the validation runs {:.3}",
+            m.speed, m.rms_error
+        );
+    }
     for e in &bank.entries {
         let w = e.windows.last().expect("full window");
+        let condition = e
+            .condition
+            .map(|c| format!("Kalker {:>3} %", c * 100.0))
+            .unwrap_or_default();
         println!(
-            "{:>5} m/s {:<48} lag {:>4} m: ridge {:.0e}, validation objective {:.4}, rms error {:.3} mm",
+            "{:>5} m/s {condition} {:<48} lag {:>4} m: ridge {:.0e}, validation objective {:.4}, rms error {:.3} mm",
             e.speed,
             e.channels.join(","),
             e.lag as f64 * bank.grid,

@@ -25,6 +25,9 @@ fn the_shipped_taps_are_regenerated_byte_for_byte() {
     let mut made = fit(&fmus, &o, &|_| {}).unwrap();
     let mut want = shipped.clone();
     want.entries.retain(|e| e.speed == 20.0);
+    if let Some(c) = want.contact.as_mut() {
+        c.speeds.retain(|m| m.speed == 20.0);
+    }
     assert!(!want.entries.is_empty());
     made.provenance.command = want.provenance.command.clone();
     assert_eq!(made.to_bytes(), want.to_bytes());

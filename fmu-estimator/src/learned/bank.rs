@@ -1,7 +1,7 @@
 //! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
 //! sensor set and lag, with where they came from.
 //!
-//! # Format (version 1)
+//! # Format (version 2; version 1, without contact conditions, is still read)
 //! | part | content |
 //! |---|---|
 //! | first line | `learned-taps 1 <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
@@ -20,7 +20,9 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const MAGIC: &str = "learned-taps";
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
+/// The formats this reader takes.
+pub const READS: [u32; 2] = [1, 2];
 
 /// Where the taps came from: enough to regenerate them and to judge where they hold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -65,6 +67,11 @@ pub struct Entry {
     /// (hunting into derailment) is left out.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub kalker_scales: Vec<f64>,
+    /// The contact condition (Kalker-coefficient scale) this entry's taps are fitted for, in a
+    /// bank that blends conditions by the estimated contact ([`super::contact`]); absent: the
+    /// taps serve every condition (fitted on all of `kalker_scales` at once).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition: Option<f64>,
     pub windows: Vec<Window>,
 }
 
@@ -90,6 +97,9 @@ pub struct Header {
     /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
     pub kalman_highpass: f64,
     pub provenance: Provenance,
+    /// The estimator of the contact condition, in a bank with per-condition entries.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<super::contact::ContactModel>,
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
 }
@@ -135,9 +145,9 @@ impl Header {
         if f.len() != 5 || f[0] != MAGIC {
             return Err(bad(format!("the first line is '{first}'")));
         }
-        if f[1] != FORMAT.to_string() {
+        if !READS.iter().any(|r| f[1] == r.to_string()) {
             return Err(format!(
-                "{shown}: tap bank format {} (this estimator reads format {FORMAT})",
+                "{shown}: tap bank format {} (this estimator reads formats {READS:?})",
                 f[1]
             ));
         }
@@ -200,8 +210,17 @@ impl Header {
 
     /// The consistency of the header (taps aside).
     fn check(&self) -> Result<(), String> {
-        if self.format != FORMAT {
+        if !READS.contains(&self.format) {
             return Err(format!("header format {}", self.format));
+        }
+        if let Some(c) = &self.contact {
+            c.check()?;
+        }
+        let conditional = self.entries.iter().filter(|e| e.condition.is_some()).count();
+        if conditional > 0 && (conditional < self.entries.len() || self.contact.is_none()) {
+            return Err(
+                "per-condition entries need a contact model and a condition on every entry".into(),
+            );
         }
         if !(self.grid.is_finite() && self.grid > 0.0) {
             return Err(format!("grid step {} m", self.grid));
@@ -223,6 +242,11 @@ impl Header {
                 if !super::grid::CHANNELS.contains(&c.as_str()) {
                     return Err(format!("entry {i}: unknown channel '{c}'"));
                 }
+            }
+            if let Some(c) = e.condition
+                && !(c.is_finite() && c > 0.0)
+            {
+                return Err(format!("entry {i}: condition {c}"));
             }
             if e.windows.is_empty() {
                 return Err(format!("entry {i}: no windows"));
@@ -263,6 +287,7 @@ pub(crate) mod tests {
             ridge: 1e-6,
             validation_objective: 0.1,
             kalker_scales: vec![],
+            condition: None,
             windows: [2usize, 5]
                 .iter()
                 .map(|&past| Window {
@@ -291,6 +316,7 @@ pub(crate) mod tests {
                 ridges: vec![1e-6],
                 command: "none".into(),
             },
+            contact: None,
             entries: vec![
                 entry(10.0, 0),
                 entry(20.0, 0),
@@ -330,7 +356,7 @@ pub(crate) mod tests {
         assert!(e.contains("truncated"), "{e}");
         let e = Bank::parse(b"hello\n", p).unwrap_err();
         assert!(e.contains("first line"), "{e}");
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 1", "learned-taps 7");
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 2", "learned-taps 7");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err();
         assert!(e.contains("format 7"), "{e}");
     }

@@ -62,6 +62,21 @@ impl Biquad {
         }
     }
 
+    /// Second-order Butterworth low-pass with cut-off wavelength `cutoff` on a grid of `ds`
+    /// (RBJ cookbook low-pass, `Q = 1/sqrt(2)`).
+    pub fn lowpass(ds: f64, cutoff: f64) -> Biquad {
+        let w0 = std::f64::consts::TAU * ds / cutoff;
+        let (sin, cos) = w0.sin_cos();
+        let alpha = sin / std::f64::consts::SQRT_2;
+        let a0 = 1.0 + alpha;
+        let k = (1.0 - cos) / 2.0 / a0;
+        Biquad {
+            b: [k, 2.0 * k, k],
+            a: [-2.0 * cos / a0, (1.0 - alpha) / a0],
+            s: [0.0; 2],
+        }
+    }
+
     pub fn step(&mut self, x: f64) -> f64 {
         let y = self.b[0] * x + self.s[0];
         self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];
@@ -219,6 +234,25 @@ mod tests {
         assert!((gain(500.0) - std::f64::consts::FRAC_1_SQRT_2).abs() < 2e-3);
         assert!((gain(5000.0) / 0.01 - 1.0).abs() < 0.02, "{}", gain(5000.0));
         assert!((gain(20.0) - 1.0).abs() < 2e-3);
+    }
+
+    #[test]
+    fn the_lowpass_is_a_butterworth_of_order_two() {
+        // Oracle: |1 / (s^2 + sqrt(2) s + 1)| at the pre-warped frequency: 1/sqrt(2) at the
+        // cut-off, 1 well below it, and the bilinear map's value a decade above.
+        let gain = |wavelength: f64| {
+            let mut b = Biquad::lowpass(0.2, 25.0);
+            let n = 100_000;
+            let w = std::f64::consts::TAU * 0.2 / wavelength;
+            let y: Vec<f64> = (0..n).map(|k| b.step((w * k as f64).sin())).collect();
+            let tail = &y[n / 2..];
+            (2.0 * tail.iter().map(|v| v * v).sum::<f64>() / tail.len() as f64).sqrt()
+        };
+        assert!((gain(25.0) - std::f64::consts::FRAC_1_SQRT_2).abs() < 2e-3);
+        assert!((gain(1000.0) - 1.0).abs() < 2e-3);
+        let r = (std::f64::consts::PI * 0.2 / 2.5).tan() / (std::f64::consts::PI * 0.2 / 25.0).tan();
+        let want = 1.0 / ((1.0 - r * r).powi(2) + 2.0 * r * r).sqrt();
+        assert!((gain(2.5) / want - 1.0).abs() < 1e-3, "{} {want}", gain(2.5));
     }
 
     #[test]

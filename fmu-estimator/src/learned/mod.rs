@@ -10,6 +10,7 @@
 //! what they reach is in `docs/cross-level.md` sections 5-6 and `docs/accuracy.md`.
 
 pub mod bank;
+pub mod contact;
 pub mod grid;
 pub mod stream;
 

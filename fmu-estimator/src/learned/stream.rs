@@ -14,8 +14,15 @@
 //! estimate there is of that position, never one of another position relabelled. Outside the bank's speed range no learned
 //! estimate is made (the caller falls back to the Kalman filter); the history goes on, so the
 //! learned estimate resumes as soon as the speed is back inside.
+//!
+//! A bank with per-condition taps (a contact model, [`super::contact`]) is blended in the
+//! contact condition too: every closed cell updates the contact features, the model turns them
+//! into a Kalker-coefficient scale, and the taps of the two trained conditions around it are
+//! blended linearly, as the speeds are (up to four windows per estimate). Where a condition was
+//! left out at a speed (the vehicle is unstable there), the nearest trained condition stands in.
 
 use super::bank::{Bank, Entry};
+use super::contact::{ContactModel, Moments};
 use super::grid::{CHANNELS, Grid, ROLL_RATE};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -97,12 +104,16 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     r
 }
 
-/// The bank's entries for one sensor set and lag, by speed.
+/// The bank's entries for one sensor set and lag, by speed, then by contact condition.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct Selection {
     speeds: Vec<f64>,
-    causal: Vec<Windows>,
-    lagged: Vec<Windows>,
+    /// Contact conditions (Kalker-coefficient scales, ascending); empty without a contact
+    /// model (one set of windows per speed).
+    conditions: Vec<f64>,
+    causal: Vec<Vec<Windows>>,
+    lagged: Vec<Vec<Windows>>,
+    contact: Option<ContactModel>,
     lag: usize,
     uses_roll_rate: bool,
     sample_step: f64,
@@ -238,6 +249,66 @@ pub struct Learned {
     delay: Delay,
     /// Whether the last closed cell's speed was inside the bank's range.
     in_range: bool,
+    /// The contact features' moments (a bank with a contact model).
+    moments: Option<Moments>,
+    /// The estimated Kalker-coefficient scale (0 without a contact model).
+    contact_scale: f64,
+}
+
+/// Linear interpolation weights of `v` on the ascending `xs`: one or two (index, weight) pairs,
+/// zero weights left out; the end points beyond the ends.
+fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
+    if xs.len() == 1 {
+        return vec![(0, 1.0)];
+    }
+    let i = xs.partition_point(|x| *x <= v).clamp(1, xs.len() - 1);
+    let a = ((v - xs[i - 1]) / (xs[i] - xs[i - 1])).clamp(0.0, 1.0);
+    [(i - 1, 1.0 - a), (i, a)]
+        .into_iter()
+        .filter(|(_, w)| *w > 0.0)
+        .collect()
+}
+
+/// The windows of `entries` by ascending speed, and per speed one per condition of
+/// `conditions` (the entry of the nearest condition at that speed), or the single entry of each
+/// speed when `conditions` is empty; `what` names the entries in errors.
+#[allow(clippy::type_complexity)]
+fn by_speed(
+    entries: &[&Entry],
+    conditions: &[f64],
+    what: &str,
+) -> Result<(Vec<f64>, Vec<Vec<Windows>>), String> {
+    let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    let mut table = vec![];
+    for v in &speeds {
+        let at: Vec<&Entry> = entries.iter().copied().filter(|e| e.speed == *v).collect();
+        if conditions.is_empty() {
+            if at.len() > 1 {
+                return Err(format!(
+                    "the tap bank has two {what} entries for one speed ({v} m/s)"
+                ));
+            }
+            table.push(vec![Windows::of(at[0])]);
+            continue;
+        }
+        let row = conditions
+            .iter()
+            .map(|c| {
+                let nearest = at
+                    .iter()
+                    .min_by(|a, b| {
+                        let d = |e: &Entry| (e.condition.unwrap_or(f64::NAN) - c).abs();
+                        d(a).total_cmp(&d(b))
+                    })
+                    .expect("an entry at this speed");
+                Windows::of(nearest)
+            })
+            .collect();
+        table.push(row);
+    }
+    Ok((speeds, table))
 }
 
 /// What [`Learned::select`] needs to know of the FMU's configuration.
@@ -256,13 +327,10 @@ impl Learned {
     pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, String> {
         let roll = |e: &Entry| e.channels.iter().any(|c| c == CHANNELS[ROLL_RATE]);
         let of_set = |lag: usize| -> Vec<&Entry> {
-            let mut v: Vec<&Entry> = bank
-                .entries
+            bank.entries
                 .iter()
                 .filter(|e| roll(e) == choice.roll_rate && e.lag == lag)
-                .collect();
-            v.sort_by(|a, b| a.speed.total_cmp(&b.speed));
-            v
+                .collect()
         };
         let sensors = if choice.roll_rate {
             "four sensors (with the roll-rate gyroscope)"
@@ -273,12 +341,13 @@ impl Learned {
         if causal.is_empty() {
             return Err(format!("the tap bank has no causal taps for {sensors}"));
         }
-        let speeds: Vec<f64> = causal.iter().map(|e| e.speed).collect();
-        if speeds.windows(2).any(|w| !(w[1] > w[0])) {
-            return Err(format!(
-                "the tap bank has two causal entries for one speed ({speeds:?} m/s)"
-            ));
-        }
+        let mut conditions: Vec<f64> = match &bank.contact {
+            Some(_) => causal.iter().filter_map(|e| e.condition).collect(),
+            None => vec![],
+        };
+        conditions.sort_by(f64::total_cmp);
+        conditions.dedup();
+        let (speeds, causal) = by_speed(&causal, &conditions, "causal")?;
         let (lag, lagged) = if choice.lag > 0.0 {
             let want = choice.lag / bank.grid;
             let lags: Vec<usize> = {
@@ -303,14 +372,14 @@ impl Learned {
                 .collect();
             match best {
                 Some(l) if (l as f64 - want).abs() <= 0.5 => {
-                    let entries = of_set(l);
-                    if entries.iter().map(|e| e.speed).collect::<Vec<_>>() != speeds {
+                    let what = format!("{} m lag", l as f64 * bank.grid);
+                    let (at, windows) = by_speed(&of_set(l), &conditions, &what)?;
+                    if at != speeds {
                         return Err(format!(
-                            "the tap bank's {} m lag taps are not at the speeds of its causal taps",
-                            l as f64 * bank.grid
+                            "the tap bank's {what} taps are not at the speeds of its causal taps"
                         ));
                     }
-                    (l, entries.iter().map(|e| Windows::of(e)).collect())
+                    (l, windows)
                 }
                 _ => {
                     return Err(format!(
@@ -327,19 +396,26 @@ impl Learned {
         } else {
             (0, vec![])
         };
-        let causal: Vec<Windows> = causal.iter().map(|e| Windows::of(e)).collect();
         let capacity = causal
             .iter()
             .chain(&lagged)
+            .flatten()
             .map(Windows::longest)
             .max()
             .unwrap_or(1)
             .max(1);
+        let contact = bank.contact.clone().filter(|_| !conditions.is_empty());
         Ok(Learned {
+            moments: contact
+                .as_ref()
+                .map(|c| Moments::new(bank.grid, c.band, c.memory)),
+            contact_scale: 0.0,
             selection: Arc::new(Selection {
                 speeds,
+                conditions,
                 causal,
                 lagged,
+                contact,
                 lag,
                 uses_roll_rate: choice.roll_rate,
                 sample_step: bank.provenance.sample_step,
@@ -354,6 +430,12 @@ impl Learned {
             },
             in_range: false,
         })
+    }
+
+    /// The estimated Kalker-coefficient scale of the contact (1: the nominal coefficients), from
+    /// the last closed cell; 0 when the taps do not estimate it.
+    pub fn contact_scale(&self) -> f64 {
+        self.contact_scale
     }
 
     /// The speed range the taps cover \[m/s\].
@@ -389,6 +471,15 @@ impl Learned {
         };
         for cell in &closed.cells {
             self.history.push(cell);
+            if let Some(m) = self.moments.as_mut() {
+                m.push(cell);
+            }
+        }
+        if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
+            // Nominal until the features exist (the first cells of a run).
+            self.contact_scale = m
+                .features()
+                .map_or(model.range[1], |f| model.estimate(&f, speed));
         }
         let s = &self.selection.speeds;
         self.in_range = speed >= s[0] && speed <= s[s.len() - 1];
@@ -399,25 +490,22 @@ impl Learned {
             return;
         }
         let sel = Arc::clone(&self.selection);
-        // The two bank speeds around `speed` and the weight of the upper one.
-        let i = s
-            .partition_point(|v| *v <= speed)
-            .clamp(1, s.len().max(2) - 1);
-        let (lo, hi, a) = if s.len() == 1 {
-            (0, 0, 0.0)
+        let by_speed = weights(&sel.speeds, speed);
+        let by_condition = if sel.conditions.is_empty() {
+            vec![(0, 1.0)]
         } else {
-            (i - 1, i, (speed - s[i - 1]) / (s[i] - s[i - 1]))
+            weights(&sel.conditions, self.contact_scale)
         };
-        let blend = |set: &[Windows], hist: &History| -> Option<(f64, f64)> {
-            let (e0, r0) = set[lo].apply(hist)?;
-            if a == 0.0 || lo == hi {
-                return Some((e0, r0));
+        let blend = |set: &[Vec<Windows>], hist: &History| -> Option<(f64, f64)> {
+            let (mut e, mut r) = (0.0, 0.0);
+            for (s, a) in &by_speed {
+                for (c, b) in &by_condition {
+                    let (ei, ri) = set[*s][*c].apply(hist)?;
+                    e += a * b * ei;
+                    r += a * b * ri;
+                }
             }
-            let (e1, r1) = set[hi].apply(hist)?;
-            if a == 1.0 {
-                return Some((e1, r1));
-            }
-            Some(((1.0 - a) * e0 + a * e1, (1.0 - a) * r0 + a * r1))
+            Some((e, r))
         };
         let d = closed.distance;
         if let Some((value, std)) = blend(&sel.causal, &self.history) {
@@ -527,6 +615,78 @@ mod tests {
             (got - want).abs() < 1e-12 * want.abs().max(1.0),
             "{got} {want}"
         );
+    }
+
+    #[test]
+    fn per_condition_taps_are_blended_by_the_estimated_contact() {
+        use crate::learned::contact::{ContactModel, SpeedModel};
+        let mut bank = sample_bank();
+        // Two conditions at each speed: the sample taps (0.5) and their negatives (1.0).
+        bank.entries.retain(|e| e.lag == 0);
+        let mut more = bank.entries.clone();
+        for e in &mut bank.entries {
+            e.condition = Some(0.5);
+        }
+        for e in &mut more {
+            e.condition = Some(1.0);
+            for w in &mut e.windows {
+                w.taps.iter_mut().for_each(|t| *t = -*t);
+            }
+        }
+        bank.entries.extend(more);
+        // The scale follows the first feature: 0.75 + 0.1 ln(M_11 / M_00).
+        bank.contact = Some(ContactModel {
+            band: [3.0, 25.0],
+            memory: 10.0,
+            range: [0.5, 1.0],
+            speeds: vec![SpeedModel {
+                speed: 10.0,
+                coefficients: vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.75],
+                rms_error: 0.1,
+            }],
+        });
+        let mut l = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.0,
+            },
+        )
+        .unwrap();
+        let mut grid = Grid::new(0.2, 500.0);
+        let mut cells = vec![];
+        let mut d = 0.0;
+        for k in 0..400 {
+            d += 0.05;
+            let u = (k as f64 * 0.3).sin();
+            // Channel 1 is 1.2 x channel 0: ln(1.44) = 0.365, scale 0.786.
+            let x = [u, 1.2 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+            if let Some(c) = grid.add(d, &x) {
+                cells.extend(c.cells);
+            }
+            l.step(d, 10.0, &x);
+        }
+        let s = l.contact_scale();
+        assert!((s - (0.75 + 0.1 * 1.44f64.ln())).abs() < 0.02, "{s}");
+        let b = (s - 0.5) / 0.5;
+        let (lo, hi) = (&bank.entries[0], &bank.entries[2]);
+        assert_eq!((lo.speed, hi.speed, hi.condition), (10.0, 10.0, Some(1.0)));
+        let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+        let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
+        assert!(
+            (got - want).abs() < 1e-12 * want.abs().max(1.0),
+            "{got} {want}"
+        );
+        // A bank without a contact model reports no scale.
+        let plain = Learned::new(
+            &sample_bank(),
+            Choice {
+                roll_rate: false,
+                lag: 0.0,
+            },
+        )
+        .unwrap();
+        assert_eq!(plain.contact_scale(), 0.0);
     }
 
     #[test]

@@ -62,6 +62,7 @@
 //! D1 (0.085 -> 1.08); fitted on both ([`training_runs`] with scales 1 and 0.5) they give D1
 //! 0.17 nominal and 0.23 halved (docs/cross-level.md section 5).
 
+pub(crate) mod contact;
 mod fir;
 pub mod spectra;
 mod split;
