@@ -216,7 +216,11 @@ impl Header {
         if let Some(c) = &self.contact {
             c.check()?;
         }
-        let conditional = self.entries.iter().filter(|e| e.condition.is_some()).count();
+        let conditional = self
+            .entries
+            .iter()
+            .filter(|e| e.condition.is_some())
+            .count();
         if conditional > 0 && (conditional < self.entries.len() || self.contact.is_none()) {
             return Err(
                 "per-condition entries need a contact model and a condition on every entry".into(),

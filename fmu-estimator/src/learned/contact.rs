@@ -190,7 +190,9 @@ mod tests {
         let mut b = Moments::new(0.2, [3.0, 25.0], 200.0);
         let mut seed = 1u64;
         let mut noise = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         for _ in 0..20_000 {

@@ -250,9 +250,14 @@ mod tests {
         };
         assert!((gain(25.0) - std::f64::consts::FRAC_1_SQRT_2).abs() < 2e-3);
         assert!((gain(1000.0) - 1.0).abs() < 2e-3);
-        let r = (std::f64::consts::PI * 0.2 / 2.5).tan() / (std::f64::consts::PI * 0.2 / 25.0).tan();
+        let r =
+            (std::f64::consts::PI * 0.2 / 2.5).tan() / (std::f64::consts::PI * 0.2 / 25.0).tan();
         let want = 1.0 / ((1.0 - r * r).powi(2) + 2.0 * r * r).sqrt();
-        assert!((gain(2.5) / want - 1.0).abs() < 1e-3, "{} {want}", gain(2.5));
+        assert!(
+            (gain(2.5) / want - 1.0).abs() < 1e-3,
+            "{} {want}",
+            gain(2.5)
+        );
     }
 
     #[test]

@@ -532,8 +532,14 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, St
         band: CONTACT_BAND,
         memory: CONTACT_MEMORY,
         range: [
-            o.kalker_scales.iter().copied().fold(f64::INFINITY, f64::min),
-            o.kalker_scales.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            o.kalker_scales
+                .iter()
+                .copied()
+                .fold(f64::INFINITY, f64::min),
+            o.kalker_scales
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
         ],
         speeds: models,
     });
