@@ -77,6 +77,54 @@ pub struct Processed {
     /// The FMU's outputs with the learned filter (when one is given): `alignment`,
     /// `alignment_lagged` and their standard deviations, `active_estimator`.
     pub learned: Option<Vec<Estimate>>,
+    /// The FMU's `contact_scale` output per sample (with the learned filter).
+    pub contact_scale: Option<Vec<f64>>,
+}
+
+/// A recording's signal columns, read where they are: the Python bindings hand numpy's memory
+/// over without a copy, and a fleet's recordings are large.
+#[derive(Debug, Clone, Copy)]
+pub struct Columns<'a> {
+    pub speed: &'a [f64],
+    pub ws_acc_y: &'a [f64],
+    pub ws_yaw_rate: &'a [f64],
+    pub frame_acc_y: &'a [f64],
+    /// The roll-rate gyroscope, when the record has one (0 otherwise, as in [`Sample`]).
+    pub ws_roll_rate: Option<&'a [f64]>,
+}
+
+impl Columns<'_> {
+    /// Refuses columns of unequal length, naming the first that differs from `speed`.
+    pub fn check(&self) -> Result<usize, String> {
+        let n = self.speed.len();
+        let others = [
+            ("ws_acc_y", Some(self.ws_acc_y)),
+            ("ws_yaw_rate", Some(self.ws_yaw_rate)),
+            ("frame_acc_y", Some(self.frame_acc_y)),
+            ("ws_roll_rate", self.ws_roll_rate),
+        ];
+        for (name, column) in others {
+            if let Some(c) = column
+                && c.len() != n
+            {
+                return Err(format!(
+                    "column '{name}' has {} samples, 'speed' has {n}",
+                    c.len()
+                ));
+            }
+        }
+        Ok(n)
+    }
+
+    fn sample(&self, k: usize) -> Sample {
+        Sample {
+            speed: self.speed[k],
+            ws_acc_y: self.ws_acc_y[k],
+            ws_yaw_rate: self.ws_yaw_rate[k],
+            frame_acc_y: self.frame_acc_y[k],
+            ws_roll_rate: self.ws_roll_rate.map_or(0.0, |r| r[k]),
+        }
+    }
 }
 
 /// The FMU's parameter values with `overrides` (FMI name, value as text) applied, refusing
@@ -163,8 +211,33 @@ pub fn process_learned(
     samples: &[Sample],
     smooth: bool,
 ) -> Result<Processed, String> {
+    run(config, learned, h, samples.len(), |k| samples[k], smooth)
+}
+
+/// [`process_learned`] over columns read in place; unequal lengths are refused.
+pub fn process_columns(
+    config: &Config,
+    learned: Option<Learned>,
+    h: f64,
+    columns: &Columns,
+    smooth: bool,
+) -> Result<Processed, String> {
+    let n = columns.check()?;
+    run(config, learned, h, n, |k| columns.sample(k), smooth)
+}
+
+/// The FMU's stepping over `n` samples, the `k`-th given by `sample(k)`.
+fn run(
+    config: &Config,
+    learned: Option<Learned>,
+    h: f64,
+    n: usize,
+    sample: impl Fn(usize) -> Sample,
+    smooth: bool,
+) -> Result<Processed, String> {
     let mut learned = learned;
-    let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(samples.len()));
+    let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
+    let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
     if !(h > 0.0 && h.is_finite()) {
         return Err(format!("step {h} s must be a positive number"));
     }
@@ -175,10 +248,11 @@ pub fn process_learned(
     let mut out = Processed::default();
     let mut distance = 0.0;
     // For each sample, the index of the last filter step at or before it (None before the first).
-    let mut step_of: Vec<Option<usize>> = Vec::with_capacity(samples.len());
+    let mut step_of: Vec<Option<usize>> = Vec::with_capacity(n);
     let mut steps = 0usize;
     let initial = core.alignment();
-    for (k, s) in samples.iter().enumerate() {
+    for k in 0..n {
+        let s = &sample(k);
         crate::plausible::speed(s.speed).map_err(|e| format!("sample {}: {e}", k + 1))?;
         // Implausible sensor values are skipped like non-finite ones, as in the FMU.
         let mut x = [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate];
@@ -216,11 +290,13 @@ pub fn process_learned(
         step_of.push(steps.checked_sub(1));
         out.distance.push(distance);
         out.filtered.push(core.alignment());
-        if let (Some(l), Some(e)) = (&learned, estimates.as_mut()) {
+        if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
             e.push(l.estimate(distance, core.alignment()));
+            c.push(l.contact_scale());
         }
     }
     out.learned = estimates;
+    out.contact_scale = contact;
     if smooth {
         let smoothed = core.smoothed_alignment();
         out.smoothed = Some(
@@ -346,13 +422,14 @@ mod tests {
             .unwrap();
             inst.do_step(t, 1e-3).unwrap();
             t += 1e-3;
-            let mut o = [0.0; 4];
+            let mut o = [0.0; 5];
             inst.get_real(
                 &[
                     vr::ALIGNMENT,
                     vr::ALIGNMENT_STD,
                     vr::ALIGNMENT_LAGGED,
                     vr::ALIGNMENT_LAGGED_STD,
+                    vr::CONTACT_SCALE,
                 ],
                 &mut o,
             )
@@ -361,9 +438,57 @@ mod tests {
             inst.get_integer(&[vr::ACTIVE_ESTIMATOR], &mut active)
                 .unwrap();
             let e = est[k];
-            assert_eq!(o, [e.alignment, e.std, e.lagged, e.lagged_std], "step {k}");
+            let c = offline.contact_scale.as_ref().unwrap()[k];
+            assert_eq!(
+                o,
+                [e.alignment, e.std, e.lagged, e.lagged_std, c],
+                "step {k}"
+            );
             assert_eq!(active[0], e.active, "step {k}");
         }
+    }
+
+    /// Columns read in place give the samples' results, bit for bit, with and without the
+    /// roll-rate column; unequal columns are refused by name.
+    #[test]
+    fn columns_are_processed_as_samples() {
+        let values = settings(&[("use_roll_rate".into(), "true".into())]).unwrap();
+        let (config, _) = config(&values, None).unwrap();
+        let recorded = samples(3000, |k| 10.0 + 0.005 * k as f64);
+        let col = |f: fn(&Sample) -> f64| recorded.iter().map(f).collect::<Vec<f64>>();
+        let (v, a, y, f) = (
+            col(|s| s.speed),
+            col(|s| s.ws_acc_y),
+            col(|s| s.ws_yaw_rate),
+            col(|s| s.frame_acc_y),
+        );
+        let roll: Vec<f64> = (0..v.len()).map(|k| 0.01 * (k as f64 * 0.1).sin()).collect();
+        for with_roll in [false, true] {
+            let columns = Columns {
+                speed: &v,
+                ws_acc_y: &a,
+                ws_yaw_rate: &y,
+                frame_acc_y: &f,
+                ws_roll_rate: with_roll.then_some(roll.as_slice()),
+            };
+            let rows = if with_roll {
+                Sample::with_roll_rate(recorded.clone(), &roll)
+            } else {
+                recorded.clone()
+            };
+            let want = process_learned(&config, learned(&values).unwrap(), 1e-3, &rows, true);
+            let got = process_columns(&config, learned(&values).unwrap(), 1e-3, &columns, true);
+            assert_eq!(got.unwrap(), want.unwrap());
+        }
+        let short = Columns {
+            speed: &v,
+            ws_acc_y: &a,
+            ws_yaw_rate: &y[1..],
+            frame_acc_y: &f,
+            ws_roll_rate: None,
+        };
+        let err = process_columns(&config, None, 1e-3, &short, false).unwrap_err();
+        assert!(err.contains("'ws_yaw_rate' has 2999 samples"), "{err}");
     }
 
     /// Oracle: causality. Cutting the record at sample `k` (here: changing every sample from
