@@ -205,6 +205,14 @@ fn test(o: TestOptions) -> Result<bool> {
             venv_ok = true;
             Ok(())
         }));
+        if venv_ok {
+            stages.push(timed("python bindings (maturin develop --release)", || {
+                venv_ok = false;
+                python::install_bindings()?;
+                venv_ok = true;
+                Ok(())
+            }));
+        }
         let pytest = "pytest tests";
         match (&fmu_dir, venv_ok) {
             (Some(dir), true) => stages.push(timed(pytest, || {

@@ -58,6 +58,21 @@ pub fn ensure_venv() -> Result<PathBuf> {
     Ok(python())
 }
 
+/// Builds the Python bindings (`bindings/`, PyO3) in release and installs them into `.venv` as
+/// the package `track_alignment`, with the pinned maturin; the build shares `target/` with the
+/// rest of the workspace.
+pub fn install_bindings() -> Result<()> {
+    let bin = if cfg!(windows) { "Scripts" } else { "bin" };
+    let maturin = venv_dir().join(bin).join("maturin");
+    let mut cmd = Command::new(&maturin);
+    cmd.current_dir(root())
+        .env("VIRTUAL_ENV", venv_dir())
+        .args(["develop", "--release", "--manifest-path"])
+        .arg(root().join("bindings").join("Cargo.toml"));
+    let line = command_line(&cmd);
+    run(&mut cmd).with_context(|| format!("`{line}` could not build the Python bindings"))
+}
+
 /// Whether an interpreter starts at all (a venv whose base Python was removed does not).
 fn runs(python: &std::path::Path) -> bool {
     Command::new(python)

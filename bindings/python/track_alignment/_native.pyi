@@ -1,0 +1,67 @@
+"""Type hints of the Rust extension (bindings/src)."""
+
+from os import PathLike
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+Setting = bool | int | float | str
+
+def estimate(
+    speed: ArrayLike,
+    ws_acc_y: ArrayLike,
+    ws_yaw_rate: ArrayLike,
+    frame_acc_y: ArrayLike,
+    *,
+    step: float,
+    ws_roll_rate: ArrayLike | None = None,
+    settings: Mapping[str, Setting] | None = None,
+    calibration: str | PathLike[str] | None = None,
+    smooth: bool = False,
+) -> dict[str, Any]:
+    """The estimator FMU stepped every ``step`` seconds over these samples (sample ``k`` holds
+    the speed [m/s] and sensors [m/s2, rad/s] at the end of step ``k``).
+
+    ``settings`` are FMU parameters by name (``{"estimator": 1, "lag": 5.0}``);
+    ``calibration`` another calibration file; ``smooth`` adds the Rauch-Tung-Striebel smoother.
+    Float64 contiguous arrays are read in place; other array-likes are converted once.
+
+    Returns the FMU's outputs per sample as float64 arrays: ``alignment``, ``alignment_std``,
+    ``alignment_lagged``, ``alignment_lagged_std``, ``distance_lagged``, ``alignment_kalman``,
+    ``contact_scale``, ``distance`` [m]; ``active_estimator`` (int32); with ``smooth``,
+    ``alignment_smoothed`` and ``alignment_smoothed_std``; and ``skipped_updates`` (int).
+    """
+
+def parameters() -> dict[str, tuple[str, Setting, str]]:
+    """``{name: (FMI type, default, description)}`` of every estimator parameter."""
+
+def band_metrics(
+    estimate_distance: ArrayLike,
+    estimate: ArrayLike,
+    truth_distance: ArrayLike,
+    truth: ArrayLike,
+    *,
+    ds: float = 0.05,
+    trim: float = 10.0,
+) -> dict[str, dict[str, float]]:
+    """Per band (``whole`` 3-200 m, ``D1`` 3-25, ``D2`` 25-70, ``D3`` 70-200):
+    ``{"J_mm", "Jrel", "truth_rms_mm"}``, the studies' metric (docs/studies.md)."""
+
+def bandpass(x: ArrayLike, ds: float, short: float, long: float) -> npt.NDArray[np.float64]:
+    """``x`` (every ``ds`` m) through the metrics' zero-phase Butterworth band-pass between
+    wavelengths ``short`` and ``long`` [m]."""
+
+def simulate(
+    fmu: str | PathLike[str],
+    stop_time: float,
+    *,
+    step: float = 1e-3,
+    parameters: Mapping[str, Setting] | None = None,
+    variables: Sequence[str] | None = None,
+) -> dict[str, npt.NDArray[np.float64]]:
+    """One FMU run by the co-simulation master from 0 to ``stop_time``: ``{"time", variable...}``
+    for ``variables`` (default: every output)."""

@@ -1,0 +1,32 @@
+//! Python bindings of the toolkit (issue 16): the estimator over numpy arrays, the EN 13848
+//! band metrics and vehicle-FMU runs, as the module `track_alignment._native`.
+//!
+//! | Python | Rust it calls | equal to |
+//! |---|---|---|
+//! | `estimate` | `fmu_estimator::offline::process_columns` | the estimator FMU's outputs, bit for bit |
+//! | `band_metrics`, `bandpass` | the studies' `metrics::evaluate`, `metrics::bandpass` | `orchestrator study` figures |
+//! | `simulate` | the co-simulation master, one FMU | `orchestrator run` of that FMU |
+//!
+//! Why a thin layer: every number comes from the same code the FMU and the CLI run, so the
+//! bindings add conversions and nothing else. Input arrays are read where numpy holds them (no
+//! copy) and the GIL is released while Rust computes, so Dask threads run in parallel. Errors
+//! carry the library's messages: `ValueError` for bad input, `RuntimeError` for a run that
+//! failed.
+
+mod convert;
+mod estimate;
+mod metrics;
+mod simulate;
+
+use pyo3::prelude::*;
+
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(estimate::estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate::parameters, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::band_metrics, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::bandpass, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
