@@ -1,0 +1,333 @@
+"""The fleet pipeline: many passes of many trains over one line -> a map of alignment quality
+per track segment, on ``dask.distributed`` (a ``LocalCluster`` by default, or any scheduler:
+Slurm through dask-jobqueue, Kubernetes through dask-kubernetes; docs/fleet.md).
+
+Steps, each recording one task:
+
+1. read the recording (Parquet or CSV, :mod:`track_alignment.recordings`) and run the
+   estimator over it (:func:`track_alignment.estimate`, the FMU's estimator, bit for bit);
+2. put the estimate on the line's distance grid (``ds``, default 0.25 m) at the recording's
+   positions (``distance``; the integral of ``speed`` without it), by linear interpolation;
+3. band-pass it in EN 13848 D1 (3-25 m) and D2 (25-70 m) with the metrics' zero-phase
+   Butterworth filter and drop ``trim`` metres at both ends of the pass;
+4. per segment (``segment`` metres, 200 by default): the pass's standard deviation in each
+   band, where the pass covers at least half the segment.
+
+The passes' band-passed estimates are summed in a fixed binary tree of tasks (so the result
+does not depend on the number of workers or the order tasks finish), and averaged: averaging
+removes the passes' independent errors (sensor noise, speeds, wheel wear), so the segment's
+standard deviation of the average approaches the track's as passes are added.
+
+Output (``out_dir``):
+
+| file | what |
+|---|---|
+| ``segments.parquet`` | per segment: ``segment``, ``start_m``, ``end_m``, ``passes``, ``d1_sd_mm`` and ``d2_sd_mm`` (of the average over passes), ``d1_pass_sd_mean_mm``, ``d1_pass_sd_spread_mm`` (mean and standard deviation over passes of each pass's own SD), the same for D2; with a truth, ``d1_truth_sd_mm``, ``d2_truth_sd_mm`` |
+| ``passes.parquet`` | per pass and segment: ``pass``, ``file``, ``segment``, ``d1_sd_mm``, ``d2_sd_mm`` |
+| ``map.png`` | segment index against D1 and D2 standard deviation, the passes' spread as error bars |
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import dataclass
+from glob import glob
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from . import _native
+from .recordings import RecordingError, read_recording, read_table
+
+BANDS = {"d1": (3.0, 25.0), "d2": (25.0, 70.0)}
+
+
+@dataclass
+class Options:
+    segment: float = 200.0
+    ds: float = 0.25
+    trim: float = 10.0
+    settings: Mapping[str, Any] | None = None
+
+
+@dataclass
+class Coverage:
+    """Band-passed estimates on the line grid from index ``start``; NaN where not covered;
+    ``count`` is how many passes cover each point (summed passes: sums)."""
+
+    start: int
+    bands: dict[str, np.ndarray]
+    count: np.ndarray
+
+
+def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.ndarray]]:
+    """One recording: its band-passed estimate on the line grid and its per-segment SDs [mm]."""
+    cols, step = read_recording(path)
+    out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
+                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(options.settings or {}))
+    position = cols["distance"] if "distance" in cols else out["distance"]
+    if np.any(np.diff(position) < 0):
+        raise RecordingError(f"{path}: the position (distance) goes backwards; one pass per recording, one direction")
+    ds = options.ds
+    first, last = int(np.ceil(position[0] / ds)), int(np.floor(position[-1] / ds))
+    n_trim = int(round(options.trim / ds))
+    if last - first + 1 <= 2 * n_trim + 4 * int(BANDS["d2"][1] / ds):
+        raise RecordingError(f"{path}: covers {position[-1] - position[0]:.0f} m, too short for the D2 band")
+    grid = np.arange(first, last + 1) * ds
+    aligned = np.interp(grid, position, out["alignment"])
+    bands = {}
+    for name, (short, long) in BANDS.items():
+        x = _native.bandpass(aligned, ds, short, long)
+        x[:n_trim] = np.nan
+        x[len(x) - n_trim:] = np.nan
+        bands[name] = x
+    count = np.isfinite(bands["d1"]).astype(np.float64)
+    return Coverage(first, bands, count), segment_sds(first, bands, options)
+
+
+def segment_sds(start: int, bands: Mapping[str, np.ndarray], options: Options) -> dict[str, np.ndarray]:
+    """Per segment: the SD [mm] of each band where at least half the segment is covered (NaN
+    elsewhere), for the segments from 0 to the last one the signal reaches."""
+    per = int(round(options.segment / options.ds))
+    n = len(next(iter(bands.values())))
+    n_segments = (start + n + per - 1) // per
+    out = {}
+    for name, x in bands.items():
+        full = np.full(n_segments * per, np.nan)
+        full[start:start + n] = x
+        seg = full.reshape(n_segments, per)
+        valid = np.isfinite(seg).sum(axis=1)
+        with np.errstate(invalid="ignore"):
+            sd = np.nanstd(np.where(valid[:, None] > 0, seg, 0.0), axis=1) * 1e3
+        sd[valid < per / 2] = np.nan
+        out[name] = sd
+    out["segment"] = np.arange(n_segments, dtype=np.float64)
+    return out
+
+
+def add(a: Coverage, b: Coverage) -> Coverage:
+    """The sum of two coverages on the union of their ranges (NaN counts as not covered)."""
+    start = min(a.start, b.start)
+    end = max(a.start + len(a.count), b.start + len(b.count))
+    total = Coverage(start, {k: np.zeros(end - start) for k in a.bands}, np.zeros(end - start))
+    for c in (a, b):
+        i = slice(c.start - start, c.start - start + len(c.count))
+        total.count[i] += c.count
+        for k, x in c.bands.items():
+            total.bands[k][i] += np.nan_to_num(x, nan=0.0)
+    return total
+
+
+def tree_sum(items: list) -> Any:
+    """A fixed binary tree of delayed :func:`add` over ``items``: its shape depends only on
+    their number, so the floating-point sums do not depend on scheduling."""
+    import dask
+
+    level = list(items)
+    while len(level) > 1:
+        nxt = [dask.delayed(add)(level[i], level[i + 1]) for i in range(0, len(level) - 1, 2)]
+        if len(level) % 2:
+            nxt.append(level[-1])
+        level = nxt
+    return level[0]
+
+
+def truth_sds(path: str | Path, options: Options) -> dict[str, np.ndarray]:
+    """Per-segment SDs of a truth file (``distance``, ``alignment``), processed as a pass."""
+    cols, _ = read_table(path)
+    ds = options.ds
+    first, last = int(np.ceil(cols["distance"][0] / ds)), int(np.floor(cols["distance"][-1] / ds))
+    grid = np.arange(first, last + 1) * ds
+    aligned = np.interp(grid, cols["distance"], cols["alignment"])
+    n_trim = int(round(options.trim / ds))
+    bands = {}
+    for name, (short, long) in BANDS.items():
+        x = _native.bandpass(aligned, ds, short, long)
+        x[:n_trim] = np.nan
+        x[len(x) - n_trim:] = np.nan
+        bands[name] = x
+    return segment_sds(first, bands, options)
+
+
+def expand(inputs: Sequence[str | Path]) -> list[str]:
+    """Files named, matched by a glob, or inside a directory (*.parquet and *.csv), sorted,
+    without ``truth.parquet``."""
+    found: set[str] = set()
+    for item in inputs:
+        p = Path(item)
+        if p.is_dir():
+            matches = [*p.glob("*.parquet"), *p.glob("*.csv")]
+        elif p.exists():
+            matches = [p]
+        else:
+            matches = [Path(m) for m in glob(str(item))]
+            if not matches:
+                raise RecordingError(f"{item}: no such file, directory or match")
+        found.update(str(m) for m in matches if m.name != "truth.parquet")
+    if not found:
+        raise RecordingError(f"no recordings in {', '.join(map(str, inputs))}")
+    return sorted(found)
+
+
+def run(
+    recordings: Sequence[str | Path],
+    out_dir: str | Path,
+    *,
+    options: Options | None = None,
+    client=None,
+    truth: str | Path | None = None,
+    plot: bool = True,
+):
+    """The pipeline over ``recordings`` on ``client`` (a ``dask.distributed.Client``; a
+    ``LocalCluster`` with the machine's cores when None). Returns the segments table (pandas)."""
+    import dask
+    import pandas as pd
+
+    options = options or Options()
+    files = expand(recordings)
+    own = None
+    if client is None:
+        from dask.distributed import Client, LocalCluster
+
+        own = Client(LocalCluster(threads_per_worker=1, processes=True, dashboard_address=":0"))
+        client = own
+    try:
+        per_pass = [dask.delayed(estimate_pass, pure=True)(f, options) for f in files]
+        total = tree_sum([p[0] for p in per_pass])
+        sds = [p[1] for p in per_pass]
+        total, sds = client.compute([total, sds], sync=True)
+    finally:
+        if own is not None:
+            own.close()
+            own.cluster.close()
+    return write(files, total, sds, options, Path(out_dir), truth, plot)
+
+
+def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot: bool):
+    import pandas as pd
+
+    out.mkdir(parents=True, exist_ok=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = {k: np.where(total.count > 0, x / total.count, np.nan) for k, x in total.bands.items()}
+    averaged = segment_sds(total.start, mean, options)
+    n_segments = max(len(averaged["segment"]), *(len(s["segment"]) for s in sds))
+
+    def pad(x):
+        return np.concatenate([x, np.full(n_segments - len(x), np.nan)])
+
+    rows = {"segment": np.arange(n_segments), "start_m": np.arange(n_segments) * options.segment,
+            "end_m": (np.arange(n_segments) + 1) * options.segment}
+    per_pass = {k: np.vstack([pad(s[k]) for s in sds]) for k in BANDS}
+    rows["passes"] = np.isfinite(per_pass["d1"]).sum(axis=0)
+    for k in BANDS:
+        rows[f"{k}_sd_mm"] = pad(averaged[k])
+        with np.errstate(invalid="ignore"), _quiet():
+            rows[f"{k}_pass_sd_mean_mm"] = np.nanmean(per_pass[k], axis=0)
+            rows[f"{k}_pass_sd_spread_mm"] = np.nanstd(per_pass[k], axis=0)
+    if truth is not None:
+        t = truth_sds(truth, options)
+        for k in BANDS:
+            rows[f"{k}_truth_sd_mm"] = np.concatenate([t[k], np.full(max(0, n_segments - len(t[k])), np.nan)])[:n_segments]
+    segments = pd.DataFrame(rows)
+    # Segments past the last one any pass covers are not part of the line.
+    covered = np.flatnonzero(segments["passes"].to_numpy() > 0)
+    segments = segments.iloc[: covered[-1] + 1 if covered.size else 0]
+    segments.to_parquet(out / "segments.parquet", index=False)
+    passes = pd.DataFrame([
+        {"pass": i, "file": Path(f).name, "segment": j, "d1_sd_mm": s["d1"][j], "d2_sd_mm": s["d2"][j]}
+        for i, (f, s) in enumerate(zip(files, sds)) for j in range(len(s["segment"])) if np.isfinite(s["d1"][j])
+    ])
+    passes.to_parquet(out / "passes.parquet", index=False)
+    if plot:
+        plot_map(segments, out / "map.png")
+    return segments
+
+
+class _quiet:
+    """Silences numpy's 'mean of empty slice' for segments no pass covers."""
+
+    def __enter__(self):
+        import warnings
+
+        self._w = warnings.catch_warnings()
+        self._w.__enter__()
+        warnings.simplefilter("ignore", category=RuntimeWarning)
+
+    def __exit__(self, *exc):
+        return self._w.__exit__(*exc)
+
+
+def plot_map(segments, path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    for ax, k, label in zip(axes, BANDS, ("D1 3-25 m", "D2 25-70 m")):
+        ax.errorbar(segments["segment"], segments[f"{k}_pass_sd_mean_mm"], yerr=segments[f"{k}_pass_sd_spread_mm"],
+                    fmt="o", color="0.6", capsize=3, label="single passes: mean and spread")
+        ax.plot(segments["segment"], segments[f"{k}_sd_mm"], "s-", color="C0", label="average of the passes")
+        if f"{k}_truth_sd_mm" in segments:
+            ax.plot(segments["segment"], segments[f"{k}_truth_sd_mm"], "k--", label="truth")
+        ax.set_ylabel(f"alignment SD, {label} [mm]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[1].set_xlabel(f"segment ({segments['end_m'][0] - segments['start_m'][0]:.0f} m each)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def parse_settings(items: Sequence[str]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise ValueError(f"--set {item!r}: expected name=value")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``track-alignment-fleet RECORDINGS... --out DIR``: exit 0 done, 2 bad input, 3 failed."""
+    p = argparse.ArgumentParser(prog="track-alignment-fleet", description=__doc__.split("\n\n")[0])
+    p.add_argument("recordings", nargs="+", help="recording files, directories or globs (Parquet or CSV)")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--segment", type=float, default=200.0, help="segment length [m] (200)")
+    p.add_argument("--ds", type=float, default=0.25, help="line grid step [m] (0.25)")
+    p.add_argument("--scheduler", help="address of a running dask scheduler (default: a LocalCluster)")
+    p.add_argument("--workers", type=int, help="LocalCluster workers (default: the machine's cores)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="estimator parameter")
+    p.add_argument("--truth", help="a truth file (distance, alignment) to add the true SDs")
+    p.add_argument("--no-plot", action="store_true")
+    a = p.parse_args(argv)
+    try:
+        settings = parse_settings(a.set)
+        if not (a.segment > 0 and 0 < a.ds < 1.5):
+            raise ValueError(f"--segment {a.segment} must be positive and --ds {a.ds} within 0-1.5 m (D1 starts at 3 m)")
+        options = Options(segment=a.segment, ds=a.ds, settings=settings)
+        from dask.distributed import Client, LocalCluster
+
+        if a.scheduler:
+            client = Client(a.scheduler)
+        else:
+            client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+        try:
+            segments = run(a.recordings, a.out, options=options, client=client, truth=a.truth, plot=not a.no_plot)
+        finally:
+            client.close()
+    except (RecordingError, ValueError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except Exception as e:
+        print(f"error: the pipeline failed: {e}", file=sys.stderr)
+        return 3
+    print(f"{len(segments)} segments from {int(segments['passes'].max())} passes -> {Path(a.out) / 'segments.parquet'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

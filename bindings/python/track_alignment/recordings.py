@@ -1,0 +1,109 @@
+"""Recordings of one train pass: reading them (Parquet or CSV, chosen by extension) and writing
+them as Parquet with units and provenance.
+
+A recording is a table with one row per sample, taken every ``step`` seconds:
+
+| column | unit | required | meaning |
+|---|---|---|---|
+| ``time`` | s | yes | sample time, uniform |
+| ``speed`` | m/s | yes | forward speed over the step ending at the sample |
+| ``ws_acc_y`` | m/s2 | yes | wheelset lateral acceleration |
+| ``ws_yaw_rate`` | rad/s | yes | wheelset yaw rate |
+| ``frame_acc_y`` | m/s2 | yes | bogie-frame lateral acceleration |
+| ``distance`` | m | no | position along the line (odometry, GNSS map-matching); without it the position is the integral of ``speed`` from 0 |
+| ``ws_roll_rate`` | rad/s | no | wheelset roll rate, for the four-sensor taps |
+
+Parquet files carry each column's unit in the Arrow field metadata (``unit``) and the run's
+provenance as JSON in the file metadata (``track_alignment.provenance``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+REQUIRED = ("time", "speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y")
+OPTIONAL = ("distance", "ws_roll_rate")
+UNITS = {
+    "time": "s",
+    "speed": "m/s",
+    "distance": "m",
+    "ws_acc_y": "m/s2",
+    "ws_yaw_rate": "rad/s",
+    "frame_acc_y": "m/s2",
+    "ws_roll_rate": "rad/s",
+    "alignment": "m",
+}
+PROVENANCE_KEY = b"track_alignment.provenance"
+
+
+class RecordingError(ValueError):
+    """A recording that cannot be used; the message names the file and what is wrong."""
+
+
+def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+    """Every column of a Parquet or CSV file as float64 arrays, and the Parquet provenance."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".parquet":
+            import pyarrow.parquet as pq
+
+            table = pq.read_table(path)
+            columns = {n: table.column(n).to_numpy().astype(np.float64, copy=False) for n in table.column_names}
+            meta = table.schema.metadata or {}
+            provenance = json.loads(meta[PROVENANCE_KEY]) if PROVENANCE_KEY in meta else {}
+            return columns, provenance
+        if suffix == ".csv":
+            data = np.genfromtxt(path, delimiter=",", names=True, deletechars="", dtype=np.float64)
+            if data.dtype.names is None:
+                raise RecordingError(f"{path}: no header row")
+            return {n: np.ascontiguousarray(data[n]) for n in data.dtype.names}, {}
+    except RecordingError:
+        raise
+    except Exception as e:  # a corrupt file: name it
+        raise RecordingError(f"{path}: cannot be read ({e})") from e
+    raise RecordingError(f"{path}: unknown format '{suffix}' (.parquet or .csv)")
+
+
+def read_recording(path: str | Path) -> tuple[dict[str, np.ndarray], float]:
+    """The recording's columns (required and optional ones) and its step [s]; refuses a missing
+    column, unequal lengths, fewer than 2 rows, a non-finite or non-uniform time, naming the
+    file and the row."""
+    columns, _ = read_table(path)
+    missing = [c for c in REQUIRED if c not in columns]
+    if missing:
+        raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (has {', '.join(columns)})")
+    keep = {c: columns[c] for c in (*REQUIRED, *OPTIONAL) if c in columns}
+    time = keep["time"]
+    if len(time) < 2:
+        raise RecordingError(f"{path}: {len(time)} row(s), at least 2 needed")
+    dt = np.diff(time)
+    step = float(np.median(dt))
+    if not (np.isfinite(time).all() and step > 0):
+        raise RecordingError(f"{path}: the time column is not finite and increasing")
+    bad = np.flatnonzero(np.abs(dt - step) > 1e-6 * step)
+    if bad.size:
+        k = int(bad[0])
+        raise RecordingError(
+            f"{path}: time is not uniform at row {k + 2}: {time[k]} -> {time[k + 1]} (step {step})"
+        )
+    return keep, step
+
+
+def write_parquet(path: str | Path, columns: Mapping[str, np.ndarray], provenance: Mapping[str, Any]) -> None:
+    """Columns as float64 Parquet (zstd), units in the field metadata, provenance in the file's."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    fields = [
+        pa.field(name, pa.float64(), nullable=False,
+                 metadata={b"unit": UNITS[name].encode()} if name in UNITS else None)
+        for name in columns
+    ]
+    schema = pa.schema(fields, metadata={PROVENANCE_KEY: json.dumps(dict(provenance), sort_keys=True).encode()})
+    arrays = [pa.array(np.asarray(v, dtype=np.float64)) for v in columns.values()]
+    pq.write_table(pa.Table.from_arrays(arrays, schema=schema), path, compression="zstd")
