@@ -462,7 +462,9 @@ mod tests {
             col(|s| s.ws_yaw_rate),
             col(|s| s.frame_acc_y),
         );
-        let roll: Vec<f64> = (0..v.len()).map(|k| 0.01 * (k as f64 * 0.1).sin()).collect();
+        let roll: Vec<f64> = (0..v.len())
+            .map(|k| 0.01 * (k as f64 * 0.1).sin())
+            .collect();
         for with_roll in [false, true] {
             let columns = Columns {
                 speed: &v,
