@@ -81,6 +81,7 @@ def test_parquet_recordings_round_trip_with_units_and_provenance(fleet_dir, tmp_
     assert provenance["parameters"]["track_seed"] == 1 and provenance["pass"] == 3
     schema = pq.read_schema(fleet_dir / "pass_0003.parquet")
     assert schema.field("ws_yaw_rate").metadata[b"unit"] == b"rad/s"
+    assert recordings.read_units(fleet_dir / "pass_0003.parquet")["frame_acc_y"] == "m/s2"
     again = tmp_path / "again.parquet"
     recordings.write_parquet(again, cols, provenance)
     back, prov = recordings.read_table(again)

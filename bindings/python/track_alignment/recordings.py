@@ -13,8 +13,10 @@ A recording is a table with one row per sample, taken every ``step`` seconds:
 | ``distance`` | m | no | position along the line (odometry, GNSS map-matching); without it the position is the integral of ``speed`` from 0 |
 | ``ws_roll_rate`` | rad/s | no | wheelset roll rate, for the four-sensor taps |
 
-Parquet files carry each column's unit in the Arrow field metadata (``unit``) and the run's
-provenance as JSON in the file metadata (``track_alignment.provenance``).
+Parquet files carry, in the file's key-value metadata, ``units`` (JSON ``{column: unit}``) and
+``provenance`` (JSON: what produced the file, from which inputs and settings), the convention the
+Rust side (``orchestrator run``/``simulate``, ``smooth``) writes too; this module also puts each
+unit in the Arrow field metadata (``unit``) for Arrow tools.
 """
 
 from __future__ import annotations
@@ -37,11 +39,20 @@ UNITS = {
     "ws_roll_rate": "rad/s",
     "alignment": "m",
 }
-PROVENANCE_KEY = b"track_alignment.provenance"
+PROVENANCE_KEY = b"provenance"
+UNITS_KEY = b"units"
 
 
 class RecordingError(ValueError):
     """A recording that cannot be used; the message names the file and what is wrong."""
+
+
+def read_units(path: str | Path) -> dict[str, str]:
+    """The ``units`` of a Parquet file's metadata (empty for a file without them)."""
+    import pyarrow.parquet as pq
+
+    meta = pq.read_schema(path).metadata or {}
+    return json.loads(meta[UNITS_KEY]) if UNITS_KEY in meta else {}
 
 
 def read_table(path: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -104,6 +115,10 @@ def write_parquet(path: str | Path, columns: Mapping[str, np.ndarray], provenanc
                  metadata={b"unit": UNITS[name].encode()} if name in UNITS else None)
         for name in columns
     ]
-    schema = pa.schema(fields, metadata={PROVENANCE_KEY: json.dumps(dict(provenance), sort_keys=True).encode()})
+    units = {name: UNITS[name] for name in columns if name in UNITS}
+    schema = pa.schema(fields, metadata={
+        UNITS_KEY: json.dumps(units, sort_keys=True).encode(),
+        PROVENANCE_KEY: json.dumps(dict(provenance), sort_keys=True).encode(),
+    })
     arrays = [pa.array(np.asarray(v, dtype=np.float64)) for v in columns.values()]
     pq.write_table(pa.Table.from_arrays(arrays, schema=schema), path, compression="zstd")
