@@ -6,7 +6,6 @@
 //! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi stepping;
 //! - [`record`]: the results writer;
 //! - [`simulate`]: one FMU with input signals from a CSV file;
-//! - [`smooth`]: the estimator run offline (filter and RTS smoother) over recorded signals;
 //! - [`info`]: the description of an FMU.
 //!
 //! FMUs are loaded by the `fmi-import` crate.
@@ -26,7 +25,5 @@ pub mod outdir;
 pub mod record;
 pub mod resolve;
 pub mod simulate;
-pub mod smooth;
 pub mod ssp;
-pub mod study;
 pub mod system;

@@ -52,7 +52,7 @@ impl Drop for Recorder {
 }
 
 /// Appends `x` as the results files write numbers: shortest round-trip form, `nan`, `inf`, `-inf`.
-pub(crate) fn push_f64(line: &mut Vec<u8>, x: f64, buf: &mut ryu::Buffer) {
+pub fn push_f64(line: &mut Vec<u8>, x: f64, buf: &mut ryu::Buffer) {
     if x.is_finite() {
         let s = buf.format_finite(x);
         // ryu writes "1e-7" style exponents and "1.0" for integers: both parse everywhere.

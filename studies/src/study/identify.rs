@@ -18,7 +18,7 @@
 
 use super::optimize::nelder_mead;
 use super::runs::{Fmus, Settings, vehicle_run};
-use crate::system::Value;
+use orchestrator::system::Value;
 use fmu_estimator::discretize::{Scheme, transition};
 use fmu_estimator::filter::Vec7;
 use fmu_estimator::model::state_matrix;

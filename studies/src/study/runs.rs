@@ -2,8 +2,8 @@
 //! standard system (evaluation), in-process through the master, with the variables the
 //! analysis needs kept in memory.
 
-use crate::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
-use crate::system::{Component, Endpoint, Experiment, System, Value};
+use orchestrator::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
+use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
 use model_description::BaseType;

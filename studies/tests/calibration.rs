@@ -4,7 +4,7 @@
 
 mod common;
 
-use orchestrator::study::{calibrate, identify, runs};
+use alignment_studies::study::{calibrate, identify, runs};
 
 #[test]
 fn regenerating_the_calibration_reproduces_the_committed_file() {
@@ -35,7 +35,7 @@ fn regenerating_the_calibration_reproduces_the_committed_file() {
 /// (made for ML95).
 #[test]
 fn a_filter_calibrated_for_another_vehicle_beats_the_shipped_one_on_it() {
-    use orchestrator::study::cases;
+    use alignment_studies::study::cases;
     let mut fmus = runs::Fmus::new(
         common::fmu("RailVehicle"),
         common::fmu("AlignmentEstimator"),

@@ -15,7 +15,7 @@
 use super::identify::Identification;
 use super::metrics::{BANDS, bandpass, common_grid, resample};
 use super::standard::{DS, TRIM};
-use crate::master::Table;
+use orchestrator::master::Table;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;

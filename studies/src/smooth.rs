@@ -10,7 +10,7 @@
 //! learned smoother (`--learned FILE`, from `orchestrator study learn`) also `alignment_learned`
 //! and `alignment_hybrid`, computed on its 1 m grid and interpolated linearly to every row.
 
-use crate::record::push_f64;
+use orchestrator::record::push_f64;
 use crate::study::learned::LearnedSmoother;
 use crate::study::metrics::resample;
 use fmu_estimator::offline::{self, Processed, Sample};
@@ -18,7 +18,7 @@ use std::path::Path;
 
 /// Reads the samples and the step from a CSV file.
 pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String> {
-    let cols = crate::csv::Csv::read(path)?;
+    let cols = orchestrator::csv::Csv::read(path)?;
     let find = |names: &[&str]| {
         cols.column(names)
             .map_err(|e| format!("{}: {e}", path.display()))
@@ -53,7 +53,7 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
     Ok((time[1..].to_vec(), h, samples))
 }
 
-/// The output CSV text, numbers written as in `results.csv` ([`crate::record`]); `learned`, if
+/// The output CSV text, numbers written as in `results.csv` ([`orchestrator::record`]); `learned`, if
 /// given, adds the learned and hybrid estimates per sample.
 pub fn to_csv(time: &[f64], out: &Processed, learned: Option<&(Vec<f64>, Vec<f64>)>) -> String {
     let mut s: Vec<u8> = b"time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std".to_vec();
@@ -117,7 +117,7 @@ pub fn smooth_file(
     learned: Option<&Path>,
 ) -> Result<Processed, String> {
     // Refused before any work: a symlink, FIFO or device given as --out is never replaced.
-    crate::outdir::refuse_special(output).map_err(|e| e.to_string())?;
+    orchestrator::outdir::refuse_special(output).map_err(|e| e.to_string())?;
     let (time, h, samples) = read_samples(input)?;
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;

@@ -38,7 +38,7 @@ pub fn training_runs(
         .iter()
         .map(|&k| {
             let mut settings = seeded(seed);
-            settings.push(("kalker_scale".into(), crate::system::Value::Real(k)));
+            settings.push(("kalker_scale".into(), orchestrator::system::Value::Real(k)));
             match speed {
                 Some(v) => record(fmus, settings, stop, Some(&move |_| v)),
                 None => record(fmus, settings, stop, None),

@@ -4,10 +4,10 @@
 
 mod common;
 
-use orchestrator::study::learned::{
+use alignment_studies::study::learned::{
     GRID, LearnedSmoother, Lookahead, SPLITS, default_partner, learn, training_runs,
 };
-use orchestrator::study::{runs, variants};
+use alignment_studies::study::{runs, variants};
 
 #[test]
 fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
@@ -44,7 +44,7 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
         None,
     )
     .unwrap();
-    use orchestrator::study::metrics::BandMetrics;
+    use alignment_studies::study::metrics::BandMetrics;
     let jrel = |m: &BandMetrics, b: &str| m.get(b).unwrap().jrel;
     let below = |what: &str, m: &BandMetrics, band: &str, bound: f64| {
         let j = jrel(m, band);

@@ -3,7 +3,7 @@
 //! so that none of them depends on another for it.
 
 use super::runs::{Fmus, Settings, SpeedProfile, vehicle_run_driven};
-use crate::master::Table;
+use orchestrator::master::Table;
 use fmu_estimator::offline::{self, Sample};
 use serde::Serialize;
 use std::path::Path;

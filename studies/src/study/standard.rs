@@ -3,7 +3,7 @@
 //! beside the paper's Table (docs/references.md section 1).
 
 use super::metrics::{BANDS, BandMetrics, evaluate};
-use crate::master::Table;
+use orchestrator::master::Table;
 
 /// The paper's standard case, J [mm] / Jrel per band (its Tables 3 and 4).
 pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [

@@ -11,8 +11,8 @@
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use super::runs::{Fmus, STOP, Settings, seeded, standard_run};
 use super::standard::{DS, TRIM};
-use crate::master::Table;
-use crate::system::Value;
+use orchestrator::master::Table;
+use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
 

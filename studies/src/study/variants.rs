@@ -351,7 +351,7 @@ pub fn record_seeds(
     seeds
         .par_iter()
         .map(|&s| {
-            use crate::system::Value;
+            use orchestrator::system::Value;
             let mut settings = seeded(s);
             match conditions {
                 Conditions::Standard => {}

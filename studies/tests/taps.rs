@@ -6,8 +6,8 @@
 mod common;
 
 use fmu_estimator::learned::bank::Bank;
-use orchestrator::study::learned::taps::{Options, fit};
-use orchestrator::study::runs::Fmus;
+use alignment_studies::study::learned::taps::{Options, fit};
+use alignment_studies::study::runs::Fmus;
 use std::path::Path;
 
 #[test]

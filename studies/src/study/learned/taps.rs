@@ -36,7 +36,7 @@ use crate::study::metrics::{BANDS, Band, evaluate};
 use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
-use crate::system::Value;
+use orchestrator::system::Value;
 use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};

@@ -204,7 +204,7 @@ pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, String> {
     let base: Vec<(String, String)> = parameter_settings(&c.params)
         .into_iter()
         .map(|(k, v)| match v {
-            crate::system::Value::Real(x) => Ok((k, format!("{x:e}"))),
+            orchestrator::system::Value::Real(x) => Ok((k, format!("{x:e}"))),
             other => Err(format!("parameter {k}: unexpected value {other:?}")),
         })
         .collect::<Result<_, _>>()?;
@@ -232,7 +232,7 @@ fn candidate_file(c: &Calibration, virtual_scale: f64, xi_scale: f64) -> String 
 
 /// The estimator's FMI settings for parameters `p` (the FMU's built-in defaults may differ).
 pub fn parameter_settings(p: &Params) -> super::runs::Settings {
-    use crate::system::Value::Real;
+    use orchestrator::system::Value::Real;
     [
         ("m", p.m),
         ("I", p.i),
@@ -285,7 +285,7 @@ pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, Stri
             let mut est = parameter_settings(&c.params);
             est.push((
                 "calibration_file".into(),
-                crate::system::Value::String(path.display().to_string()),
+                orchestrator::system::Value::String(path.display().to_string()),
             ));
             let case = super::cases::Case {
                 name: format!("tuning {v:e} {x:e}"),
