@@ -6,7 +6,8 @@
 //! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi stepping;
 //! - [`record`]: the results writer;
 //! - [`simulate`]: one FMU with input signals from a CSV file;
-//! - [`info`]: the description of an FMU.
+//! - [`info`]: the description of an FMU;
+//! - [`cli`]: the command line's commands as functions returning values.
 //!
 //! FMUs are loaded by the `fmi-import` crate.
 
@@ -17,6 +18,7 @@
 // `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod cli;
 pub mod csv;
 pub mod info;
 pub mod input;

@@ -1,8 +1,8 @@
-//! What a co-simulation is made of, independent of how it was described (an SSP file, the
-//! built-in standard case, command-line options): components, connections, parameter values and
+//! What a co-simulation is made of, independent of how it was described (an SSP file,
+//! command-line options, a program): components, connections, parameter values and
 //! the experiment.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A value for a parameter or a start value.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,59 +119,7 @@ pub struct System {
     pub experiment: Experiment,
 }
 
-/// Whether both FMUs declare a variable `name` (from their model descriptions only). An archive
-/// that cannot be read counts as having it: loading the system then reports what is wrong.
-fn both_have(a: &Path, b: &Path, name: &str) -> bool {
-    [a, b].iter().all(|p| match crate::info::read_archive(p) {
-        Ok(archive) => archive.model_description.variable(name).is_some(),
-        Err(_) => true,
-    })
-}
-
 impl System {
-    /// The paper's standard case: the vehicle's sensor signals and its speed feed the
-    /// estimator, connected by variable name; 20 s at 1 ms. The roll-rate gyroscope
-    /// (`ws_roll_rate`) is connected when both FMUs have it, so an older vehicle or estimator
-    /// without it still runs the paper's three sensors.
-    pub fn standard_case(vehicle_fmu: &Path, estimator_fmu: &Path) -> System {
-        let link = |from: &str, to: &str| Connection {
-            from: Endpoint::new("vehicle", from),
-            to: Endpoint::new("estimator", to),
-            transform: None,
-        };
-        let mut connections = vec![
-            link("ws_acc_y", "ws_acc_y"),
-            link("ws_yaw_rate", "ws_yaw_rate"),
-            link("frame_acc_y", "frame_acc_y"),
-        ];
-        if both_have(vehicle_fmu, estimator_fmu, "ws_roll_rate") {
-            // Read by the estimator only with use_roll_rate = true.
-            connections.push(link("ws_roll_rate", "ws_roll_rate"));
-        }
-        connections.push(link("forward_speed", "speed"));
-        System {
-            name: "standard_case".into(),
-            components: vec![
-                Component {
-                    name: "vehicle".into(),
-                    source: vehicle_fmu.to_path_buf(),
-                    parameters: vec![],
-                },
-                Component {
-                    name: "estimator".into(),
-                    source: estimator_fmu.to_path_buf(),
-                    parameters: vec![],
-                },
-            ],
-            connections,
-            experiment: Experiment {
-                start: 0.0,
-                stop: Some(20.0),
-                step: Some(1e-3),
-            },
-        }
-    }
-
     pub fn component(&self, name: &str) -> Option<&Component> {
         self.components.iter().find(|c| c.name == name)
     }

@@ -1,5 +1,5 @@
 //! The learned FIR estimator's cost, beside the Kalman filter's on the same samples in the same
-//! run: `cargo bench -p orchestrator --bench learned`. No FMU needed: the record is synthetic
+//! run: `cargo bench -p alignment-studies --bench learned`. No FMU needed: the record is synthetic
 //! noise at 20 m/s and 1 ms (the cost does not depend on the values).
 //!
 //! Printed, each the median of 5 runs over 200 s of samples (200 000 samples, 4 000 grid points):

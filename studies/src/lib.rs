@@ -12,5 +12,9 @@
 // `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod cli;
+pub mod error;
 pub mod smooth;
 pub mod study;
+
+pub use error::Error;

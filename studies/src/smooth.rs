@@ -1,4 +1,4 @@
-//! `orchestrator smooth`: the estimator run offline over recorded sensor signals, filtered and
+//! `alignment-studies smooth`: the estimator run offline over recorded sensor signals, filtered and
 //! smoothed (Rauch-Tung-Striebel), from a CSV file such as the `results.csv` of a run.
 //!
 //! Input: a CSV with a `time` column at a constant step and the columns `speed` (or
@@ -7,7 +7,7 @@
 //! ends at `time[k]`; a first row at the start time with the initial values (as `results.csv`
 //! has) is used only for its time. Output columns: `time`, `distance`, `alignment_filtered`,
 //! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres); with a
-//! learned smoother (`--learned FILE`, from `orchestrator study learn`) also `alignment_learned`
+//! learned smoother (`--learned FILE`, from `alignment-studies learn`) also `alignment_learned`
 //! and `alignment_hybrid`, computed on its 1 m grid and interpolated linearly to every row.
 
 use orchestrator::record::push_f64;

@@ -1,5 +1,5 @@
 //! The estimator's shipped calibration file is reproducible: running the identification,
-//! calibration and tuning of `orchestrator study calibrate` again, with the packaged FMUs,
+//! calibration and tuning of `alignment-studies calibrate` again, with the packaged FMUs,
 //! gives the committed file to the byte.
 
 mod common;
@@ -24,7 +24,7 @@ fn regenerating_the_calibration_reproduces_the_committed_file() {
     let committed = std::fs::read_to_string(&path).unwrap();
     assert!(
         text == committed,
-        "{} differs from a fresh `orchestrator study calibrate`; regenerate it (and rebuild the FMU) if the vehicle or the procedure changed",
+        "{} differs from a fresh `alignment-studies calibrate`; regenerate it (and rebuild the FMU) if the vehicle or the procedure changed",
         path.display()
     );
 }

@@ -145,6 +145,10 @@ pub enum SspError {
     #[error("{}: archive entry '{entry}' points outside the archive (absolute or '..' path); refusing the archive", path.display())]
     UnsafeEntry { path: PathBuf, entry: String },
 
+    /// An FMU was given (`read_with`) for a component the system does not have.
+    #[error("{}: an FMU was given for component '{component}', which the system does not have", path.display())]
+    NoSuchComponent { path: PathBuf, component: String },
+
     /// An FMU to be written into an .ssp cannot be read (not a zip, no modelDescription.xml).
     #[error("component '{component}': cannot read the FMU {}: {message}", path.display())]
     Fmu {

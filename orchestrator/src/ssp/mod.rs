@@ -91,14 +91,48 @@ impl LoadedSystem {
 /// relative to the .ssd's directory (or the archive root) and returned absolute; `file:` URIs
 /// are accepted. Errors are wrapped in [`SspError::InFile`] naming the file.
 pub fn read(path: &Path) -> Result<LoadedSystem, SspError> {
-    read::read(path)
+    read::read(path, &Sources::new())
+}
+
+/// Components' FMUs given in place of their `source`, by component name.
+pub type Sources = std::collections::BTreeMap<String, std::path::PathBuf>;
+
+/// [`read`], with the FMUs of the components `sources` names taken from there instead of from
+/// their `source` attribute (so a shipped description runs with the user's FMUs wherever they
+/// were built). A name that is not a component of the system is an error.
+pub fn read_with(path: &Path, sources: &Sources) -> Result<LoadedSystem, SspError> {
+    let sources = sources
+        .iter()
+        .map(|(name, fmu)| {
+            std::path::absolute(fmu)
+                .map(|fmu| (name.clone(), fmu))
+                .map_err(|source| SspError::Io {
+                    path: fmu.clone(),
+                    source,
+                })
+        })
+        .collect::<Result<Sources, _>>()?;
+    let loaded = read::read(path, &sources)?;
+    if let Some(name) = sources.keys().find(|n| loaded.system.component(n).is_none()) {
+        return Err(SspError::NoSuchComponent {
+            path: path.to_path_buf(),
+            component: name.clone(),
+        });
+    }
+    Ok(loaded)
 }
 
 /// Parses the text of a SystemStructure.ssd whose relative URIs (FMUs, .ssv files) resolve
 /// against `base_dir`. Errors inside the text are not wrapped in [`SspError::InFile`] (the
 /// caller knows the file); errors inside an .ssv file are.
 pub fn parse_ssd(xml: &str, base_dir: &Path) -> Result<System, SspError> {
-    read::parse_ssd(xml, base_dir)
+    read::parse_ssd(xml, base_dir, &Sources::new())
+}
+
+/// [`parse_ssd`] with the FMUs of the components `sources` names taken from there (absolute
+/// paths) instead of from their `source` attribute, as [`read_with`] does.
+pub fn parse_ssd_with(xml: &str, base_dir: &Path, sources: &Sources) -> Result<System, SspError> {
+    read::parse_ssd(xml, base_dir, sources)
 }
 
 /// Writes `system` as an .ssp archive: SystemStructure.ssd plus every component's FMU copied to

@@ -8,13 +8,13 @@ use std::path::{Component as PathPart, Path, PathBuf};
 use model_description::xml::{self, Element, line_column};
 
 use super::error::SspError;
-use super::{FMU_MIME_TYPE, LoadedSystem, PARAMETER_SET_MIME_TYPE, SSD_NAME};
+use super::{FMU_MIME_TYPE, LoadedSystem, PARAMETER_SET_MIME_TYPE, SSD_NAME, Sources};
 use crate::system::{Component, Connection, Endpoint, Experiment, Linear, System, Value};
 
-pub fn read(path: &Path) -> Result<LoadedSystem, SspError> {
+pub fn read(path: &Path, sources: &Sources) -> Result<LoadedSystem, SspError> {
     if path.is_dir() {
         // An extracted archive.
-        return read(&path.join(SSD_NAME));
+        return read(&path.join(SSD_NAME), sources);
     }
     if is_archive(path)? {
         let dir = tempfile::Builder::new()
@@ -37,6 +37,7 @@ pub fn read(path: &Path) -> Result<LoadedSystem, SspError> {
             base_dir: absolute(dir.path())?,
             confine: true,
             shown_dir: path.to_path_buf(),
+            sources: sources.clone(),
         };
         let system = parse(&text, &place).map_err(|e| in_file(path.join(SSD_NAME), e))?;
         Ok(LoadedSystem {
@@ -53,6 +54,7 @@ pub fn read(path: &Path) -> Result<LoadedSystem, SspError> {
             base_dir: absolute(dir)?,
             confine: false,
             shown_dir: dir.to_path_buf(),
+            sources: sources.clone(),
         };
         let system = parse(&text, &place).map_err(|e| in_file(path.to_path_buf(), e))?;
         Ok(LoadedSystem {
@@ -62,22 +64,25 @@ pub fn read(path: &Path) -> Result<LoadedSystem, SspError> {
     }
 }
 
-pub fn parse_ssd(xml: &str, base_dir: &Path) -> Result<System, SspError> {
+pub fn parse_ssd(xml: &str, base_dir: &Path, sources: &Sources) -> Result<System, SspError> {
     let place = Place {
         base_dir: absolute(base_dir)?,
         confine: false,
         shown_dir: base_dir.to_path_buf(),
+        sources: sources.clone(),
     };
     parse(xml, &place)
 }
 
 /// Where the .ssd sits: relative URIs resolve against `base_dir`; inside an extracted archive
 /// (`confine`) they must stay under it; `shown_dir` is how that directory is named in errors
-/// (the archive's path for an archive, not the temporary directory).
+/// (the archive's path for an archive, not the temporary directory); `sources` replace the
+/// named components' `source` (the user's FMUs for a shipped description).
 struct Place {
     base_dir: PathBuf,
     confine: bool,
     shown_dir: PathBuf,
+    sources: Sources,
 }
 
 impl Place {
@@ -590,7 +595,10 @@ impl Reader<'_> {
             return Err(self.unsupported(offset, format!("component '{name}' with implementation=\"ModelExchange\" (this master runs FMUs for Co-Simulation)")));
         }
         let uri = self.required(e, "source", ctx)?;
-        let source = self.resolve(e, "source", uri, &context)?;
+        let source = match self.place.sources.get(name) {
+            Some(given) => given.clone(),
+            None => self.resolve(e, "source", uri, &context)?,
+        };
         if !source.is_file() {
             let offset = e.attribute("source").map_or(e.offset, |a| a.offset);
             let (line, column) = self.at(offset);

@@ -69,7 +69,7 @@ pub fn calibrate(
     seed: u32,
     stop: f64,
     step: f64,
-) -> Result<Calibration, String> {
+) -> Result<Calibration, crate::Error> {
     let settings: Settings = super::runs::seeded(seed);
     let mut names: Vec<&str> = TRUTH.to_vec();
     names.extend(SENSORS);
@@ -90,7 +90,7 @@ pub fn calibrate(
     let first = (1.0 / step).round() as usize;
     let n = truth[0].len();
     if n <= first + 1 {
-        return Err(format!("the calibration run is too short ({n} samples)"));
+        return Err(format!("the calibration run is too short ({n} samples)").into());
     }
     let (mut q, mut r) = (Mat7::zeros(), Mat4::zeros());
     for k in first..n {
@@ -194,7 +194,7 @@ pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> S
 /// Chooses the 8-state priors' virtual-measurement sigma (`prior_sigma_xi`) on the calibration
 /// seed, for the integrated random walk with these Q and R and parameters: the vehicle is run
 /// once and the candidates are evaluated offline ([`super::variants::tune_prior_sigma`]).
-pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, String> {
+pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, crate::Error> {
     use super::variants;
     let dir = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
     let path = dir.path().join("candidate.toml");
@@ -268,7 +268,7 @@ pub const XI_SCALES: [f64; 5] = [1.0, 1e1, 1e2, 1e3, 1e4];
 /// 20-80 m with good coherence). How strongly the virtual measurement pulls decides the long
 /// wavelengths (docs/references.md section 1), so its weight is a calibration choice, made here on the
 /// calibration track by a grid over [`VIRTUAL_SCALES`] x [`XI_SCALES`].
-pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, String> {
+pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, crate::Error> {
     use rayon::prelude::*;
     let dir = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
     let grid: Vec<(f64, f64)> = VIRTUAL_SCALES

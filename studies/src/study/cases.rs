@@ -8,9 +8,10 @@
 //!   `V / f`; case 1 the standard track, case 2 a 1 mm harmonic alignment of that wavelength
 //!   alone, case 3 their sum.
 
-use super::metrics::{BANDS, BandMetrics, evaluate};
+use super::metrics::{BANDS, BandMetrics};
 use super::runs::{Fmus, STOP, Settings, seeded, standard_run};
-use super::standard::{DS, TRIM};
+use super::standard::evaluate_results;
+use crate::Error;
 use orchestrator::master::Table;
 use orchestrator::system::Value;
 use rayon::prelude::*;
@@ -182,11 +183,11 @@ pub(crate) fn band_spreads(per_seed: &[BandMetrics]) -> Vec<(String, Spread)> {
 
 /// The results of `items * per` jobs run item after item (each item with its `per` seeds or
 /// records), grouped per item; the first error if any.
-pub(crate) fn by_item<T>(
-    results: Vec<Result<T, String>>,
+pub(crate) fn by_item<T, E>(
+    results: Vec<Result<T, E>>,
     items: usize,
     per: usize,
-) -> Result<Vec<Vec<T>>, String> {
+) -> Result<Vec<Vec<T>>, E> {
     let mut results = results.into_iter();
     (0..items)
         .map(|_| results.by_ref().take(per).collect())
@@ -206,7 +207,7 @@ fn spread(values: &[f64]) -> (f64, f64) {
 }
 
 /// Runs one seed of a case and evaluates it.
-pub fn run_seed(fmus: &Fmus, case: &Case, seed: u32) -> Result<BandMetrics, String> {
+pub fn run_seed(fmus: &Fmus, case: &Case, seed: u32) -> Result<BandMetrics, Error> {
     run_seed_until(fmus, case, seed, STOP)
 }
 
@@ -216,28 +217,15 @@ pub fn run_seed_until(
     case: &Case,
     seed: u32,
     stop: f64,
-) -> Result<BandMetrics, String> {
+) -> Result<BandMetrics, Error> {
     let table = run_seed_table(fmus, case, seed, stop)?;
-    let c = |n: &str| {
-        table
-            .column(n)
-            .map(|x| x[1..].to_vec())
-            .ok_or_else(|| format!("no column {n}"))
-    };
-    evaluate(
-        &c("estimator.distance")?,
-        &c("estimator.alignment")?,
-        &c("vehicle.distance")?,
-        &c("vehicle.alignment")?,
-        DS,
-        TRIM,
-    )
-    .map_err(|e| format!("{}, seed {seed}: {e}", case.name))
+    evaluate_results(&table)
+        .map_err(|e| Error::Input(format!("{}, seed {seed}: {e}", case.name)))
 }
 
 /// The recorded table of one seed of a case (`time` and the columns
 /// [`EVALUATED`](super::runs::EVALUATED)), as [`run_seed_until`] evaluates it.
-pub fn run_seed_table(fmus: &Fmus, case: &Case, seed: u32, stop: f64) -> Result<Table, String> {
+pub fn run_seed_table(fmus: &Fmus, case: &Case, seed: u32, stop: f64) -> Result<Table, Error> {
     let mut vehicle = seeded(seed);
     vehicle.extend(case.vehicle.iter().cloned());
     standard_run(fmus, vehicle, case.estimator.clone(), stop)
@@ -249,11 +237,11 @@ pub fn run_cases(
     cases: &[Case],
     seeds: &[u32],
     progress: &(dyn Fn() + Sync),
-) -> Result<Vec<CaseResult>, String> {
+) -> Result<Vec<CaseResult>, Error> {
     let jobs: Vec<(usize, u32)> = (0..cases.len())
         .flat_map(|c| seeds.iter().map(move |&s| (c, s)))
         .collect();
-    let results: Vec<Result<BandMetrics, String>> = jobs
+    let results: Vec<Result<BandMetrics, Error>> = jobs
         .par_iter()
         .map(|&(c, s)| {
             let r = run_seed(fmus, &cases[c], s);

@@ -132,7 +132,7 @@ pub fn identify(
     seed: u32,
     stop: f64,
     step: f64,
-) -> Result<Identification, String> {
+) -> Result<Identification, crate::Error> {
     let mut settings: Settings = super::runs::seeded(seed);
     settings.push(("vertical_irregularity".into(), Value::Boolean(false)));
     settings.push(("sensor_noise".into(), Value::Boolean(false)));

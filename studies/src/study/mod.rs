@@ -11,4 +11,5 @@ pub mod plot;
 pub mod records;
 pub mod runs;
 pub mod standard;
+pub mod standard_case;
 pub mod variants;

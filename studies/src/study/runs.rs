@@ -4,6 +4,7 @@
 
 use orchestrator::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
 use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
+use crate::Error;
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
 use model_description::BaseType;
@@ -158,12 +159,12 @@ fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
     }
 }
 
-fn run(system: System, stop: f64, record: Vec<Endpoint>) -> Result<Table, String> {
-    let cosim = Cosimulation::load(system).map_err(|e| e.to_string())?;
-    let summary = cosim
-        .run(&options(stop, record))
-        .map_err(|e| e.to_string())?;
-    summary.table.ok_or_else(|| "no table was collected".into())
+fn run(system: System, stop: f64, record: Vec<Endpoint>) -> Result<Table, Error> {
+    let cosim = Cosimulation::load(system)?;
+    let summary = cosim.run(&options(stop, record))?;
+    summary
+        .table
+        .ok_or_else(|| Error::Input("no table was collected".into()))
 }
 
 /// The vehicle alone with `settings`, recording `variables` (vehicle variable names).
@@ -172,7 +173,7 @@ pub fn vehicle_run(
     settings: Settings,
     variables: &[&str],
     stop: f64,
-) -> Result<Table, String> {
+) -> Result<Table, Error> {
     vehicle_run_driven(fmus, settings, variables, stop, None)
 }
 
@@ -187,7 +188,7 @@ pub fn vehicle_run_driven(
     variables: &[&str],
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
-) -> Result<Table, String> {
+) -> Result<Table, Error> {
     let system = System {
         name: "vehicle".into(),
         components: vec![Component {
@@ -210,7 +211,7 @@ pub fn vehicle_run_driven(
     let Some(speed) = speed else {
         return run(system, stop, record);
     };
-    let cosim = Cosimulation::load(system).map_err(|e| e.to_string())?;
+    let cosim = Cosimulation::load(system)?;
     let speed_vr = cosim.model_descriptions()[0]
         .variable("speed")
         .map(|v| v.value_reference)
@@ -222,9 +223,10 @@ pub fn vehicle_run_driven(
                 out.clear();
                 out.push((BaseType::Real, speed_vr, speed(t)));
             },
-        )
-        .map_err(|e| e.to_string())?;
-    summary.table.ok_or_else(|| "no table was collected".into())
+        )?;
+    summary
+        .table
+        .ok_or_else(|| Error::Input("no table was collected".into()))
 }
 
 /// The columns the evaluation reads from a standard-system run.
@@ -241,8 +243,8 @@ pub fn standard_run(
     vehicle: Settings,
     estimator: Settings,
     stop: f64,
-) -> Result<Table, String> {
-    let mut system = System::standard_case(&fmus.vehicle, &fmus.estimator);
+) -> Result<Table, Error> {
+    let mut system = super::standard_case::system(&fmus.vehicle, &fmus.estimator)?;
     system.components[0].parameters = fmus
         .vehicle_settings
         .iter()

@@ -1,0 +1,81 @@
+//! `orchestrator run SYSTEM`: a system described in SSP, through the master.
+
+use super::{Common, fmu_sources, split_assignment};
+use crate::master::{Algorithm, Cosimulation, RunError, RunSummary};
+use crate::outdir::OutputDir;
+use crate::system::{Endpoint, System};
+use clap::Args;
+use std::path::{Path, PathBuf};
+
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// An SSP system (.ssd or .ssp), e.g. studies/standard.ssd (the vehicle -> estimator case).
+    pub system: PathBuf,
+    /// Run a component with this FMU instead of the system's source: COMPONENT=PATH (repeatable).
+    #[arg(long = "fmu", value_name = "COMPONENT=PATH")]
+    pub fmus: Vec<String>,
+    #[command(flatten)]
+    pub settings: Settings,
+}
+
+/// What a run of a given system takes from the command line.
+#[derive(Args, Clone, Debug)]
+pub struct Settings {
+    #[command(flatten)]
+    pub common: Common,
+    /// Set a parameter before initialization: component.variable=value (repeatable).
+    #[arg(long = "set", value_name = "COMPONENT.VARIABLE=VALUE")]
+    pub set: Vec<String>,
+    /// Jacobi instead of Gauss-Seidel.
+    #[arg(long)]
+    pub jacobi: bool,
+}
+
+/// A finished run and its output directory, still locked (a caller may add files the
+/// manifest lists, as `alignment-studies run` adds metrics.json).
+pub struct Finished {
+    pub summary: RunSummary,
+    pub out: Option<OutputDir>,
+}
+
+/// Reads the system (with the `--fmu` replacements) and runs it.
+pub fn run(args: &RunArgs) -> Result<Finished, RunError> {
+    let sources = fmu_sources(&args.fmus)?;
+    let loaded = crate::ssp::read_with(&args.system, &sources)
+        .map_err(|e| RunError::Config(e.to_string()))?;
+    let program = concat!("orchestrator ", env!("CARGO_PKG_VERSION"));
+    run_system(&loaded.system, &args.settings, program, &[], false)
+}
+
+/// Runs `system` with the command line's settings; `extra` names the files besides the results
+/// the caller will write into the output directory (listed in the manifest, so the next run
+/// there removes them), `collect` keeps the rows in memory ([`RunSummary::table`]).
+pub fn run_system(
+    system: &System,
+    s: &Settings,
+    program: &str,
+    extra: &[&str],
+    collect: bool,
+) -> Result<Finished, RunError> {
+    let mut cosim = Cosimulation::load(system.clone())?;
+    for a in &s.set {
+        let (name, value) = split_assignment(a)?;
+        let e = Endpoint::parse(name).map_err(|e| RunError::Config(format!("--set {a}: {e}")))?;
+        cosim.set(&e, value)?;
+    }
+    let mut opts = s.common.options(system, &cosim)?;
+    if s.jacobi {
+        opts.algorithm = Algorithm::Jacobi;
+    }
+    opts.collect = collect;
+    let fmus: Vec<(&str, &Path)> = system
+        .components
+        .iter()
+        .map(|c| (c.name.as_str(), c.source.as_path()))
+        .collect();
+    let mut files = vec!["results.csv", "results.units.csv"];
+    files.extend_from_slice(extra);
+    let out = s.common.hold_output(program, &files, &fmus, &s.set)?;
+    let summary = cosim.run(&opts)?;
+    Ok(Finished { summary, out })
+}
