@@ -36,35 +36,22 @@ enum Command {
     ExportSsp(export::ExportArgs),
 }
 
-/// Ctrl-C (and SIGTERM, SIGHUP) during `run` or `simulate`: the first asks the master to stop
-/// at the next step boundary and keep the results; a second one quits at once. The handler runs
-/// on ctrlc's own thread, not in signal context, so printing and exiting there are safe.
-fn stop_on_interrupt() {
-    let installed = ctrlc::set_handler(|| {
-        if orchestrator::master::request_stop() {
-            eprintln!(
-                "interrupted: stopping at the next step boundary and keeping the results (interrupt again to quit at once)"
-            );
-        } else {
-            eprintln!("interrupted again: quitting at once");
-            std::process::exit(130);
-        }
-    });
-    if let Err(e) = installed {
-        eprintln!("warning: cannot handle Ctrl-C ({e}); an interrupt will lose the results");
-    }
-}
-
 fn main() -> ExitCode {
     let cli = Cli::parse();
     if matches!(cli.command, Command::Run(_) | Command::Simulate(_)) {
-        stop_on_interrupt();
+        run::stop_on_interrupt();
     }
     let result = match &cli.command {
-        Command::Run(a) => run::run(a).map(|done| eprintln!("{}", cli::summary_text(&done.summary))),
-        Command::Simulate(a) => simulate::simulate(a).map(|s| eprintln!("{}", cli::summary_text(&s))),
+        Command::Run(a) => {
+            run::run(a).map(|done| eprintln!("{}", cli::summary_text(&done.summary)))
+        }
+        Command::Simulate(a) => {
+            simulate::simulate(a).map(|s| eprintln!("{}", cli::summary_text(&s)))
+        }
         Command::Info(a) => info::info(a).map(|text| print!("{text}")),
-        Command::ExportSsp(a) => export::export_ssp(a).map(|()| eprintln!("wrote {}", a.out.display())),
+        Command::ExportSsp(a) => {
+            export::export_ssp(a).map(|()| eprintln!("wrote {}", a.out.display()))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -115,6 +115,36 @@ impl OutputDir {
         &self.dir
     }
 
+    /// Opens `dir` for a run ([`OutputDir::open`]), checks its output `files` (no symlink, FIFO
+    /// or device is replaced, [`refuse_special`]) and writes the manifest before the run, so
+    /// that even a failed run's partial results can be traced. `program` names the writer; the
+    /// command line is this process's.
+    pub fn hold(
+        dir: &Path,
+        program: &str,
+        files: &[&str],
+        fmus: &[(&str, &Path)],
+        settings: &[String],
+    ) -> io::Result<OutputDir> {
+        let out = OutputDir::open(dir)?;
+        for f in files {
+            refuse_special(&out.path().join(f))?;
+        }
+        let manifest = Manifest {
+            program: program.into(),
+            command: std::env::args().collect(),
+            settings: settings.to_vec(),
+            fmus: fmus
+                .iter()
+                .map(|(c, p)| fmu_record(c, p))
+                .collect::<Result<_, _>>()?,
+            time_utc: rfc3339(std::time::SystemTime::now()),
+            files: files.iter().map(|f| f.to_string()).collect(),
+        };
+        out.write_manifest(&manifest)?;
+        Ok(out)
+    }
+
     /// Removes what the previous manifest lists, and the manifest.
     fn remove_stale(&self) -> io::Result<()> {
         let manifest = self.dir.join(MANIFEST);

@@ -8,10 +8,10 @@
 //!   part;
 //! - the paper's Kalman filter over the same samples (`fmu_estimator::offline`), per sample.
 
-use fmu_estimator::offline;
 use alignment_studies::study::learned::synthetic::noise_record;
 use alignment_studies::study::learned::{GRID, LearnedSmoother, Lookahead, default_partner};
 use alignment_studies::study::runs::STEP;
+use fmu_estimator::offline;
 use std::time::Instant;
 
 fn median(mut v: Vec<f64>) -> f64 {

@@ -45,11 +45,3 @@ impl From<&str> for Error {
         Error::Input(message.to_string())
     }
 }
-
-/// For the study code that still reports its errors as text (the records, variants and tap
-/// fits): the message, without the exit code a typed caller would keep.
-impl From<Error> for String {
-    fn from(e: Error) -> String {
-        e.to_string()
-    }
-}

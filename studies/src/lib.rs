@@ -1,7 +1,8 @@
 //! The alignment-estimation studies of the paper, on top of the `orchestrator` master: accuracy
 //! metrics in the EN 13848 bands, identification and calibration of the simplified model, the
 //! paper's evaluation cases, the estimator's variants and the learned filters ([`study`]), and
-//! the estimator run offline over recorded signals ([`smooth`]).
+//! the estimator run offline over recorded signals ([`smooth`]); what each command produces,
+//! as a value ([`report`]); the command line's commands ([`cli`]).
 //!
 //! A crate of its own so that the master depends on no model, plotting or signal-processing
 //! crate: a user of the master does not get the railway science, and the studies read as a
@@ -14,6 +15,7 @@
 
 pub mod cli;
 pub mod error;
+pub mod report;
 pub mod smooth;
 pub mod study;
 

@@ -1,9 +1,11 @@
+#![allow(clippy::result_large_err)]
 //! The `alignment-studies` command line: the estimation studies on top of the orchestrator.
 //! See `alignment-studies --help` and `docs/studies.md`; each command is a module of
 //! [`alignment_studies::cli`].
 //!
 //! Exit codes as `orchestrator`'s (docs/orchestrator.md): 0 success; 1 results cannot be
-//! written; 2 bad input; 3 an FMU failed during a run.
+//! written; 2 bad input; 3 an FMU failed during a run; 130 `run` interrupted (Ctrl-C, SIGTERM,
+//! SIGHUP: it stops at the next step boundary and keeps the results).
 
 use alignment_studies::Error;
 use alignment_studies::cli::cases::Group;
@@ -56,30 +58,26 @@ enum Command {
     Smooth(smooth::SmoothArgs),
 }
 
+/// Runs the command and writes what it produced.
 fn execute(command: Command) -> Result<(), Error> {
     let say = |line: &str| println!("{line}");
     let report = match command {
         Command::Run(a) => {
-            let done = run::run(&a)?;
-            eprintln!("{}", orchestrator_summary(&done.run.summary));
-            for note in &done.notes {
-                eprintln!("{note}");
-            }
-            if let Some((path, json, table)) = &done.metrics {
-                std::fs::write(path, json).map_err(|e| Error::write(path, e))?;
-                print!("{table}");
-            }
-            return Ok(());
+            orchestrator::cli::run::stop_on_interrupt();
+            // The output directory stays locked until metrics.json is written.
+            let done = run::execute(&a)?;
+            eprintln!("{}", orchestrator_summary(&done.summary));
+            return done.report.write();
         }
-        Command::Smooth(a) => return smooth::smooth(&a).map(|line| eprintln!("{line}")),
-        Command::Calibrate(a) => calibrate::calibrate(&a, &say)?,
-        Command::Standard(a) => cases::study(&a, &[Group::Standard], &say)?,
-        Command::Robustness(a) => cases::study(&a, &[Group::Robustness], &say)?,
-        Command::Resonance(a) => cases::study(&a, &[Group::Resonance], &say)?,
-        Command::All(a) => cases::study(&a, &Group::ALL, &say)?,
-        Command::Variants(a) => variants::variants(&a, &say)?,
-        Command::Learn(a) => learn::learn(&a)?,
-        Command::Taps(a) => taps::taps(&a, &|m| eprintln!("{m}"))?,
+        Command::Smooth(a) => smooth::execute(&a)?,
+        Command::Calibrate(a) => calibrate::execute(&a, &say)?,
+        Command::Standard(a) => cases::execute(&a, &[Group::Standard], &say)?,
+        Command::Robustness(a) => cases::execute(&a, &[Group::Robustness], &say)?,
+        Command::Resonance(a) => cases::execute(&a, &[Group::Resonance], &say)?,
+        Command::All(a) => cases::execute(&a, &Group::ALL, &say)?,
+        Command::Variants(a) => variants::execute(&a, &say)?,
+        Command::Learn(a) => learn::execute(&a)?,
+        Command::Taps(a) => taps::execute(&a, &|m| eprintln!("{m}"))?,
     };
     report.write()
 }

@@ -10,10 +10,10 @@
 //! learned smoother (`--learned FILE`, from `alignment-studies learn`) also `alignment_learned`
 //! and `alignment_hybrid`, computed on its 1 m grid and interpolated linearly to every row.
 
-use orchestrator::record::push_f64;
 use crate::study::learned::LearnedSmoother;
 use crate::study::metrics::resample;
 use fmu_estimator::offline::{self, Processed, Sample};
+use orchestrator::record::push_f64;
 use std::path::Path;
 
 /// Reads the samples and the step from a CSV file.

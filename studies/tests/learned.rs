@@ -79,13 +79,21 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     );
 
     // Bad training requests are refused before any run.
-    let e = training_runs(&fmus, 101, 30.0, &[1.0], None).unwrap_err();
+    let e = training_runs(&fmus, 101, 30.0, &[1.0], None)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("longer than 40 s"), "{e}");
-    let e = training_runs(&fmus, 101, 200.0, &[], None).unwrap_err();
+    let e = training_runs(&fmus, 101, 200.0, &[], None)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("Kalker scales"), "{e}");
-    let e = training_runs(&fmus, 101, 200.0, &[1.0, -0.5], None).unwrap_err();
+    let e = training_runs(&fmus, 101, 200.0, &[1.0, -0.5], None)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("-0.5"), "{e}");
-    let e = training_runs(&fmus, 101, 200.0, &[1.0], Some(f64::NAN)).unwrap_err();
+    let e = training_runs(&fmus, 101, 200.0, &[1.0], Some(f64::NAN))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("training speed"), "{e}");
     // A record at another speed or step is refused by name.
     let mut slow = held_out.samples.clone();

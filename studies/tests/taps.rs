@@ -5,9 +5,9 @@
 
 mod common;
 
-use fmu_estimator::learned::bank::Bank;
 use alignment_studies::study::learned::taps::{Options, fit};
 use alignment_studies::study::runs::Fmus;
+use fmu_estimator::learned::bank::Bank;
 use std::path::Path;
 
 #[test]

@@ -114,10 +114,9 @@ impl Common {
         })
     }
 
-    /// The output directory (none with --no-record): locked for this process, cleared of the
-    /// previous run's outputs, its output `files` checked (no symlink, FIFO or device is
-    /// replaced) and the manifest written before the run, so that even a failed run's partial
-    /// results can be traced ([`crate::outdir`]). `program` names the writer in the manifest.
+    /// The output directory, held for this run ([`OutputDir::hold`]: locked, cleared of the
+    /// previous run's outputs, its `files` checked, the manifest written); none with
+    /// --no-record.
     pub fn hold_output(
         &self,
         program: &str,
@@ -125,34 +124,17 @@ impl Common {
         fmus: &[(&str, &Path)],
         settings: &[String],
     ) -> Result<Option<OutputDir>, RunError> {
-        use crate::outdir::{Manifest, fmu_record, refuse_special, rfc3339};
         if self.no_record {
             return Ok(None);
         }
-        let io = |e: std::io::Error| {
-            RunError::Io(format!(
-                "cannot write results in {} (nothing was run): {e}",
-                self.out.display()
-            ))
-        };
-        let out = OutputDir::open(&self.out).map_err(io)?;
-        for f in files {
-            refuse_special(&out.path().join(f)).map_err(io)?;
-        }
-        let manifest = Manifest {
-            program: program.into(),
-            command: std::env::args().collect(),
-            settings: settings.to_vec(),
-            fmus: fmus
-                .iter()
-                .map(|(c, p)| fmu_record(c, p))
-                .collect::<Result<_, _>>()
-                .map_err(io)?,
-            time_utc: rfc3339(std::time::SystemTime::now()),
-            files: files.iter().map(|f| f.to_string()).collect(),
-        };
-        out.write_manifest(&manifest).map_err(io)?;
-        Ok(Some(out))
+        OutputDir::hold(&self.out, program, files, fmus, settings)
+            .map(Some)
+            .map_err(|e| {
+                RunError::Io(format!(
+                    "cannot write results in {} (nothing was run): {e}",
+                    self.out.display()
+                ))
+            })
     }
 }
 

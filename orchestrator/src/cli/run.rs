@@ -79,3 +79,23 @@ pub fn run_system(
     let summary = cosim.run(&opts)?;
     Ok(Finished { summary, out })
 }
+
+/// Ctrl-C (and SIGTERM, SIGHUP) during a run (`run`, `simulate`, `alignment-studies run`): the
+/// first asks the master to stop at the next step boundary and keep the results; a second one
+/// quits at once. The handler runs on ctrlc's own thread, not in signal context, so printing
+/// and exiting there are safe.
+pub fn stop_on_interrupt() {
+    let installed = ctrlc::set_handler(|| {
+        if crate::master::request_stop() {
+            eprintln!(
+                "interrupted: stopping at the next step boundary and keeping the results (interrupt again to quit at once)"
+            );
+        } else {
+            eprintln!("interrupted again: quitting at once");
+            std::process::exit(130);
+        }
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: cannot handle Ctrl-C ({e}); an interrupt will lose the results");
+    }
+}

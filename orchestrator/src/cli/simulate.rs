@@ -85,11 +85,5 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
         &[("fmu", args.fmu.as_path())],
         &args.set,
     )?;
-    crate::simulate::simulate(
-        &args.fmu,
-        signals.as_ref(),
-        &settings,
-        &opts,
-        args.replay,
-    )
+    crate::simulate::simulate(&args.fmu, signals.as_ref(), &settings, &opts, args.replay)
 }

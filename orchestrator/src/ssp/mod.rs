@@ -113,7 +113,10 @@ pub fn read_with(path: &Path, sources: &Sources) -> Result<LoadedSystem, SspErro
         })
         .collect::<Result<Sources, _>>()?;
     let loaded = read::read(path, &sources)?;
-    if let Some(name) = sources.keys().find(|n| loaded.system.component(n).is_none()) {
+    if let Some(name) = sources
+        .keys()
+        .find(|n| loaded.system.component(n).is_none())
+    {
         return Err(SspError::NoSuchComponent {
             path: path.to_path_buf(),
             component: name.clone(),

@@ -3,6 +3,7 @@
 
 use super::{CALIBRATION_SEED, Report, StandardFmus};
 use crate::Error;
+use crate::report::learned::LearnOptions;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -39,64 +40,15 @@ pub struct LearnArgs {
     pub out: PathBuf,
 }
 
-pub fn learn(a: &LearnArgs) -> Result<Report, Error> {
-    use crate::study::learned::{
-        Lookahead, WINDOW, decimation, default_partner, learn, training_runs, validation,
+/// Fits the learned FIR smoother ([`crate::report::learned::learn`]).
+pub fn execute(a: &LearnArgs) -> Result<Report, Error> {
+    let options = LearnOptions {
+        seed: a.seed,
+        stop: a.stop,
+        lag: a.lag,
+        grid: a.grid,
+        kalker_scales: a.kalker_scales.clone(),
+        speed: a.speed,
     };
-    use crate::study::runs::{STEP, STOP};
-    use crate::study::variants;
-    let (grid, out) = (a.grid, &a.out);
-    // The grid the filter will have (a whole number of samples), checked before the runs.
-    let speed = a.speed.unwrap_or(20.0);
-    let grid =
-        STEP * speed * decimation(speed, grid).map_err(|e| format!("--grid: {e}"))? as f64;
-    let lookahead = match a.lag {
-        None => Lookahead::Smoother,
-        Some(m) if (0.0..=WINDOW).contains(&m) => Lookahead::FixedLag((m / grid).round() as usize),
-        Some(m) => {
-            return Err(Error::Input(format!(
-                "--lag must be between 0 and {WINDOW} m (the window), not {m}"
-            )));
-        }
-    };
-    let (runs, provenance) = training_runs(
-        &a.fmus.fmus(),
-        a.seed,
-        a.stop,
-        &a.kalker_scales,
-        a.speed,
-    )
-    ?;
-    // The shaping filter's virtual-measurement sigma, chosen as the study does, on the first
-    // 20 s of the (first) training run.
-    let (sigma, _) =
-        variants::tune_prior_sigma(&validation(&runs[0]), 3, &[], None)?;
-    let (l, j) = learn(
-        &runs,
-        &provenance,
-        lookahead,
-        grid,
-        default_partner(lookahead, sigma),
-    )
-    ?;
-    let ahead = match l.lookahead {
-        Lookahead::Smoother => format!("smoother, {WINDOW} m each way"),
-        Lookahead::FixedLag(n) => format!("look-ahead {} m", n as f64 * l.grid()),
-    };
-    let markdown = format!(
-        "learned FIR ({ahead}, grid {} m) at {} m/s: {}; split {} m with {} (whole Jrel on the first {} s: {j:.3}); wrote {}",
-        l.grid(),
-        l.speed,
-        l.provenance,
-        l.split,
-        l.partner.name,
-        STOP,
-        out.display()
-    );
-    let mut report = Report {
-        markdown,
-        ..Report::default()
-    };
-    report.file(out.clone(), l.to_json());
-    Ok(report)
+    crate::report::learned::learn(&a.fmus.fmus(), &options, &a.out)
 }

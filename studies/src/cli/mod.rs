@@ -1,6 +1,7 @@
-//! The `alignment-studies` commands as a library: each module holds a command's options and
-//! one function returning what the command produces (a [`Report`], a run), so `main.rs` only
-//! parses, calls, writes and maps the error to an exit code ([`Error::exit_code`]).
+//! The `alignment-studies` commands: each module holds a command's options and one function
+//! that turns them into the library's terms and calls the one library function
+//! ([`crate::report`]) that returns what the command produces (a [`Report`], a run). `main.rs`
+//! only parses, calls, writes and maps the error to an exit code ([`Error::exit_code`]).
 
 pub mod calibrate;
 pub mod cases;
@@ -11,10 +12,12 @@ pub mod taps;
 pub mod variants;
 
 use crate::Error;
+use crate::report::Evaluation;
+pub use crate::report::Report;
 use crate::study::runs::Fmus;
 use clap::Args;
 use orchestrator::system::Endpoint;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// The track seed the shipped estimator is identified and calibrated on.
 pub const CALIBRATION_SEED: u32 = 101;
@@ -81,56 +84,28 @@ pub struct StudyArgs {
 }
 
 impl StudyArgs {
-    /// Accuracy is measured on tracks the estimator was not calibrated on.
-    pub fn held_out(&self) -> Result<(), Error> {
-        if self.seeds.contains(&self.calibration_seed) {
-            return Err(Error::Input(format!(
-                "seed {} is the calibration seed: accuracy must be measured on other tracks",
-                self.calibration_seed
-            )));
+    /// The seeds as the library takes them.
+    pub fn evaluation(&self) -> Evaluation {
+        Evaluation {
+            seeds: self.seeds.clone(),
+            calibration_seed: self.calibration_seed,
         }
-        Ok(())
     }
 }
 
-/// What a study produces: Markdown for the screen, the files of its report (Markdown, JSON,
-/// CSV, each with its contents) and the figures it drew (SVG files, written while drawing).
-#[derive(Debug, Default)]
-pub struct Report {
-    pub markdown: String,
-    pub files: Vec<(PathBuf, Vec<u8>)>,
-    pub figures: Vec<PathBuf>,
-    /// The closing line for stderr: time taken, where the report is.
-    pub note: String,
-}
-
-impl Report {
-    pub fn file(&mut self, path: PathBuf, contents: impl Into<Vec<u8>>) {
-        self.files.push((path, contents.into()));
-    }
-
-    /// Writes the files, prints the Markdown, then the note.
-    pub fn write(&self) -> Result<(), Error> {
-        for (path, contents) in &self.files {
-            create_parent(path)?;
-            std::fs::write(path, contents).map_err(|e| Error::write(path, e))?;
+/// A progress bar drawn on stderr from a study's [`Progress`](crate::report::cases::Progress)
+/// calls, hidden with `quiet`.
+pub fn progress_bar(quiet: bool) -> impl Fn(crate::report::cases::Progress) + Sync {
+    use crate::report::cases::Progress;
+    let bar = indicatif::ProgressBar::hidden();
+    move |p| match p {
+        Progress::Runs(n) if !quiet => {
+            bar.set_length(n as u64);
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
         }
-        if !self.markdown.is_empty() {
-            println!("{}", self.markdown);
-        }
-        if !self.note.is_empty() {
-            eprintln!("{}", self.note);
-        }
-        Ok(())
-    }
-}
-
-/// Creates the directory a file is to be written in, if it names one.
-pub fn create_parent(file: &Path) -> Result<(), Error> {
-    match file.parent().filter(|d| !d.as_os_str().is_empty()) {
-        Some(dir) => std::fs::create_dir_all(dir)
-            .map_err(|e| Error::Io(format!("cannot create {}: {e}", dir.display()))),
-        None => Ok(()),
+        Progress::Runs(_) => {}
+        Progress::Done => bar.inc(1),
+        Progress::Finished => bar.finish_and_clear(),
     }
 }
 

@@ -1,6 +1,7 @@
 //! `alignment-studies smooth`: the estimator's filter and RTS smoother (and optionally a learned
 //! estimator) over recorded sensor signals.
 
+use super::Report;
 use crate::Error;
 use clap::Args;
 use std::path::PathBuf;
@@ -24,8 +25,9 @@ pub struct SmoothArgs {
     pub learned: Option<PathBuf>,
 }
 
-/// Filters and smooths the record into `out`; returns the line that says what was done.
-pub fn smooth(a: &SmoothArgs) -> Result<String, Error> {
+/// Filters and smooths the record into `out` ([`crate::smooth::smooth_file`]); the report's
+/// note says what was done.
+pub fn execute(a: &SmoothArgs) -> Result<Report, Error> {
     let overrides = a
         .set
         .iter()
@@ -34,7 +36,7 @@ pub fn smooth(a: &SmoothArgs) -> Result<String, Error> {
                 .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    super::create_parent(&a.out)?;
+    crate::report::create_parent(&a.out)?;
     let processed = crate::smooth::smooth_file(
         &a.input,
         &a.out,
@@ -42,10 +44,13 @@ pub fn smooth(a: &SmoothArgs) -> Result<String, Error> {
         a.calibration.as_deref(),
         a.learned.as_deref(),
     )?;
-    Ok(format!(
-        "{} samples filtered and smoothed ({} updates skipped); wrote {}",
-        processed.filtered.len(),
-        processed.skipped,
-        a.out.display()
-    ))
+    Ok(Report {
+        note: format!(
+            "{} samples filtered and smoothed ({} updates skipped); wrote {}",
+            processed.filtered.len(),
+            processed.skipped,
+            a.out.display()
+        ),
+        ..Report::default()
+    })
 }

@@ -3,6 +3,7 @@
 
 use super::{CALIBRATION_SEED, Report, StandardFmus};
 use crate::Error;
+use crate::study::learned::taps::Options;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -38,8 +39,9 @@ pub struct TapsArgs {
     pub out: PathBuf,
 }
 
-pub fn taps(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
-    use crate::study::learned::taps::{Options, fit};
+/// The fit's options from the command line (the command line goes into the bank's provenance
+/// when they are not the shipped bank's), then the fit ([`crate::report::learned::taps`]).
+pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
     let mut o = Options::shipped();
     o.speeds = a.speeds.clone();
     o.kalker_scales = a.kalker_scales.clone();
@@ -68,40 +70,5 @@ pub fn taps(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
     ) {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
-    let started = std::time::Instant::now();
-    let bank = fit(&a.fmus.fmus(), &o, log)?;
-    let mut lines = vec![];
-    for m in bank.contact.iter().flat_map(|c| &c.speeds) {
-        lines.push(format!(
-            "{:>5} m/s contact model: rms error of the Kalker scale on the validation runs {:.3}",
-            m.speed, m.rms_error
-        ));
-    }
-    for e in &bank.entries {
-        let w = e.windows.last().expect("full window");
-        let condition = e
-            .condition
-            .map(|c| format!("Kalker {:>3} %", c * 100.0))
-            .unwrap_or_default();
-        lines.push(format!(
-            "{:>5} m/s {condition} {:<48} lag {:>4} m: ridge {:.0e}, validation objective {:.4}, rms error {:.3} mm",
-            e.speed,
-            e.channels.join(","),
-            e.lag as f64 * bank.grid,
-            e.ridge,
-            e.validation_objective,
-            w.rms_error * 1e3
-        ));
-    }
-    let mut report = Report {
-        markdown: lines.join("\n"),
-        note: format!(
-            "tap bank in {:.1} s; wrote {}",
-            started.elapsed().as_secs_f64(),
-            a.out.display()
-        ),
-        ..Report::default()
-    };
-    report.file(a.out.clone(), bank.to_bytes());
-    Ok(report)
+    crate::report::learned::taps(&a.fmus.fmus(), &o, &a.out, log)
 }

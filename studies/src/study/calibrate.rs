@@ -275,13 +275,13 @@ pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, crat
         .iter()
         .flat_map(|&v| XI_SCALES.iter().map(move |&x| (v, x)))
         .collect();
-    let scores: Vec<Result<f64, String>> = grid
+    let scores: Vec<Result<f64, crate::Error>> = grid
         .par_iter()
         .enumerate()
         .map(|(i, &(v, x))| {
             let path = dir.path().join(format!("candidate{i}.toml"));
             std::fs::write(&path, candidate_file(c, v, x))
-                .map_err(|e| format!("{}: {e}", path.display()))?;
+                .map_err(|e| crate::Error::write(&path, e))?;
             let mut est = parameter_settings(&c.params);
             est.push((
                 "calibration_file".into(),

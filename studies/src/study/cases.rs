@@ -219,8 +219,7 @@ pub fn run_seed_until(
     stop: f64,
 ) -> Result<BandMetrics, Error> {
     let table = run_seed_table(fmus, case, seed, stop)?;
-    evaluate_results(&table)
-        .map_err(|e| Error::Input(format!("{}, seed {seed}: {e}", case.name)))
+    evaluate_results(&table).map_err(|e| Error::Input(format!("{}, seed {seed}: {e}", case.name)))
 }
 
 /// The recorded table of one seed of a case (`time` and the columns

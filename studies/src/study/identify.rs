@@ -18,13 +18,13 @@
 
 use super::optimize::nelder_mead;
 use super::runs::{Fmus, Settings, vehicle_run};
-use orchestrator::system::Value;
 use fmu_estimator::discretize::{Scheme, transition};
 use fmu_estimator::filter::Vec7;
 use fmu_estimator::model::state_matrix;
 use fmu_estimator::params::Params;
 use fmu_vehicle::dynamics::{ContactOptions, Vehicle};
 use fmu_vehicle::params::VehicleParams;
+use orchestrator::system::Value;
 
 /// `p_fix` of the simplified model from the vehicle's parameter set (suspension equivalents
 /// left at the paper's Table 2 values, to be identified).

@@ -3,8 +3,9 @@
 //! so that none of them depends on another for it.
 
 use super::runs::{Fmus, Settings, SpeedProfile, vehicle_run_driven};
-use orchestrator::master::Table;
+use crate::Error;
 use fmu_estimator::offline::{self, Sample};
+use orchestrator::master::Table;
 use serde::Serialize;
 use std::path::Path;
 
@@ -56,7 +57,7 @@ pub fn record(
     settings: Settings,
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
-) -> Result<Record, String> {
+) -> Result<Record, Error> {
     record_with(fmus, settings, stop, speed, None)
 }
 
@@ -68,7 +69,7 @@ pub fn record_with(
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
     roll_rate: Option<&str>,
-) -> Result<Record, String> {
+) -> Result<Record, Error> {
     Ok(record_table(fmus, settings, stop, speed, roll_rate, &[])?.0)
 }
 
@@ -81,7 +82,7 @@ pub fn record_table(
     speed: Option<SpeedProfile<'_>>,
     roll_rate: Option<&str>,
     more: &[&str],
-) -> Result<(Record, Table), String> {
+) -> Result<(Record, Table), Error> {
     let mut variables = RECORDED.to_vec();
     variables.extend(roll_rate);
     variables.extend(more);

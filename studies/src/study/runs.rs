@@ -2,12 +2,12 @@
 //! standard system (evaluation), in-process through the master, with the variables the
 //! analysis needs kept in memory.
 
-use orchestrator::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
-use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use crate::Error;
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
 use model_description::BaseType;
+use orchestrator::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
+use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use std::path::PathBuf;
 
 /// The two FMUs of the studies, and the user's settings for each, applied to every run before
@@ -216,14 +216,11 @@ pub fn vehicle_run_driven(
         .variable("speed")
         .map(|v| v.value_reference)
         .ok_or("the vehicle FMU has no 'speed' input")?;
-    let summary = cosim
-        .run_with_inputs(
-            &options(stop, record),
-            &|t, out: &mut Vec<ExternalValue>| {
-                out.clear();
-                out.push((BaseType::Real, speed_vr, speed(t)));
-            },
-        )?;
+    let inputs = |t: f64, out: &mut Vec<ExternalValue>| {
+        out.clear();
+        out.push((BaseType::Real, speed_vr, speed(t)));
+    };
+    let summary = cosim.run_with_inputs(&options(stop, record), &inputs)?;
     summary
         .table
         .ok_or_else(|| Error::Input("no table was collected".into()))

@@ -347,7 +347,7 @@ pub fn record_seeds(
     fmus: &Fmus,
     seeds: &[u32],
     conditions: Conditions,
-) -> Result<Vec<Record>, String> {
+) -> Result<Vec<Record>, crate::Error> {
     seeds
         .par_iter()
         .map(|&s| {

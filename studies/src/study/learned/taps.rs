@@ -32,16 +32,17 @@
 //!    alignment on the validation seeds becomes its standard deviation.
 
 use super::spectra::{Correlations, band_power};
+use crate::Error;
 use crate::study::metrics::{BANDS, Band, evaluate};
 use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
-use orchestrator::system::Value;
 use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
 use fmu_estimator::offline;
 use nalgebra::{DMatrix, DVector};
+use orchestrator::system::Value;
 use rayon::prelude::*;
 
 /// Grid step along the track \[m\].
@@ -144,7 +145,7 @@ fn run(
     speed: f64,
     distance: f64,
     roll: bool,
-) -> Result<Option<GridRun>, String> {
+) -> Result<Option<GridRun>, Error> {
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(20.0, MAX_STOP).round();
     let mut settings = seeded(seed);
@@ -159,7 +160,7 @@ fn run(
     ) {
         Ok(r) => r,
         // The vehicle FMU stops a run in which it leaves the track: no running condition.
-        Err(e) if e.contains(fmu_vehicle::fmu::DERAILED) => return Ok(None),
+        Err(e) if e.to_string().contains(fmu_vehicle::fmu::DERAILED) => return Ok(None),
         Err(e) => return Err(e),
     };
     let ws_y = table
@@ -168,7 +169,7 @@ fn run(
     if ws_y.iter().any(|y| !(y.abs() <= UNSTABLE_WS_Y)) {
         return Ok(None);
     }
-    on_grid(&rec).map(Some)
+    Ok(Some(on_grid(&rec)?))
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
@@ -349,7 +350,7 @@ fn fit_speed(
     o: &Options,
     speed: f64,
     progress: &dyn Fn(&str),
-) -> Result<(Vec<Entry>, Option<SpeedModel>), String> {
+) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
     let training: Vec<Option<GridRun>> = o
         .kalker_scales
         .par_iter()
@@ -384,7 +385,8 @@ fn fit_speed(
     if stable.is_empty() {
         return Err(format!(
             "at {speed} m/s the vehicle is unstable under every training contact condition"
-        ));
+        )
+        .into());
     }
     // Validated under every contact condition trained on: robust taps are chosen for all of them.
     let cases: Vec<(u32, f64)> = o
@@ -403,7 +405,7 @@ fn fit_speed(
         .filter_map(|(k, r)| r.map(|r| (k, r)))
         .collect();
     if validation.is_empty() {
-        return Err(format!("at {speed} m/s every validation run is unstable"));
+        return Err(format!("at {speed} m/s every validation run is unstable").into());
     }
     let per_condition = o.per_condition && o.kalker_scales.len() > 1;
     // The groups fitted: each condition alone, or all pooled.
@@ -501,7 +503,7 @@ fn fit_speed(
 }
 
 /// Fits the bank (speeds one after the other, each speed's runs and solves in parallel).
-pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, String> {
+pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Error> {
     if o.validation_seeds.contains(&o.training_seed) {
         return Err("the validation seeds must differ from the training seed".into());
     }
@@ -509,16 +511,14 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, St
         return Err(format!(
             "the speeds must be positive numbers of m/s; got {:?}",
             o.speeds
-        ));
+        )
+        .into());
     }
     if o.lags
         .iter()
         .any(|l| !(l.is_finite() && *l > 0.0 && *l <= WINDOW))
     {
-        return Err(format!(
-            "the lags must lie in (0, {WINDOW}] m; got {:?}",
-            o.lags
-        ));
+        return Err(format!("the lags must lie in (0, {WINDOW}] m; got {:?}", o.lags).into());
     }
     let mut entries = vec![];
     let mut models = vec![];

@@ -15,24 +15,23 @@ pub fn training_runs(
     stop: f64,
     kalker_scales: &[f64],
     speed: Option<f64>,
-) -> Result<(Vec<Record>, String), String> {
+) -> Result<(Vec<Record>, String), crate::Error> {
     if let Some(v) = speed
         && !(v.is_finite() && v > 0.0)
     {
-        return Err(format!(
-            "the training speed must be a positive number of m/s; got {v}"
-        ));
+        return Err(format!("the training speed must be a positive number of m/s; got {v}").into());
     }
     if !(stop > 2.0 * STOP) {
         return Err(format!(
             "the training run must be longer than {} s (the first {STOP} s choose the split); got {stop} s",
             2.0 * STOP
-        ));
+        )
+        .into());
     }
     if kalker_scales.is_empty() || kalker_scales.iter().any(|k| !(k.is_finite() && *k > 0.0)) {
-        return Err(format!(
-            "the Kalker scales must be positive numbers; got {kalker_scales:?}"
-        ));
+        return Err(
+            format!("the Kalker scales must be positive numbers; got {kalker_scales:?}").into(),
+        );
     }
     let runs = kalker_scales
         .iter()

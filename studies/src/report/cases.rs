@@ -1,0 +1,175 @@
+//! The paper's cases (standard, robustness, resonance) on held-out seeds, run in parallel: a
+//! report with a table per group, its JSON, the first seed's time series and the figures
+//! (`alignment-studies standard | robustness | resonance | all`).
+
+use super::{Evaluation, Report, create_dir};
+use crate::Error;
+use crate::study::runs::{self, Fmus};
+use crate::study::{cases, plot};
+use std::path::Path;
+
+/// How far the runs are, for a progress bar.
+#[derive(Clone, Copy, Debug)]
+pub enum Progress {
+    /// This many runs are about to start.
+    Runs(usize),
+    /// One more run is done.
+    Done,
+    /// All runs are done (or one failed).
+    Finished,
+}
+
+/// The groups of cases a command runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Group {
+    Standard,
+    Robustness,
+    Resonance,
+}
+
+impl Group {
+    pub const ALL: [Group; 3] = [Group::Standard, Group::Robustness, Group::Resonance];
+
+    fn title(self) -> &'static str {
+        match self {
+            Group::Standard => "Standard case",
+            Group::Robustness => "Robustness",
+            Group::Resonance => "Resonance",
+        }
+    }
+}
+
+/// Runs the groups' cases on the evaluation's seeds and builds the report for the directory
+/// `out` (`report.md`, one JSON per group, the figures). `log` gets the lines worth seeing at
+/// once; `progress` is told the number of runs, then called after each.
+pub fn cases(
+    fmus: &Fmus,
+    evaluation: &Evaluation,
+    groups: &[Group],
+    out: &Path,
+    log: &dyn Fn(&str),
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Report, Error> {
+    evaluation.held_out()?;
+    let seeds = &evaluation.seeds;
+    let mut plan: Vec<(Group, Vec<cases::Case>)> = vec![];
+    for &g in groups {
+        let group = match g {
+            Group::Standard => vec![cases::standard()],
+            Group::Robustness => cases::robustness(filter_conicity(fmus)?),
+            Group::Resonance => {
+                let mode = first_lateral_mode(fmus)?;
+                log(&format!(
+                    "first lateral mode of the vehicle at 20 m/s: {:.3} Hz (damping {:.3}): wavelength {:.2} m",
+                    mode.frequency,
+                    mode.damping,
+                    20.0 / mode.frequency
+                ));
+                cases::resonance(mode.frequency, 20.0)
+            }
+        };
+        plan.push((g, group));
+    }
+    let total: usize = plan.iter().map(|(_, c)| c.len()).sum::<usize>() * seeds.len();
+    progress(Progress::Runs(total));
+    let started = std::time::Instant::now();
+    let all: Vec<cases::Case> = plan.iter().flat_map(|(_, c)| c.iter().cloned()).collect();
+    let results = cases::run_cases(fmus, &all, seeds, &|| progress(Progress::Done));
+    progress(Progress::Finished);
+    let results = results?;
+    // The figures are drawn into the directory.
+    create_dir(out)?;
+    let mut report = Report::default();
+    let mut md = String::from("# Alignment estimation study\n\n");
+    let mut offset = 0;
+    for (group, cases) in &plan {
+        let title = group.title();
+        let slice = &results[offset..offset + cases.len()];
+        offset += cases.len();
+        md.push_str(&cases::markdown(title, slice));
+        md.push('\n');
+        let json = serde_json::to_string_pretty(slice).unwrap_or_default();
+        let file = format!("{}.json", title.to_lowercase().replace(' ', "_"));
+        report.file(out.join(file), json);
+        match group {
+            Group::Standard => {
+                md.push_str(&first_seed(seeds[0], out, fmus, &cases[0], &mut report)?)
+            }
+            Group::Robustness | Group::Resonance => {
+                let svg = format!("{}.svg", title.to_lowercase());
+                let path = out.join(&svg);
+                plot::case_bars(&path, slice, &format!("{title}: Jrel per band"))
+                    .map_err(Error::Io)?;
+                report.figures.push(path);
+                md.push_str(&format!("![{title}: Jrel per band]({svg})\n\n"));
+            }
+        }
+    }
+    let report_path = out.join("report.md");
+    report.note = format!(
+        "{total} runs in {:.1} s; report in {}",
+        started.elapsed().as_secs_f64(),
+        report_path.display()
+    );
+    report.file(report_path, md.clone());
+    report.markdown = md;
+    Ok(report)
+}
+
+/// The time series and figures of the first held-out seed (run once more: the parallel runs
+/// keep only the metrics); the report's paragraph linking them.
+fn first_seed(
+    seed: u32,
+    out: &Path,
+    fmus: &Fmus,
+    case: &cases::Case,
+    report: &mut Report,
+) -> Result<String, Error> {
+    let table = cases::run_seed_table(fmus, case, seed, runs::STOP)?;
+    let ts = plot::TimeSeries::from_table(&table)?;
+    let csv = format!("standard_seed{seed}.csv");
+    report.file(out.join(&csv), ts.to_csv());
+    let heading = format!("standard case, seed {seed}");
+    let (alignment, spectra) = (
+        out.join("standard_alignment.svg"),
+        out.join("standard_spectra.svg"),
+    );
+    let title = format!("estimated vs true alignment, {heading}");
+    plot::estimate_vs_truth(&alignment, &ts.distance, &ts.estimate, &ts.truth, &title)
+        .map_err(Error::Io)?;
+    let title = format!("amplitude spectra, {heading}");
+    plot::spectra(&spectra, &ts.distance, &ts.estimate, &ts.truth, &title).map_err(Error::Io)?;
+    report.figures.extend([alignment, spectra]);
+    Ok(format!(
+        "Seed {seed}: time series [{csv}]({csv}).\n\n![estimated vs true alignment](standard_alignment.svg)\n\n![amplitude spectra](standard_spectra.svg)\n\n"
+    ))
+}
+
+/// The filter's conicity, which the robustness case lowers by 10 %: the user's (or their
+/// calibration file's) if set, else the FMU's default.
+fn filter_conicity(fmus: &Fmus) -> Result<f64, Error> {
+    let estimator = fmi_import::Fmu::open(&fmus.estimator).map_err(|e| Error::Run(e.into()))?;
+    let alpha = match estimator
+        .model_description()
+        .variable("alpha")
+        .map(|v| &v.kind)
+    {
+        Some(model_description::VariableKind::Real(r)) => r.start.unwrap_or(0.1),
+        _ => 0.1,
+    };
+    Ok(fmus.estimator_number("alpha").unwrap_or(alpha))
+}
+
+/// The vehicle's first lightly damped lateral mode at 20 m/s.
+fn first_lateral_mode(fmus: &Fmus) -> Result<fmu_vehicle::modal::Mode, Error> {
+    let params = fmus.vehicle_params()?;
+    let conicity = params.wheelset.conicity;
+    let vehicle = fmu_vehicle::dynamics::Vehicle::new(
+        params,
+        conicity,
+        fmu_vehicle::dynamics::ContactOptions::default(),
+    );
+    fmu_vehicle::modal::modes(&vehicle, 20.0)
+        .first_lateral()
+        .ok_or_else(|| "the vehicle has no lightly damped lateral mode at 20 m/s".into())
+}

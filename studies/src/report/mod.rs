@@ -1,0 +1,90 @@
+//! What each study produces, as a value: a [`Report`] holds the Markdown for the screen, the
+//! files to write (Markdown, JSON, CSV, a calibration or a tap bank) and the figures drawn.
+//! One function per command builds it ([`cases`], [`variants`], [`calibration`], [`learned`],
+//! [`standard`]), so the command line only parses, calls, writes and maps the error to an exit
+//! code, and a program or a test can take the report without a process.
+
+pub mod calibration;
+pub mod cases;
+pub mod learned;
+pub mod standard;
+pub mod variants;
+
+use crate::Error;
+use std::path::{Path, PathBuf};
+
+/// What a study produces. Nothing is written until [`Report::write`], except the figures,
+/// which the plotting library draws straight into their files (listed in `figures`).
+#[derive(Debug, Default)]
+pub struct Report {
+    /// For the screen (stdout).
+    pub markdown: String,
+    /// The files of the report, each with its contents.
+    pub files: Vec<(PathBuf, Vec<u8>)>,
+    /// The SVG figures drawn.
+    pub figures: Vec<PathBuf>,
+    /// The closing lines for stderr: time taken, where the report is, why something is missing.
+    pub note: String,
+}
+
+impl Report {
+    /// Adds a file to write.
+    pub fn file(&mut self, path: PathBuf, contents: impl Into<Vec<u8>>) {
+        self.files.push((path, contents.into()));
+    }
+
+    /// Writes the files (creating their directories), prints the Markdown, then the note.
+    pub fn write(&self) -> Result<(), Error> {
+        for (path, contents) in &self.files {
+            create_parent(path)?;
+            std::fs::write(path, contents).map_err(|e| Error::write(path, e))?;
+        }
+        if !self.markdown.is_empty() {
+            println!("{}", self.markdown.trim_end());
+        }
+        if !self.note.is_empty() {
+            eprintln!("{}", self.note.trim_end());
+        }
+        Ok(())
+    }
+}
+
+/// The held-out evaluation: accuracy is measured on track seeds the estimator was not
+/// calibrated on.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// Held-out track seeds.
+    pub seeds: Vec<u32>,
+    /// The seed the estimator was calibrated on, refused among `seeds`.
+    pub calibration_seed: u32,
+}
+
+impl Evaluation {
+    /// Refuses the calibration seed among the evaluation seeds.
+    pub fn held_out(&self) -> Result<(), Error> {
+        if self.seeds.contains(&self.calibration_seed) {
+            return Err(Error::Input(format!(
+                "seed {} is the calibration seed: accuracy must be measured on other tracks",
+                self.calibration_seed
+            )));
+        }
+        if self.seeds.is_empty() {
+            return Err(Error::Input("no evaluation seed given".into()));
+        }
+        Ok(())
+    }
+}
+
+/// Creates the directory a file is to be written in, if it names one.
+pub fn create_parent(file: &Path) -> Result<(), Error> {
+    match file.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) => create_dir(dir),
+        None => Ok(()),
+    }
+}
+
+/// Creates a directory and its parents.
+pub fn create_dir(dir: &Path) -> Result<(), Error> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| Error::Io(format!("cannot create {}: {e}", dir.display())))
+}
