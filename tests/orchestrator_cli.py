@@ -1,8 +1,9 @@
-"""Helpers for the orchestrator's tests (tests/test_orchestrator*.py): where the binary is, how to
-run it, how to read its results, how to write small SSP systems, and how to compare numbers.
+"""Helpers for the orchestrator's tests (tests/test_orchestrator*.py) and the studies' (the
+`alignment-studies` binary): where the binaries are, how to run them, how to read their results,
+how to write small SSP systems, and how to compare numbers.
 
-The binary is `$ORCHESTRATOR` (set by `cargo xtask test`), else `<repo>/target/release/orchestrator`,
-else it is built once per process with `cargo build --release -p orchestrator`.
+The binaries are `$ORCHESTRATOR` and `$ALIGNMENT_STUDIES` (set by `cargo xtask test`), else
+`<repo>/target/release/<name>`, else they are built once per process with `cargo build --release`.
 """
 
 from __future__ import annotations
@@ -24,18 +25,31 @@ from project import REPO, packaged_fmus
 TIMEOUT = 120
 
 
-@functools.lru_cache(maxsize=None)
-def orchestrator_binary() -> Path:
-    env = os.environ.get("ORCHESTRATOR")
+def _binary(env_name: str, package: str, name: str) -> Path:
+    env = os.environ.get(env_name)
     if env:
         path = Path(env)
-        assert path.is_file(), f"ORCHESTRATOR={env} is not a file"
+        assert path.is_file(), f"{env_name}={env} is not a file"
         return path
-    path = REPO / "target" / "release" / "orchestrator"
+    path = REPO / "target" / "release" / name
     if not path.is_file():
-        subprocess.run(["cargo", "build", "--release", "-p", "orchestrator"], cwd=REPO, check=True)
-    assert path.is_file(), f"`cargo build --release -p orchestrator` did not produce {path}"
+        subprocess.run(["cargo", "build", "--release", "-p", package], cwd=REPO, check=True)
+    assert path.is_file(), f"`cargo build --release -p {package}` did not produce {path}"
     return path
+
+
+@functools.lru_cache(maxsize=None)
+def orchestrator_binary() -> Path:
+    return _binary("ORCHESTRATOR", "orchestrator", "orchestrator")
+
+
+@functools.lru_cache(maxsize=None)
+def studies_binary() -> Path:
+    return _binary("ALIGNMENT_STUDIES", "alignment-studies", "alignment-studies")
+
+
+# The standard case (vehicle -> estimator, 20 s at 1 ms), shipped with the studies.
+STANDARD_SSD = REPO / "studies" / "standard.ssd"
 
 
 def fmus() -> dict[str, Path]:
@@ -44,14 +58,28 @@ def fmus() -> dict[str, Path]:
 
 
 def standard_fmu_args() -> list[str]:
+    """The packaged FMUs as `alignment-studies` takes them."""
     f = fmus()
     return ["--vehicle", str(f["RailVehicle"]), "--estimator", str(f["AlignmentEstimator"])]
 
 
-def run(*args, env: dict | None = None, cwd: Path | None = None, check: int | None = 0) -> subprocess.CompletedProcess:
-    """Runs `orchestrator ARGS...`; with `check` (default 0) asserts the exit code and shows stderr.
-    `env` adds to the environment (a value None removes the variable)."""
-    cmd = [str(orchestrator_binary()), *map(str, args)]
+def standard_case_args() -> list[str]:
+    """The standard case as `orchestrator run` and `export-ssp --system` take it: the shipped .ssd
+    with the packaged FMUs."""
+    f = fmus()
+    return [str(STANDARD_SSD), "--fmu", f"vehicle={f['RailVehicle']}", "--fmu", f"estimator={f['AlignmentEstimator']}"]
+
+
+def studies(*args, **kwargs) -> subprocess.CompletedProcess:
+    """Runs `alignment-studies ARGS...`, as [`run`] runs the orchestrator."""
+    return run(*args, binary=studies_binary(), **kwargs)
+
+
+def run(*args, env: dict | None = None, cwd: Path | None = None, check: int | None = 0,
+        binary: Path | None = None) -> subprocess.CompletedProcess:
+    """Runs `orchestrator ARGS...` (or `binary`); with `check` (default 0) asserts the exit code and
+    shows stderr. `env` adds to the environment (a value None removes the variable)."""
+    cmd = [str(binary or orchestrator_binary()), *map(str, args)]
     full_env = None
     if env is not None:
         full_env = dict(os.environ)

@@ -186,7 +186,7 @@ def run_system(components: list[Comp], connections: list[Connection], stop: floa
     return out
 
 
-# ---- the standard case (orchestrator/src/system.rs) -------------------------------------------
+# ---- the standard case (studies/standard.ssd) -------------------------------------------------
 
 STANDARD_CONNECTIONS = [
     Connection("vehicle.ws_acc_y", "estimator.ws_acc_y"),

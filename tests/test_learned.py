@@ -1,5 +1,5 @@
-"""The learned FIR smoother through the command line: `orchestrator study learn` fits it on the
-calibration seed, `orchestrator smooth --learned` applies it to a recorded run of another seed,
+"""The learned FIR smoother through the command line: `alignment-studies learn` fits it on the
+calibration seed, `alignment-studies smooth --learned` applies it to a recorded run of another seed,
 and the accuracy is measured here with scipy's Butterworth filters (tests/evaluation.py), a
 second implementation of the study's metrics."""
 
@@ -14,14 +14,14 @@ import orchestrator_cli as oc
 def test_learned_smoother_from_the_command_line_beats_the_paper_in_d1(tmp_path):
     learned = tmp_path / "learned.json"
     # A shorter training run than the default 1000 s keeps the test quick.
-    oc.run("study", "learn", "--stop", "200", "--out", learned, *oc.standard_fmu_args())
+    oc.studies("learn", "--stop", "200", "--out", learned, *oc.standard_fmu_args())
     run_dir = tmp_path / "run"
     oc.run(
-        "run", "--out", run_dir, "--quiet", *oc.standard_fmu_args(),
+        "run", "--out", run_dir, "--quiet", *oc.standard_case_args(),
         "--record", "vehicle.forward_speed,vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y,vehicle.distance,vehicle.alignment",
     )
     smoothed = tmp_path / "smoothed.csv"
-    oc.run("smooth", run_dir / "results.csv", "--learned", learned, "--out", smoothed)
+    oc.studies("smooth", run_dir / "results.csv", "--learned", learned, "--out", smoothed)
     run = oc.read_results(run_dir)
     out = oc.read_results(smoothed)
     assert out.columns[-2:] == ["alignment_learned", "alignment_hybrid"]
@@ -47,7 +47,7 @@ def test_a_corrupt_learned_file_is_named(tmp_path):
     csv.write_text("\n".join(rows) + "\n")
     bad = tmp_path / "learned.json"
     bad.write_text('{"format": 1, "speed": 20}')
-    p = oc.run("smooth", csv, "--learned", bad, "--out", tmp_path / "out.csv", check=None)
+    p = oc.studies("smooth", csv, "--learned", bad, "--out", tmp_path / "out.csv", check=None)
     assert p.returncode != 0
     assert str(bad) in p.stderr and "not a learned smoother file" in p.stderr, p.stderr
     assert not (tmp_path / "out.csv").exists()
@@ -60,7 +60,7 @@ def test_the_default_estimate_does_not_drift_over_6_km(tmp_path):
     validation nor study evaluation seed)."""
     run_dir = tmp_path / "run"
     oc.run(
-        "run", "--out", run_dir, "--quiet", "--stop", "300", *oc.standard_fmu_args(),
+        "run", "--out", run_dir, "--quiet", "--stop", "300", *oc.standard_case_args(),
         "--set", "vehicle.track_seed=7", "--interval", "0.01",
         "--record", "vehicle.distance,vehicle.alignment,estimator.distance,estimator.alignment,"
         "estimator.alignment_kalman,estimator.active_estimator",

@@ -30,8 +30,12 @@ def test_help_for_every_subcommand(sub):
         for s in ("run", "simulate", "info", "export-ssp"):
             assert f"  {s} " in p.stdout
     if sub == "run":
-        for option in ("--vehicle", "--estimator", "--stop", "--step", "--out", "--record", "--set", "--jacobi"):
+        for option in ("--fmu", "--stop", "--step", "--out", "--record", "--set", "--jacobi"):
             assert option in p.stdout
+        # The standard case's own FMU options are the studies' (`alignment-studies run`).
+        s = oc.studies("run", "--help").stdout
+        for option in ("--vehicle", "--estimator", "--stop", "--step", "--out", "--record", "--set", "--jacobi"):
+            assert option in s
 
 
 def test_no_subcommand_or_unknown_option_is_a_usage_error():
@@ -55,8 +59,8 @@ def test_corrupt_fmu_exit_2_names_the_file(corrupt_fmu, tmp_path):
     f = oc.fmus()
     for args in (["info", corrupt_fmu],
                  ["simulate", corrupt_fmu, "--stop", "1", "--step", "0.1", "--out", tmp_path / "o1"],
-                 ["run", "--vehicle", corrupt_fmu, "--estimator", f["AlignmentEstimator"], "--stop", "0.01", "--out", tmp_path / "o2"],
-                 ["run", "--vehicle", f["RailVehicle"], "--estimator", corrupt_fmu, "--stop", "0.01", "--out", tmp_path / "o3"]):
+                 ["run", oc.STANDARD_SSD, "--fmu", f"vehicle={corrupt_fmu}", "--fmu", f"estimator={f['AlignmentEstimator']}", "--stop", "0.01", "--out", tmp_path / "o2"],
+                 ["run", oc.STANDARD_SSD, "--fmu", f"vehicle={f['RailVehicle']}", "--fmu", f"estimator={corrupt_fmu}", "--stop", "0.01", "--out", tmp_path / "o3"]):
         p = oc.run(*args, check=2)
         assert "Corrupt.fmu" in p.stderr, p.stderr
         assert "Traceback" not in p.stderr and "panicked" not in p.stderr, p.stderr
@@ -207,16 +211,16 @@ def test_info_does_not_need_a_loadable_binary(tmp_path):
 
 
 def test_export_ssp_round_trip(tmp_path):
-    """export-ssp of the standard case, run back by the orchestrator: identical to the built-in
-    case; and fmpy's SSP reader and master (fmpy.ssp.simulation.simulate_ssp) run it too."""
+    """export-ssp of the standard case, run back by the orchestrator: identical to the shipped
+    .ssd's run; and fmpy's SSP reader and master (fmpy.ssp.simulation.simulate_ssp) run it too."""
     ssp = tmp_path / "standard.ssp"
-    oc.run("export-ssp", ssp, *oc.standard_fmu_args())
+    oc.run("export-ssp", ssp, "--system", *oc.standard_case_args())
     with zipfile.ZipFile(ssp) as z:
         names = set(z.namelist())
     assert {"SystemStructure.ssd", "resources/vehicle.fmu", "resources/estimator.fmu"} <= names
 
     oc.run("run", ssp, "--stop", "0.5", "--out", tmp_path / "from_ssp", "--quiet")
-    oc.run("run", "--stop", "0.5", "--out", tmp_path / "builtin", "--quiet", *oc.standard_fmu_args())
+    oc.run("run", "--stop", "0.5", "--out", tmp_path / "builtin", "--quiet", *oc.standard_case_args())
     a = (tmp_path / "from_ssp" / "results.csv").read_text()
     b = (tmp_path / "builtin" / "results.csv").read_text()
     assert a == b, "the exported system runs to the same results file, byte for byte"
@@ -350,7 +354,7 @@ def test_export_ssp_runs_in_libcosim_without_a_step_and_matches_jacobi(tmp_path)
     from libcosimpy.CosimObserver import CosimObserver
 
     ssp = tmp_path / "standard.ssp"
-    oc.run("export-ssp", ssp, *oc.standard_fmu_args())
+    oc.run("export-ssp", ssp, "--system", *oc.standard_case_args())
     ssd = zipfile.ZipFile(ssp).read("SystemStructure.ssd").decode()
     assert 'osp:FixedStepAlgorithm baseStepSize="0.001"' in ssd
     assert 'oms:FixedStepMaster description="oms-ma" stepSize="0.001"' in ssd
@@ -389,15 +393,17 @@ def test_export_ssp_runs_in_libcosim_without_a_step_and_matches_jacobi(tmp_path)
 def test_an_output_directory_has_a_manifest_and_no_stale_files(chain, tmp_path):
     """Issue 14: manifest.json traces a result (command line, --set, each FMU's GUID and
     SHA-256, time, files); a later run into the same directory removes the files of the earlier
-    one it would otherwise leave stale (the standard case's metrics.json beside a new results.csv)."""
+    one it would otherwise leave stale (the standard case's metrics.json beside a new results.csv).
+    The standard case with its metrics is `alignment-studies run`, which writes its results
+    through the master's output directory; the orchestrator's next run clears them."""
     import hashlib
     import json
 
     out = tmp_path / "out"
-    oc.run("run", "--stop", "5", "--quiet", "--out", out, "--set", "vehicle.track_seed=3", *oc.standard_fmu_args())
+    oc.studies("run", "--stop", "5", "--quiet", "--out", out, "--set", "vehicle.track_seed=3", *oc.standard_fmu_args())
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["settings"] == ["vehicle.track_seed=3"]
-    assert "--stop" in manifest["command"] and manifest["program"].startswith("orchestrator ")
+    assert "--stop" in manifest["command"] and manifest["program"].startswith("alignment-studies ")
     assert manifest["time_utc"].endswith("Z") and len(manifest["time_utc"]) == 20
     assert manifest["files"] == ["results.csv", "results.units.csv", "metrics.json"]
     for record in manifest["fmus"]:
@@ -410,7 +416,9 @@ def test_an_output_directory_has_a_manifest_and_no_stale_files(chain, tmp_path):
     oc.run("run", chain, "--step", "0.1", "--quiet", "--out", out)
     assert not (out / "metrics.json").exists(), "the earlier run's metrics would describe another run"
     assert oc.read_results(out).columns[1:] != []
-    assert json.loads((out / "manifest.json").read_text())["files"] == ["results.csv", "results.units.csv"]
+    second = json.loads((out / "manifest.json").read_text())
+    assert second["files"] == ["results.csv", "results.units.csv"]
+    assert second["program"].startswith("orchestrator ")
 
 
 def test_a_second_run_into_a_busy_output_directory_is_refused(tmp_path):
@@ -448,7 +456,7 @@ def test_smooth_refuses_to_replace_a_symlink(tmp_path):
     target.write_text("keep me\n")
     link = tmp_path / "link.csv"
     link.symlink_to(target)
-    p = oc.run("smooth", csv, "--out", link, check=None)
+    p = oc.studies("smooth", csv, "--out", link, check=None)
     assert p.returncode != 0 and "symbolic link" in p.stderr and str(link) in p.stderr, p.stderr
     assert link.is_symlink() and target.read_text() == "keep me\n"
 
@@ -494,7 +502,7 @@ def test_simulate_replay_feeds_a_record_back_in_step(tmp_path):
     run_dir = tmp_path / "run"
     oc.run("run", "--stop", "1", "--quiet", "--out", run_dir, "--set", "estimator.estimator=1",
            "--record", "vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y,vehicle.forward_speed,estimator.alignment",
-           *oc.standard_fmu_args())
+           *oc.standard_case_args())
     rec = oc.read_results(run_dir)
     signals = tmp_path / "signals.csv"
     names = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed"]

@@ -27,7 +27,7 @@ def _outputs(path):
 @pytest.fixture(scope="module")
 def standard(tmp_path_factory):
     out = tmp_path_factory.mktemp("standard")
-    oc.run("run", "--stop", "0.2", "--out", out, "--quiet", *oc.standard_fmu_args())
+    oc.run("run", "--stop", "0.2", "--out", out, "--quiet", *oc.standard_case_args())
     return out
 
 

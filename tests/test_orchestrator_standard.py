@@ -22,14 +22,14 @@ SENSORS = ("vehicle.ws_acc_y", "vehicle.ws_yaw_rate", "vehicle.frame_acc_y")
 def gs_2s(tmp_path_factory):
     """The orchestrator's standard case, 2 s at the default step (1 ms), every output recorded."""
     out = tmp_path_factory.mktemp("gs2")
-    oc.run("run", "--stop", "2", "--out", out, "--quiet", *oc.standard_fmu_args())
+    oc.run("run", "--stop", "2", "--out", out, "--quiet", *oc.standard_case_args())
     return oc.read_results(out)
 
 
 @pytest.fixture(scope="module")
 def jacobi_2s(tmp_path_factory):
     out = tmp_path_factory.mktemp("jacobi2")
-    oc.run("run", "--stop", "2", "--jacobi", "--out", out, "--quiet", *oc.standard_fmu_args())
+    oc.run("run", "--stop", "2", "--jacobi", "--out", out, "--quiet", *oc.standard_case_args())
     return oc.read_results(out)
 
 
@@ -64,7 +64,7 @@ def test_gauss_seidel_matches_python_master_20s(tmp_path):
     """The full standard run (20 s at 1 ms, the built-in default), recording only the compared
     variables (--record)."""
     started = time.perf_counter()
-    oc.run("run", "--out", tmp_path, "--quiet", "--record", ",".join(pm.COMPARED), *oc.standard_fmu_args())
+    oc.run("run", "--out", tmp_path, "--quiet", "--record", ",".join(pm.COMPARED), *oc.standard_case_args())
     wall = time.perf_counter() - started
     orch = oc.read_results(tmp_path)
     assert orch.columns == ["time", *pm.COMPARED]

@@ -1,4 +1,4 @@
-"""`orchestrator smooth` (the estimator's Kalman filter and Rauch-Tung-Striebel smoother run
+"""`alignment-studies smooth` (the estimator's Kalman filter and Rauch-Tung-Striebel smoother run
 offline over a recorded CSV) against a second implementation: a plain numpy Kalman filter and
 RTS smoother written here from the textbook equations (Särkkä 2013, sections 4.3 and 8.2), with
 the simplified model's matrices from sm_reference (scipy's expm for the exact discretization).
@@ -66,7 +66,7 @@ def test_smooth_command_equals_a_numpy_filter_and_smoother(tmp_path):
     args = ["smooth", csv, "--out", out]
     for k, v in settings.items():
         args += ["--set", f"{k}={v}"]
-    cli.run(*args)
+    cli.studies(*args)
     result = cli.read_results(out)
     # Row 0 of the CSV is the start (initial values): the filter steps from row 1 on.
     z = np.column_stack([sig["ws_acc_y"], sig["ws_yaw_rate"], sig["frame_acc_y"]])[1:]

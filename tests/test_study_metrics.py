@@ -1,4 +1,4 @@
-"""The orchestrator's band metrics (metrics.json of a standard-case run) against scipy: the same
+"""The studies' band metrics (metrics.json of `alignment-studies run`) against scipy: the same
 procedure (common uniform distance grid of 0.05 m by linear interpolation, butter order 4
 band-pass as second-order sections, sosfiltfilt, 10 m trimmed at each end, J and Jrel)
 implemented independently with numpy and scipy must give the same numbers."""
@@ -11,7 +11,7 @@ import subprocess
 import numpy as np
 from scipy.signal import butter, sosfiltfilt
 
-from orchestrator_cli import orchestrator_binary
+from orchestrator_cli import studies_binary
 from project import fmu_dir
 
 BANDS = {"whole": (3.0, 200.0), "D1": (3.0, 25.0), "D2": (25.0, 70.0), "D3": (70.0, 200.0)}
@@ -36,7 +36,7 @@ def scipy_metrics(table) -> dict[str, tuple[float, float]]:
 
 def test_band_metrics_match_scipy(tmp_path):
     subprocess.run(
-        [str(orchestrator_binary()), "run", "--stop", "20", "--quiet", "--out", str(tmp_path),
+        [str(studies_binary()), "run", "--stop", "20", "--quiet", "--out", str(tmp_path),
          "--vehicle", str(fmu_dir() / "RailVehicle.fmu"), "--estimator", str(fmu_dir() / "AlignmentEstimator.fmu"),
          "--record", "vehicle.distance,vehicle.alignment,estimator.distance,estimator.alignment"],
         check=True, capture_output=True,

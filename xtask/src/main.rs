@@ -5,8 +5,7 @@
 //!   with warnings denied, cargo test, packaging, the Python harness (tests/, run with pytest in
 //!   `.venv`, created on demand), and a summary;
 //! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
-//!   the estimator variants
-//!   through the orchestrator.
+//!   the estimator variants with `alignment-studies` (the studies on top of the orchestrator).
 
 mod fmus;
 mod package;
@@ -25,11 +24,13 @@ commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
                                cargo fmt --check, clippy -D warnings, cargo test --workspace, packaging, pytest tests/ in .venv
-  demo [-- <study args>]       package the FMUs, run the standard case and the studies through the orchestrator
+  demo [-- <study args>]       package the FMUs, run the standard case and the studies (alignment-studies)
   help                         this text";
 
 /// Where the orchestrator binary is, for the tests that run it.
 const ORCHESTRATOR_ENV: &str = "ORCHESTRATOR";
+/// Where the studies' binary is, for the tests that run it.
+const STUDIES_ENV: &str = "ALIGNMENT_STUDIES";
 
 /// The environment variable telling the Python harness where the packaged FMUs are (the target
 /// directory may be moved by CARGO_TARGET_DIR or cargo config).
@@ -156,17 +157,20 @@ fn test(o: TestOptions) -> Result<bool> {
             .map(PathBuf::from);
         Ok(())
     }));
-    let mut orchestrator: Option<PathBuf> = None;
-    stages.push(timed("build the orchestrator (release)", || {
-        orchestrator = Some(build_orchestrator()?);
-        Ok(())
-    }));
+    let mut binaries: Option<Binaries> = None;
+    stages.push(timed(
+        "build the orchestrator and alignment-studies (release)",
+        || {
+            binaries = Some(build_binaries()?);
+            Ok(())
+        },
+    ));
     let env = |cmd: &mut Command| {
         if let Some(dir) = &fmu_dir {
             cmd.env(FMU_DIR_ENV, dir);
         }
-        if let Some(bin) = &orchestrator {
-            cmd.env(ORCHESTRATOR_ENV, bin);
+        if let Some(b) = &binaries {
+            b.env(cmd);
         }
     };
     if o.rust {
@@ -216,7 +220,7 @@ fn test(o: TestOptions) -> Result<bool> {
         let pytest = "pytest tests";
         match (&fmu_dir, venv_ok) {
             (Some(dir), true) => stages.push(timed(pytest, || {
-                run_pytest(dir, orchestrator.as_deref(), &o.pytest_args)
+                run_pytest(dir, binaries.as_ref(), &o.pytest_args)
             })),
             (None, _) => stages.push(Stage {
                 name: pytest,
@@ -251,31 +255,52 @@ fn test(o: TestOptions) -> Result<bool> {
     Ok(all_passed)
 }
 
-/// Builds the orchestrator in release and returns the binary's path.
-fn build_orchestrator() -> Result<PathBuf> {
-    workspace::run(workspace::cargo().args(["build", "--release", "-p", "orchestrator"]))?;
-    let bin = workspace::target_dir()?
-        .join("release")
-        .join("orchestrator");
-    anyhow::ensure!(
-        bin.exists(),
-        "the orchestrator binary is not at {}",
-        bin.display()
-    );
-    Ok(bin)
+/// The two programs: the master and the studies on top of it.
+struct Binaries {
+    orchestrator: PathBuf,
+    studies: PathBuf,
+}
+
+impl Binaries {
+    /// Tells a test run where they are.
+    fn env(&self, cmd: &mut Command) {
+        cmd.env(ORCHESTRATOR_ENV, &self.orchestrator)
+            .env(STUDIES_ENV, &self.studies);
+    }
+}
+
+/// Builds the orchestrator and alignment-studies in release and returns the binaries' paths.
+fn build_binaries() -> Result<Binaries> {
+    workspace::run(workspace::cargo().args([
+        "build",
+        "--release",
+        "-p",
+        "orchestrator",
+        "-p",
+        "alignment-studies",
+    ]))?;
+    let release = workspace::target_dir()?.join("release");
+    let b = Binaries {
+        orchestrator: release.join("orchestrator"),
+        studies: release.join("alignment-studies"),
+    };
+    for bin in [&b.orchestrator, &b.studies] {
+        anyhow::ensure!(bin.exists(), "no binary at {}", bin.display());
+    }
+    Ok(b)
 }
 
 fn run_pytest(
     fmu_dir: &std::path::Path,
-    orchestrator: Option<&std::path::Path>,
+    binaries: Option<&Binaries>,
     extra: &[String],
 ) -> Result<()> {
     let mut cmd = Command::new(python::python());
     cmd.current_dir(workspace::root())
         .env(FMU_DIR_ENV, fmu_dir)
         .args(["-m", "pytest", "-q"]);
-    if let Some(bin) = orchestrator {
-        cmd.env(ORCHESTRATOR_ENV, bin);
+    if let Some(b) = binaries {
+        b.env(&mut cmd);
     }
     // `tests` unless the extra arguments name test files themselves (pytest would run both).
     if !extra
@@ -296,8 +321,9 @@ fn run_pytest(
     }
 }
 
-/// The main job: packages the FMUs, builds the orchestrator, runs the standard case through it
-/// (loading the .fmu files; it writes results.csv and metrics.json), the paper's studies and
+/// The main job: packages the FMUs, builds the binaries, runs the standard case with
+/// `alignment-studies run` (through the master's library, loading the .fmu files; it writes
+/// results.csv and metrics.json), the paper's studies and
 /// the variants on held-out track seeds, each command's output in a log beside its results;
 /// then prints one table, the headline: the estimator FMU's estimators beside the paper, mean
 /// over the held-out seeds, and where the full reports are.
@@ -311,7 +337,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
             .with_context(|| format!("{id}.fmu was not packaged"))
     };
     let (vehicle, estimator) = (find("RailVehicle")?, find("AlignmentEstimator")?);
-    let orchestrator = build_orchestrator()?;
+    let studies = build_binaries()?.studies;
     let out = workspace::target_dir()?.join("demo");
     let study_dir = out.join("study");
     std::fs::create_dir_all(&study_dir)
@@ -324,7 +350,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
         cmd.stdout(file.try_clone()?).stderr(file);
         workspace::run(cmd).with_context(|| format!("see {}", log.display()))
     };
-    let mut run = Command::new(&orchestrator);
+    let mut run = Command::new(&studies);
     run.arg("run")
         .arg("--vehicle")
         .arg(&vehicle)
@@ -334,15 +360,14 @@ fn demo(extra: Vec<String>) -> Result<()> {
         .arg(&out)
         .arg("--quiet");
     logged(
-        "orchestrator run: the standard case, RailVehicle.fmu -> AlignmentEstimator.fmu, 20 s at 1 ms",
+        "alignment-studies run: the standard case (studies/standard.ssd), RailVehicle.fmu -> AlignmentEstimator.fmu, 20 s at 1 ms",
         &mut run,
         &out.join("run.log"),
     )?;
     // The studies share the FMUs, the output directory and the extra arguments.
     let study = |command: &str, what: &str| {
-        let mut study = Command::new(&orchestrator);
+        let mut study = Command::new(&studies);
         study
-            .arg("study")
             .arg(command)
             .arg("--vehicle")
             .arg(&vehicle)
@@ -353,7 +378,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
             .arg("--quiet")
             .args(&extra);
         logged(
-            &format!("orchestrator study {command}: {what}"),
+            &format!("alignment-studies {command}: {what}"),
             &mut study,
             &study_dir.join(format!("{command}.log")),
         )
@@ -376,7 +401,7 @@ fn demo(extra: Vec<String>) -> Result<()> {
 /// The paper's Jrel for the standard case, whole / D1 / D2 / D3 (its results table).
 const PAPER: [f64; 4] = [0.25, 0.48, 0.26, 0.15];
 
-/// Prints the headline table from `study variants`' JSON: the standard case's estimator-FMU rows
+/// Prints the headline table from `alignment-studies variants`' JSON: the standard case's estimator-FMU rows
 /// (mean Jrel over the held-out seeds) under the paper's.
 fn headline(json: &std::path::Path) -> Result<()> {
     let text =
