@@ -65,8 +65,8 @@ fn main() {
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").expect("cargo sets it"));
     std::fs::write(out_dir.join("calibrated.rs"), code).expect("writing calibrated.rs");
 
-    // The tap banks are built into the library for offline use. Before the first `orchestrator
-    // study taps` there are none: empty files, which `learned::shipped` reports as missing.
+    // The tap banks are built into the library for offline use. Before the first
+    // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
     for name in ["learned.taps", "learned-nominal.taps"] {
         let taps = manifest.join("resources").join(name);
         println!("cargo::rerun-if-changed={}", taps.display());

@@ -1,7 +1,7 @@
 //! Q and R: from the calibration file in the FMU's resources when it holds them, otherwise the
 //! diagonal model built from the FMI noise parameters.
 //!
-//! The calibration file (`resources/calibration.toml`) is written by `orchestrator study
+//! The calibration file (`resources/calibration.toml`) is written by `alignment-studies
 //! calibrate` from vehicle runs, as the paper does (system error `x_k - F x_{k-1}` and measurement
 //! error `z_k - H x_k`). When it holds no matrices the FMU uses the **diagonal model** below.
 //! Format:

@@ -29,7 +29,7 @@ fn regenerating_the_calibration_reproduces_the_committed_file() {
     );
 }
 
-/// `study calibrate --set vehicle.vehicle=manchester.toml` then the studies with
+/// `alignment-studies calibrate --set vehicle.vehicle=manchester.toml` then the studies with
 /// `--set estimator.calibration_file=...`: the calibration carries the other vehicle's fixed
 /// parameters, and on that vehicle (held-out seed) the filter made for it beats the shipped one
 /// (made for ML95).

@@ -29,7 +29,7 @@
 //!
 //! # Estimate
 //! The Kalker-coefficient scale is a linear function of the features, fitted by least squares on
-//! the training runs of every trained condition at each bank speed (`orchestrator study taps`),
+//! the training runs of every trained condition at each bank speed (`alignment-studies taps`),
 //! blended linearly in speed like the taps, and clamped to the trained range. On the validation
 //! seeds at 20 m/s it reaches about +-0.1 after 200 m of track (a scale of 1.0, 0.75 or 0.5).
 

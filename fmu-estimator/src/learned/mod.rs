@@ -6,7 +6,7 @@
 //! - [`bank`]: the tap bank file (format, provenance, checks);
 //! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
 //!
-//! How the taps are fitted (`orchestrator study taps`, `orchestrator/src/study/learned/`) and
+//! How the taps are fitted (`alignment-studies taps`, `studies/src/study/learned/`) and
 //! what they reach is in `docs/cross-level.md` sections 5-6 and `docs/accuracy.md`.
 
 pub mod bank;
@@ -35,7 +35,7 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
     };
     if bytes.is_empty() {
         return Some(Err(format!(
-            "this build has no tap bank resources/{name}: run `orchestrator study taps`"
+            "this build has no tap bank resources/{name}: run `alignment-studies taps`"
         )));
     }
     Some(Bank::parse(

@@ -136,7 +136,7 @@ fn matrix_rows<const N: usize>(m: &nalgebra::SMatrix<f64, N, N>) -> String {
 pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> String {
     let p = &c.params;
     format!(
-        "# Calibration of the AlignmentEstimator FMU, written by `orchestrator study calibrate`.\n\
+        "# Calibration of the AlignmentEstimator FMU, written by `alignment-studies calibrate`.\n\
          # Regenerate it with that command; a test checks that doing so reproduces this file.\n\
          # {provenance}\n\
          status = \"calibrated against the RailVehicle FMU (identification seed {identification_seed}, calibration seed {seed})\"\n\
@@ -216,7 +216,7 @@ pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, crate::Er
     })
 }
 
-/// The provenance line `orchestrator study calibrate` writes into the file.
+/// The provenance line `alignment-studies calibrate` writes into the file.
 pub const PROVENANCE: &str = "Identification: lateral irregularities only, no noise; calibration and tuning: standard conditions.";
 
 /// The calibration file's text for candidate factors, for a temporary file the estimator reads.

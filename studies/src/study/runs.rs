@@ -249,8 +249,8 @@ pub fn standard_run(
         .chain(vehicle)
         .collect();
     // The paper's cases measure the paper's filter (estimator 1), unless the user asks for
-    // another with --set estimator.estimator=2; `study variants` compares the FMU's default
-    // learned filter with it.
+    // another with --set estimator.estimator=2; `alignment-studies variants` compares the FMU's
+    // default learned filter with it.
     system.components[1].parameters = std::iter::once(("estimator".to_string(), Value::Integer(1)))
         .chain(fmus.estimator_settings.iter().cloned())
         .chain(estimator)

@@ -46,7 +46,7 @@
 //! of order 2 ([`causal_hybrid`]), whose complement falls only as `1 / frequency`, so part of the
 //! Kalman filter's D1 error comes through.
 //!
-//! # Measured (`study variants`, held-out seeds 1-5, 2026-11-21)
+//! # Measured (`alignment-studies variants`, held-out seeds 1-5, 2026-11-21)
 //! Jrel whole / D1 / D2 / D3, standard case; paper 0.25 / 0.48 / 0.26 / 0.15:
 //! - learned smoother alone 0.66 / 0.09 / 0.15 / 0.89 (its window cannot see D3);
 //! - hybrid with the shaping filter's RTS smoother (split chosen: 30 m) 0.089 / 0.085 / 0.047 /
@@ -120,7 +120,7 @@ pub struct Partner {
 }
 
 /// The learned smoother of a vehicle at one speed and step: grid, anti-alias filter, taps, and
-/// the hybrid's split and Kalman partner. Saved as JSON by `orchestrator study learn`.
+/// the hybrid's split and Kalman partner. Saved as JSON by `alignment-studies learn`.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct LearnedSmoother {
     /// Format of the saved file; [`FORMAT`].

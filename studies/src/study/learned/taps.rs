@@ -1,5 +1,5 @@
 //! The tap bank of the estimator FMU's learned filter, fitted in the metric's bands
-//! (`orchestrator study taps`).
+//! (`alignment-studies taps`).
 //!
 //! # Method
 //! For every speed of the bank, sensor set (three sensors, or with the wheelset roll-rate
@@ -110,7 +110,7 @@ impl Options {
             roll_rate: true,
             training_seed: 101,
             validation_seeds: vec![102, 103, 104, 105, 106],
-            command: "orchestrator study taps".into(),
+            command: "alignment-studies taps".into(),
         }
     }
 }

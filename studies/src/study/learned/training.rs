@@ -98,7 +98,7 @@ fn validation_len() -> usize {
 }
 
 /// The first [`STOP`] s of a training run, which the taps are not fitted on: where [`learn`]
-/// chooses the split (and `study learn` the shaping filter's virtual measurement).
+/// chooses the split (and `alignment-studies learn` the shaping filter's virtual measurement).
 pub fn validation(run: &Record) -> Record {
     run.head(validation_len())
 }
