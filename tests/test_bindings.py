@@ -119,7 +119,7 @@ def test_the_smoother_and_parameters_are_reachable(vehicle_signals):
 
 
 def test_band_metrics_equal_the_command_lines(tmp_path):
-    oc.run("run", "--stop", "20", "--quiet", "--out", tmp_path, *oc.standard_fmu_args(),
+    oc.studies("run", "--stop", "20", "--quiet", "--out", tmp_path, *oc.standard_fmu_args(),
            "--record", "vehicle.distance,vehicle.alignment,estimator.distance,estimator.alignment")
     cli = json.loads((tmp_path / "metrics.json").read_text())["bands"]
     r = oc.read_results(tmp_path)

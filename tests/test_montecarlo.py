@@ -1,5 +1,5 @@
 """Monte-Carlo studies on Dask (track_alignment.montecarlo): each case a task, and each case's
-figures equal to the studies' own (`study variants`, the estimator FMU's table) for the same
+figures equal to the studies' own (`alignment-studies variants`, the estimator FMU's table) for the same
 seeds, conditions and estimators, to the last bit."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ ESTIMATORS = {"paper's filter (estimator 1)": {"estimator": 1}, "learned, causal
 @pytest.fixture(scope="module")
 def study(tmp_path_factory) -> dict:
     out = tmp_path_factory.mktemp("variants")
-    oc.run("study", "variants", "--seeds", ",".join(map(str, SEEDS)), "--quiet", "--out", out, *oc.standard_fmu_args())
+    oc.studies("variants", "--seeds", ",".join(map(str, SEEDS)), "--quiet", "--out", out, *oc.standard_fmu_args())
     return json.loads((out / "variants.json").read_text())
 
 

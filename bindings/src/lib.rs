@@ -4,8 +4,8 @@
 //! | Python | Rust it calls | equal to |
 //! |---|---|---|
 //! | `estimate` | `fmu_estimator::offline::process_columns` | the estimator FMU's outputs, bit for bit |
-//! | `band_metrics`, `bandpass` | the studies' `metrics::evaluate`, `metrics::bandpass` | `orchestrator study` figures |
-//! | `simulate` | the co-simulation master, one FMU | `orchestrator run` of that FMU |
+//! | `band_metrics`, `bandpass` | the studies' `metrics::evaluate`, `metrics::bandpass` | `alignment-studies` figures |
+//! | `simulate` | the co-simulation master, one FMU | `orchestrator simulate` of that FMU |
 //!
 //! Why a thin layer: every number comes from the same code the FMU and the CLI run, so the
 //! bindings add conversions and nothing else. Input arrays are read where numpy holds them (no

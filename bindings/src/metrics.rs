@@ -1,8 +1,9 @@
-//! The EN 13848 band metrics of the studies (the same function `study` reports with).
+//! The EN 13848 band metrics of the studies (the same function `alignment-studies` reports
+//! with).
 
 use crate::convert::{bad, slice};
+use alignment_studies::study::metrics::{self, BANDS, Band};
 use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArrayLike1};
-use orchestrator::study::metrics::{self, BANDS, Band};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 

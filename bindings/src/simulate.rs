@@ -12,7 +12,7 @@ use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// Runs the FMU at `fmu` from 0 to `stop_time` with communication step `step`, after applying
-/// `parameters` (`{name: value}`, as `orchestrator run --set`), and returns `{"time": ...,
+/// `parameters` (`{name: value}`, as `orchestrator simulate --set`), and returns `{"time": ...,
 /// variable: ...}` for `variables` (default: every output).
 #[pyfunction]
 #[pyo3(signature = (fmu, stop_time, *, step=1e-3, parameters=None, variables=None))]

@@ -2,7 +2,7 @@
 estimator over its sensors, the band metrics against the track's truth) as one task each, over
 seeds x vehicles x speeds x Kalker scales, for sweeps larger than one machine.
 
-A case is computed exactly as the studies compute it (``alignment-studies study variants``):
+A case is computed exactly as the studies compute it (``alignment-studies variants``):
 the RailVehicle FMU alone through the master for ``stop`` seconds at 1 ms with ``track_seed =
 seed`` and ``noise_seed = seed + 1000``; row 0 (before any step) dropped; the estimator over the
 samples; :func:`track_alignment.band_metrics` of its ``alignment`` at its own ``distance``
