@@ -35,6 +35,26 @@ impl Csv {
         Csv::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
     }
 
+    /// Reads a table by its extension: `.parquet` through [`crate::parquet`] (its rows numbered
+    /// from 1 in [`Csv::lines`], the header as line 0), anything else as CSV.
+    pub fn read_any(path: &Path) -> Result<Csv, String> {
+        if !crate::parquet::is_parquet(path) {
+            return Csv::read(path);
+        }
+        let t = crate::parquet::read(path)?;
+        let mut seen = std::collections::HashSet::new();
+        if let Some(dup) = t.names.iter().find(|n| !seen.insert(n.as_str())) {
+            return Err(format!("{}: column '{dup}' appears twice", path.display()));
+        }
+        let rows = t.columns.first().map_or(0, Vec::len);
+        Ok(Csv {
+            names: t.names,
+            columns: t.columns,
+            lines: (1..=rows).collect(),
+            header_line: 0,
+        })
+    }
+
     pub fn parse(text: &str) -> Result<Csv, String> {
         Csv::parse_finite(text, &[])
     }

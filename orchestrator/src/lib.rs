@@ -5,6 +5,7 @@
 //! - [`resolve`]: checks a system against its FMUs (connections, types, parameters, algebraic loops);
 //! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi stepping;
 //! - [`record`]: the results writer;
+//! - [`parquet`]: Parquet tables of numbers (recordings and results), with units and provenance;
 //! - [`simulate`]: one FMU with input signals from a CSV file;
 //! - [`info`]: the description of an FMU;
 //! - [`cli`]: the command line's commands as functions returning values.
@@ -24,6 +25,7 @@ pub mod info;
 pub mod input;
 pub mod master;
 pub mod outdir;
+pub mod parquet;
 pub mod record;
 pub mod resolve;
 pub mod simulate;

@@ -34,8 +34,24 @@ pub struct Signals {
 }
 
 impl Signals {
-    /// Reads a CSV file; errors name the file, the line and the column.
+    /// Reads a CSV file, or a Parquet file by its `.parquet` extension ([`crate::parquet`]);
+    /// errors name the file, the line (a Parquet file: the row) and the column.
     pub fn read(path: &Path) -> Result<Signals, String> {
+        if crate::parquet::is_parquet(path) {
+            let csv = crate::csv::Csv::read_any(path).map_err(|e| format!("input file {e}"))?;
+            if let Some(k) = csv
+                .columns
+                .first()
+                .and_then(|t| t.iter().position(|x| !x.is_finite()))
+            {
+                return Err(format!(
+                    "input file {}: row {}: time is not a finite number",
+                    path.display(),
+                    k + 1
+                ));
+            }
+            return Self::from_csv(csv).map_err(|e| format!("input file {}: {e}", path.display()));
+        }
         let text = crate::input::read_text(path, crate::input::CSV_LIMIT)
             .map_err(|e| format!("cannot read input file {}: {e}", path.display()))?;
         Self::parse(&text).map_err(|e| format!("input file {}: {e}", path.display()))
@@ -61,7 +77,11 @@ impl Signals {
     }
 
     pub fn parse(text: &str) -> Result<Signals, String> {
-        let csv = crate::csv::Csv::parse_finite(text, &["time"])?;
+        Self::from_csv(crate::csv::Csv::parse_finite(text, &["time"])?)
+    }
+
+    /// The signals of a table whose first column is `time` (finite, checked by the reader).
+    fn from_csv(csv: crate::csv::Csv) -> Result<Signals, String> {
         if csv.names.first().map(String::as_str) != Some("time") {
             return Err(format!(
                 "line {}: the first column must be 'time', found '{}'",

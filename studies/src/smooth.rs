@@ -1,7 +1,9 @@
 //! `alignment-studies smooth`: the estimator run offline over recorded sensor signals, filtered and
-//! smoothed (Rauch-Tung-Striebel), from a CSV file such as the `results.csv` of a run.
+//! smoothed (Rauch-Tung-Striebel), from a CSV or Parquet file (by extension) such as the
+//! `results.csv` of a run; the output is Parquet when its name ends in `.parquet` (units and the
+//! command's provenance in its metadata, [`orchestrator::parquet`]), else CSV.
 //!
-//! Input: a CSV with a `time` column at a constant step and the columns `speed` (or
+//! Input: a table with a `time` column at a constant step and the columns `speed` (or
 //! `forward_speed`), `ws_acc_y`, `ws_yaw_rate` and `frame_acc_y`, each optionally prefixed by a
 //! component name (`vehicle.ws_acc_y`). Row `k` holds the samples at the end of the step that
 //! ends at `time[k]`; a first row at the start time with the initial values (as `results.csv`
@@ -18,7 +20,7 @@ use std::path::Path;
 
 /// Reads the samples and the step from a CSV file.
 pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String> {
-    let cols = orchestrator::csv::Csv::read(path)?;
+    let cols = orchestrator::csv::Csv::read_any(path)?;
     let find = |names: &[&str]| {
         cols.column(names)
             .map_err(|e| format!("{}: {e}", path.display()))
@@ -83,6 +85,42 @@ pub fn to_csv(time: &[f64], out: &Processed, learned: Option<&(Vec<f64>, Vec<f64
     String::from_utf8(s).expect("digits, signs and letters only")
 }
 
+/// The output's column names and values (as [`to_csv`] writes them), for a Parquet output.
+fn output_columns(
+    time: &[f64],
+    out: &Processed,
+    learned: Option<&(Vec<f64>, Vec<f64>)>,
+) -> (Vec<String>, Vec<Vec<f64>>) {
+    let smoothed = |i: usize| -> Vec<f64> {
+        out.smoothed
+            .as_deref()
+            .map_or(vec![f64::NAN; time.len()], |v| {
+                v.iter().map(|e| if i == 0 { e.0 } else { e.1 }).collect()
+            })
+    };
+    let mut names = vec![
+        "time",
+        "distance",
+        "alignment_filtered",
+        "alignment_filtered_std",
+        "alignment_smoothed",
+        "alignment_smoothed_std",
+    ];
+    let mut cols = vec![
+        time.to_vec(),
+        out.distance.clone(),
+        out.filtered.iter().map(|e| e.0).collect(),
+        out.filtered.iter().map(|e| e.1).collect(),
+        smoothed(0),
+        smoothed(1),
+    ];
+    if let Some((a, b)) = learned {
+        names.extend(["alignment_learned", "alignment_hybrid"]);
+        cols.extend([a.clone(), b.clone()]);
+    }
+    (names.into_iter().map(String::from).collect(), cols)
+}
+
 /// The learned smoother saved in `file` applied to `samples` (step `h`): its learned and hybrid
 /// estimates per sample.
 fn learned_columns(
@@ -119,6 +157,14 @@ pub fn smooth_file(
     // Refused before any work: a symlink, FIFO or device given as --out is never replaced.
     orchestrator::outdir::refuse_special(output).map_err(|e| e.to_string())?;
     let (time, h, samples) = read_samples(input)?;
+    let provenance = serde_json::json!({
+        "command": "alignment-studies smooth",
+        "version": env!("CARGO_PKG_VERSION"),
+        "input": input.display().to_string(),
+        "settings": overrides,
+        "calibration": calibration.map(|p| p.display().to_string()),
+        "learned": learned.map(|p| p.display().to_string()),
+    });
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;
     for n in notes {
@@ -131,9 +177,24 @@ pub fn smooth_file(
         .map(|f| learned_columns(f, &samples, h, &out.distance))
         .transpose()?;
     // Per process: two commands writing the same output never share a temporary file.
-    let tmp = output.with_extension(format!("csv.{}.partial", std::process::id()));
-    std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
-        .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+    let parquet = orchestrator::parquet::is_parquet(output);
+    let ext = if parquet { "parquet" } else { "csv" };
+    let tmp = output.with_extension(format!("{ext}.{}.partial", std::process::id()));
+    if parquet {
+        let (names, columns) = output_columns(&time, &out, learned.as_ref());
+        let units: Vec<String> = names
+            .iter()
+            .map(|n| if n == "time" { "s" } else { "m" }.to_string())
+            .collect();
+        let cols: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+        orchestrator::parquet::write(&tmp, &names, &units, &cols, &provenance.to_string())
+            .inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            })?;
+    } else {
+        std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
+            .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
+    }
     std::fs::rename(&tmp, output).map_err(|e| {
         format!(
             "cannot rename {} to {}: {e}",

@@ -8,9 +8,10 @@ use std::path::PathBuf;
 
 #[derive(Args, Clone, Debug)]
 pub struct SmoothArgs {
-    /// The CSV of recorded signals.
+    /// The recorded signals: CSV, or Parquet by the .parquet extension.
     pub input: PathBuf,
-    /// The CSV to write (time, distance, alignment_filtered[_std], alignment_smoothed[_std]).
+    /// The table to write (time, distance, alignment_filtered[_std], alignment_smoothed[_std]):
+    /// Parquet if it ends in .parquet, else CSV.
     #[arg(long, default_value = "out/smoothed.csv")]
     pub out: PathBuf,
     /// Set an estimator parameter: name=value (repeatable), e.g. alignment_model=3.
