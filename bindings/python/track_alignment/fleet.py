@@ -275,6 +275,9 @@ def plot_map(segments, path: Path) -> None:
         ax.set_ylabel(f"alignment SD, {label} [mm]")
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
+    from matplotlib.ticker import MaxNLocator
+
+    axes[1].xaxis.set_major_locator(MaxNLocator(integer=True))
     axes[1].set_xlabel(f"segment ({segments['end_m'][0] - segments['start_m'][0]:.0f} m each)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -71,3 +71,31 @@ def synthesize(
             write_parquet(out / "truth.parquet", {"distance": cols["distance"], "alignment": cols["alignment"]},
                           {"source": "track_alignment.synthetic", "track_seed": track_seed})
     return paths
+
+
+def main(argv=None) -> int:
+    """``python -m track_alignment.synthetic --vehicle-fmu F --out DIR [--passes N]``."""
+    import argparse
+    import sys
+
+    p = argparse.ArgumentParser(prog="python -m track_alignment.synthetic", description=__doc__.split("\n\n")[0])
+    p.add_argument("--vehicle-fmu", required=True)
+    p.add_argument("--out", required=True)
+    p.add_argument("--passes", type=int, default=50)
+    p.add_argument("--track-seed", type=int, default=1)
+    p.add_argument("--length", type=float, default=1000.0, help="m")
+    a = p.parse_args(argv)
+    try:
+        paths = synthesize(a.out, a.vehicle_fmu, passes=a.passes, track_seed=a.track_seed, length=a.length)
+    except (ValueError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    except RuntimeError as e:
+        print(f"error: a vehicle run failed: {e}", file=sys.stderr)
+        return 3
+    print(f"{len(paths)} passes of {a.length:.0f} m over track seed {a.track_seed} -> {a.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
