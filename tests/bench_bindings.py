@@ -5,8 +5,9 @@
 - the fleet pipeline's wall time on a LocalCluster with 1 and 2 workers over a synthetic fleet
   (``--passes`` passes of 1 km, generated first; generation not timed).
 
-Run: ``.venv/bin/python tests/bench_bindings.py`` after ``cargo xtask test`` (or ``maturin
-develop``) and ``cargo xtask fmu``. Figures are only comparable within one run on a quiet
+Run, after ``cargo xtask fmu``: ``VIRTUAL_ENV=.venv .venv/bin/maturin develop --release
+--manifest-path bindings/Cargo.toml`` (``cargo xtask test`` installs a dev-profile build), then
+``.venv/bin/python tests/bench_bindings.py``. Figures are only comparable within one run on a quiet
 machine."""
 
 from __future__ import annotations

@@ -210,7 +210,7 @@ fn test(o: TestOptions) -> Result<bool> {
             Ok(())
         }));
         if venv_ok {
-            stages.push(timed("python bindings (maturin develop --release)", || {
+            stages.push(timed("python bindings (maturin develop)", || {
                 venv_ok = false;
                 python::install_bindings()?;
                 venv_ok = true;
@@ -395,7 +395,13 @@ fn demo(extra: Vec<String>) -> Result<()> {
     let fleet_dir = out.join("fleet");
     let mut synth = Command::new(python::python());
     synth
-        .args(["-m", "track_alignment.synthetic", "--passes", "20", "--vehicle-fmu"])
+        .args([
+            "-m",
+            "track_alignment.synthetic",
+            "--passes",
+            "20",
+            "--vehicle-fmu",
+        ])
         .arg(&vehicle)
         .arg("--out")
         .arg(fleet_dir.join("passes"));

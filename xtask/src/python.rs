@@ -58,16 +58,17 @@ pub fn ensure_venv() -> Result<PathBuf> {
     Ok(python())
 }
 
-/// Builds the Python bindings (`bindings/`, PyO3) in release and installs them into `.venv` as
-/// the package `track_alignment`, with the pinned maturin; the build shares `target/` with the
-/// rest of the workspace.
+/// Builds the Python bindings (`bindings/`, PyO3) and installs them into `.venv` as the package
+/// `track_alignment`, with the pinned maturin. The dev profile (optimized, see Cargo.toml) reuses
+/// the libraries `cargo test` compiled, where a release build would compile the workspace again
+/// (minutes of CI); benchmarks build with `maturin develop --release`.
 pub fn install_bindings() -> Result<()> {
     let bin = if cfg!(windows) { "Scripts" } else { "bin" };
     let maturin = venv_dir().join(bin).join("maturin");
     let mut cmd = Command::new(&maturin);
     cmd.current_dir(root())
         .env("VIRTUAL_ENV", venv_dir())
-        .args(["develop", "--release", "--manifest-path"])
+        .args(["develop", "--manifest-path"])
         .arg(root().join("bindings").join("Cargo.toml"));
     let line = command_line(&cmd);
     run(&mut cmd).with_context(|| format!("`{line}` could not build the Python bindings"))
