@@ -20,7 +20,9 @@
 //! `--replay` reads the signals one step ahead (`t` takes the row of `t + h`), so that a record
 //! replays exactly. A time within 1e-9 (relative) of a row's time takes that row's value.
 
-use crate::master::{Cosimulation, ExternalValue, RunError, RunOptions, RunSummary};
+use crate::master::{
+    Cosimulation, ExternalValue, ProgressFn, RunError, RunOptions, RunSummary, no_inputs,
+};
 use crate::system::{Component, Experiment, System};
 use model_description::{BaseType, Variability};
 use std::path::Path;
@@ -137,12 +139,14 @@ impl Signals {
 
 /// Runs one FMU with `signals` on its inputs. Implemented as a one-component system whose
 /// inputs are set before every step, so it shares the master's recording and error handling.
+/// Progress goes to `progress` when [`RunOptions::progress`] asks for it.
 pub fn simulate(
     fmu: &Path,
     signals: Option<&Signals>,
     settings: &[(String, String)],
     opts: &RunOptions,
     replay: bool,
+    progress: &mut ProgressFn<'_>,
 ) -> Result<RunSummary, RunError> {
     let name = fmu
         .file_stem()
@@ -164,7 +168,7 @@ pub fn simulate(
         cosim.set(&crate::system::Endpoint::new(&name, variable), value)?;
     }
     match signals {
-        None => cosim.run(opts),
+        None => cosim.run_reporting(opts, &no_inputs, progress),
         Some(s) => {
             let md = cosim.model_descriptions()[0].clone();
             let mut inputs = vec![];
@@ -204,14 +208,15 @@ pub fn simulate(
             }
             // Replaying a record: the value set at t is the row of t + h.
             let lead = if replay { opts.step } else { 0.0 };
-            cosim.run_with_inputs(opts, &|t: f64, out: &mut Vec<ExternalValue>| {
+            let external = |t: f64, out: &mut Vec<ExternalValue>| {
                 out.clear();
                 let t = t + lead;
                 for &(c, base, vr, hold) in &inputs {
                     let x = if hold { s.held(c, t) } else { s.at(c, t) };
                     out.push((base, vr, x));
                 }
-            })
+            };
+            cosim.run_reporting(opts, &external, progress)
         }
     }
 }

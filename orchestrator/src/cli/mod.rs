@@ -8,7 +8,7 @@ pub mod info;
 pub mod run;
 pub mod simulate;
 
-use crate::master::{Algorithm, Cosimulation, RunError, RunOptions, RunSummary};
+use crate::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions, RunSummary};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::{Args, ValueEnum};
@@ -155,6 +155,35 @@ pub fn fmu_sources(given: &[String]) -> Result<crate::ssp::Sources, RunError> {
             ))),
         })
         .collect()
+}
+
+/// The command line's progress bar, drawn on stderr from the master's [`Progress`] reports for a
+/// run of 10 000 steps or more (the master itself draws nothing).
+pub fn progress_bar() -> impl FnMut(Progress) {
+    let mut bar: Option<indicatif::ProgressBar> = None;
+    move |p| match p {
+        Progress::Start { total } if total >= 10_000 => {
+            let b = indicatif::ProgressBar::new(total);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {percent:>3}% {msg}",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            bar = Some(b);
+        }
+        Progress::Start { .. } => {}
+        Progress::Step { done } => {
+            if let Some(b) = &bar {
+                b.set_position(done);
+            }
+        }
+        Progress::End { .. } => {
+            if let Some(b) = bar.take() {
+                b.finish_and_clear();
+            }
+        }
+    }
 }
 
 /// What a finished run prints on stderr: steps, time, cost per step and where the rows are.

@@ -1,7 +1,7 @@
 //! `orchestrator run SYSTEM`: a system described in SSP, through the master.
 
-use super::{Common, fmu_sources, split_assignment};
-use crate::master::{Algorithm, Cosimulation, RunError, RunSummary};
+use super::{Common, fmu_sources, progress_bar, split_assignment};
+use crate::master::{Algorithm, Cosimulation, RunError, RunSummary, no_inputs};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::Args;
@@ -76,7 +76,7 @@ pub fn run_system(
     let mut files = vec!["results.csv", "results.units.csv"];
     files.extend_from_slice(extra);
     let out = s.common.hold_output(program, &files, &fmus, &s.set)?;
-    let summary = cosim.run(&opts)?;
+    let summary = cosim.run_reporting(&opts, &no_inputs, &mut progress_bar())?;
     Ok(Finished { summary, out })
 }
 

@@ -1,6 +1,6 @@
 //! `orchestrator simulate FMU`: one FMU, optionally driven by input signals from a CSV file.
 
-use super::{Common, split_assignment};
+use super::{Common, progress_bar, split_assignment};
 use crate::master::{Algorithm, RunError, RunOptions, RunSummary};
 use crate::system::Endpoint;
 use clap::Args;
@@ -85,5 +85,12 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
         &[("fmu", args.fmu.as_path())],
         &args.set,
     )?;
-    crate::simulate::simulate(&args.fmu, signals.as_ref(), &settings, &opts, args.replay)
+    crate::simulate::simulate(
+        &args.fmu,
+        signals.as_ref(),
+        &settings,
+        &opts,
+        args.replay,
+        &mut progress_bar(),
+    )
 }

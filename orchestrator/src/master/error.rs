@@ -1,0 +1,62 @@
+//! Why a run did not complete, typed so that a caller (the command line, the studies) can
+//! tell a bad input from a failing FMU and map each to its exit code, without parsing text.
+
+use fmi_import::{FmiError, ImportError};
+use std::path::PathBuf;
+
+/// Why loading or running a system failed. The message names the file, component, variable
+/// or time concerned; [`RunError::exit_code`] gives the command line's exit code.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// An FMU could not be opened: a missing or corrupt archive, binary or symbol (exit 2).
+    #[error(transparent)]
+    Import(#[from] ImportError),
+    /// The system does not fit its FMUs: unknown variables, bad connections, algebraic loops
+    /// (exit 2).
+    #[error(transparent)]
+    Resolve(#[from] crate::resolve::ResolveError),
+    /// Other bad input: options, the grid, the recorded variables, a `--set`, a file read
+    /// (exit 2).
+    #[error("{0}")]
+    Config(String),
+    /// An FMU failed during the run (exit 3); `results` is where the rows recorded until then
+    /// are, if any were written.
+    #[error("{error}{}", .results.as_ref().map(|p| format!("\nthe results recorded until then are in {}", p.display())).unwrap_or_default())]
+    Fmi {
+        error: FmiError,
+        results: Option<PathBuf>,
+    },
+    /// The results could not be written (exit 1).
+    #[error("{0}")]
+    Io(String),
+    /// The run was asked to stop ([`super::request_stop`], e.g. Ctrl-C) and stopped at a step
+    /// boundary (exit 130).
+    #[error(
+        "interrupted at t = {time} s, after {steps} of {total} steps{}",
+        match .results {
+            Some(p) => format!("; the {rows} rows recorded until then are in {}", p.display()),
+            None => String::new(),
+        }
+    )]
+    Interrupted {
+        time: f64,
+        steps: u64,
+        total: u64,
+        rows: u64,
+        results: Option<PathBuf>,
+    },
+}
+
+impl RunError {
+    /// The process exit code: 2 for a problem with the input (files, system, parameters),
+    /// 3 for an FMU that failed during the run, 1 for an I/O failure, 130 (128 + SIGINT, as
+    /// shells report a process ended by Ctrl-C) for an interrupted run.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            RunError::Import(_) | RunError::Resolve(_) | RunError::Config(_) => 2,
+            RunError::Fmi { .. } => 3,
+            RunError::Io(_) => 1,
+            RunError::Interrupted { .. } => 130,
+        }
+    }
+}

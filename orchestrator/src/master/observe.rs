@@ -1,0 +1,280 @@
+//! Recording as an observer of the run (libcosim's observers): the master hands it the
+//! instances at the start, after every step and at the time an FMU ended the run; it owns
+//! what is recorded, the results file and the table in memory, and decides which steps make a
+//! row.
+//!
+//! It is created before any FMU is instantiated, because creating it creates the results file
+//! and flushes its header: an unwritable destination or a full disk stops the run before it
+//! starts.
+
+use super::grid::Grid;
+use super::{RunError, RunOptions, Table};
+use crate::record::Recorder;
+use crate::system::{Endpoint, System};
+use fmi_import::{FmiError, Instance};
+use model_description::{BaseType, Causality, ModelDescription, VariableKind};
+use std::path::PathBuf;
+
+/// What is recorded: per component and type, the value references, and their column index.
+struct Recording {
+    columns: Vec<String>,
+    units: Vec<String>,
+    real: Vec<(Vec<u32>, Vec<usize>)>,
+    integer: Vec<(Vec<u32>, Vec<usize>)>,
+    boolean: Vec<(Vec<u32>, Vec<usize>)>,
+    row: Vec<f64>,
+    buf_r: Vec<f64>,
+    buf_i: Vec<i32>,
+    buf_b: Vec<bool>,
+}
+
+impl Recording {
+    fn new(
+        system: &System,
+        mds: &[&ModelDescription],
+        selection: Option<&[Endpoint]>,
+    ) -> Result<Recording, RunError> {
+        let n = system.components.len();
+        let mut chosen: Vec<(usize, &model_description::ScalarVariable)> = vec![];
+        match selection {
+            None => {
+                for (c, md) in mds.iter().enumerate() {
+                    for v in md
+                        .model_variables
+                        .iter()
+                        .filter(|v| v.causality == Causality::Output)
+                    {
+                        if v.kind.base_type() != BaseType::String {
+                            chosen.push((c, v));
+                        }
+                    }
+                }
+            }
+            Some(list) => {
+                for e in list {
+                    let c = system
+                        .components
+                        .iter()
+                        .position(|x| x.name == e.component)
+                        .ok_or_else(|| {
+                            RunError::Config(format!(
+                                "recorded variable {e}: no component '{}'",
+                                e.component
+                            ))
+                        })?;
+                    let v = mds[c].variable(&e.variable).ok_or_else(|| {
+                        RunError::Config(format!(
+                            "recorded variable {e}: component '{}' ({}) has no variable '{}'",
+                            e.component,
+                            system.components[c].source.display(),
+                            e.variable
+                        ))
+                    })?;
+                    if v.kind.base_type() == BaseType::String {
+                        return Err(RunError::Config(format!(
+                            "recorded variable {e}: String variables cannot be recorded"
+                        )));
+                    }
+                    chosen.push((c, v));
+                }
+            }
+        }
+        let mut rec = Recording {
+            columns: vec![],
+            units: vec![],
+            real: vec![(vec![], vec![]); n],
+            integer: vec![(vec![], vec![]); n],
+            boolean: vec![(vec![], vec![]); n],
+            row: vec![],
+            buf_r: vec![],
+            buf_i: vec![],
+            buf_b: vec![],
+        };
+        for (col, (c, v)) in chosen.iter().enumerate() {
+            rec.columns
+                .push(format!("{}.{}", system.components[*c].name, v.name));
+            rec.units.push(match &v.kind {
+                VariableKind::Real(r) => r.unit.clone().unwrap_or_default(),
+                _ => String::new(),
+            });
+            let target = match v.kind.base_type() {
+                BaseType::Real => &mut rec.real[*c],
+                BaseType::Integer | BaseType::Enumeration => &mut rec.integer[*c],
+                _ => &mut rec.boolean[*c],
+            };
+            target.0.push(v.value_reference);
+            target.1.push(col);
+        }
+        let widest =
+            |l: &Vec<(Vec<u32>, Vec<usize>)>| l.iter().map(|x| x.0.len()).max().unwrap_or(0);
+        rec.buf_r = vec![0.0; widest(&rec.real)];
+        rec.buf_i = vec![0; widest(&rec.integer)];
+        rec.buf_b = vec![false; widest(&rec.boolean)];
+        rec.row = vec![0.0; rec.columns.len()];
+        Ok(rec)
+    }
+
+    fn sample(&mut self, instances: &mut [Instance]) -> Result<(), FmiError> {
+        for (c, inst) in instances.iter_mut().enumerate() {
+            let (vr, cols) = &self.real[c];
+            if !vr.is_empty() {
+                inst.get_real(vr, &mut self.buf_r[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = self.buf_r[i];
+                }
+            }
+            let (vr, cols) = &self.integer[c];
+            if !vr.is_empty() {
+                inst.get_integer(vr, &mut self.buf_i[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = self.buf_i[i] as f64;
+                }
+            }
+            let (vr, cols) = &self.boolean[c];
+            if !vr.is_empty() {
+                inst.get_boolean(vr, &mut self.buf_b[..vr.len()])?;
+                for (i, &col) in cols.iter().enumerate() {
+                    self.row[col] = if self.buf_b[i] { 1.0 } else { 0.0 };
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why an observation failed: reading the FMUs (the run stops as if the FMU had failed in its
+/// step, keeping what was recorded), or writing (the run stops at once, saying where).
+pub(super) enum ObserveError {
+    Fmi(FmiError),
+    Write(RunError),
+}
+
+impl ObserveError {
+    /// The error of an observation outside the stepping (at the start or the end): an FMU's
+    /// failure then reports no results file.
+    pub fn into_run_error(self) -> RunError {
+        match self {
+            ObserveError::Fmi(error) => RunError::Fmi {
+                error,
+                results: None,
+            },
+            ObserveError::Write(e) => e,
+        }
+    }
+}
+
+/// The recording observer.
+pub(super) struct Results {
+    recording: Recording,
+    recorder: Option<Recorder>,
+    table: Option<Table>,
+    /// A row every this many steps.
+    every: u64,
+}
+
+impl Results {
+    /// The observer the options ask for (`None`: nothing is recorded), with the results file
+    /// created.
+    pub fn new(
+        system: &System,
+        mds: &[&ModelDescription],
+        opts: &RunOptions,
+        grid: &Grid,
+    ) -> Result<Option<Results>, RunError> {
+        if opts.out_dir.is_none() && !opts.collect {
+            return Ok(None);
+        }
+        let rec = Recording::new(system, mds, opts.record.as_deref())?;
+        let recorder = match &opts.out_dir {
+            Some(dir) => {
+                let mut r = Recorder::create(dir, &rec.columns, &rec.units).map_err(|e| {
+                    RunError::Io(format!(
+                        "cannot write results in {} (nothing was run): {e}",
+                        dir.display()
+                    ))
+                })?;
+                let integral: Vec<usize> = rec
+                    .integer
+                    .iter()
+                    .chain(&rec.boolean)
+                    .flat_map(|(_, cols)| cols.iter().copied())
+                    .collect();
+                r.set_integral(&integral);
+                Some(r)
+            }
+            None => None,
+        };
+        let table = opts.collect.then(|| Table {
+            columns: std::iter::once("time".to_string())
+                .chain(rec.columns.iter().cloned())
+                .collect(),
+            // Reserved up to a million rows; a longer run grows the columns as it goes.
+            data: vec![
+                Vec::with_capacity(grid.steps.min(1 << 20) as usize + 1);
+                rec.columns.len() + 1
+            ],
+        });
+        Ok(Some(Results {
+            recording: rec,
+            recorder,
+            table,
+            every: grid.every,
+        }))
+    }
+
+    /// Records a row at time `t`.
+    pub fn observe(&mut self, t: f64, instances: &mut [Instance]) -> Result<(), ObserveError> {
+        self.recording
+            .sample(instances)
+            .map_err(ObserveError::Fmi)?;
+        self.keep(t).map_err(ObserveError::Write)
+    }
+
+    /// After step `k`: a row when `k` is a multiple of the recording interval.
+    #[inline]
+    pub fn stepped(
+        &mut self,
+        k: u64,
+        grid: &Grid,
+        instances: &mut [Instance],
+    ) -> Result<(), ObserveError> {
+        if !k.is_multiple_of(self.every) {
+            return Ok(());
+        }
+        self.observe(grid.time(k), instances)
+    }
+
+    fn keep(&mut self, t: f64) -> Result<(), RunError> {
+        let row = &self.recording.row;
+        if let Some(r) = self.recorder.as_mut() {
+            r.row(t, row).map_err(|e| {
+                // A write failing mid-run: say where the run stopped and what is left on disk.
+                RunError::Io(format!(
+                    "{e}; the run stopped at t = {t} s; the rows written until then are in {} (the last one may be incomplete)",
+                    r.partial_path().display()
+                ))
+            })?;
+        }
+        if let Some(tb) = self.table.as_mut() {
+            tb.data[0].push(t);
+            for (col, v) in tb.data[1..].iter_mut().zip(row) {
+                col.push(*v);
+            }
+        }
+        Ok(())
+    }
+
+    /// Closes the results file (renamed to results.csv): the rows recorded, its path and the
+    /// table.
+    pub fn finish(self) -> Result<(u64, Option<PathBuf>, Option<Table>), RunError> {
+        let io = |e: std::io::Error| RunError::Io(e.to_string());
+        let rows = self.table.as_ref().map_or(0, |t| t.data[0].len() as u64);
+        match self.recorder {
+            Some(r) => {
+                let rows = r.rows;
+                Ok((rows, Some(r.finish().map_err(io)?), self.table))
+            }
+            None => Ok((rows, None, self.table)),
+        }
+    }
+}

@@ -1,0 +1,202 @@
+//! Value transfer: moving values along the connections, and from the caller's external inputs
+//! into the first component.
+//!
+//! Values move through flat buffers: each component's connected outputs of one type occupy a
+//! contiguous range, read with one fmi2GetXxx call per component and type; each component's
+//! inputs are gathered (with their linear transformation) and written with one fmi2SetXxx call.
+//! Nothing is allocated here once a run has started: this is the master's per-step cost.
+
+use super::{ExternalInputs, ExternalValue};
+use crate::resolve::Link;
+use crate::system::Linear;
+use fmi_import::{FmiError, Instance};
+use model_description::BaseType;
+
+/// A value type that can cross a connection.
+trait Port: Copy + Default {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [Self]) -> Result<(), FmiError>;
+    fn set(inst: &mut Instance, vr: &[u32], values: &[Self]) -> Result<(), FmiError>;
+    fn apply(self, t: Option<Linear>) -> Self;
+}
+
+impl Port for f64 {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [f64]) -> Result<(), FmiError> {
+        inst.get_real(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[f64]) -> Result<(), FmiError> {
+        inst.set_real(vr, values)
+    }
+    fn apply(self, t: Option<Linear>) -> f64 {
+        match t {
+            Some(l) => l.factor * self + l.offset,
+            None => self,
+        }
+    }
+}
+
+impl Port for i32 {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [i32]) -> Result<(), FmiError> {
+        inst.get_integer(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[i32]) -> Result<(), FmiError> {
+        inst.set_integer(vr, values)
+    }
+    fn apply(self, _: Option<Linear>) -> i32 {
+        self
+    }
+}
+
+impl Port for bool {
+    fn get(inst: &mut Instance, vr: &[u32], out: &mut [bool]) -> Result<(), FmiError> {
+        inst.get_boolean(vr, out)
+    }
+    fn set(inst: &mut Instance, vr: &[u32], values: &[bool]) -> Result<(), FmiError> {
+        inst.set_boolean(vr, values)
+    }
+    fn apply(self, _: Option<Linear>) -> bool {
+        self
+    }
+}
+
+/// The links of one value type, laid out for one-call-per-component transfers.
+struct Transfer<T: Port> {
+    /// Per component: the output value references it feeds, and where they start in `slots`.
+    out_vr: Vec<Vec<u32>>,
+    out_start: Vec<usize>,
+    /// Per component: its connected input value references, the slot feeding each, and the
+    /// transformation.
+    in_vr: Vec<Vec<u32>>,
+    in_slot: Vec<Vec<usize>>,
+    in_transform: Vec<Vec<Option<Linear>>>,
+    slots: Vec<T>,
+    scratch: Vec<T>,
+}
+
+impl<T: Port> Transfer<T> {
+    fn new(n: usize, links: &[&Link]) -> Transfer<T> {
+        let mut out_vr: Vec<Vec<u32>> = vec![vec![]; n];
+        // Each distinct (component, output) gets one slot; links sharing an output share it.
+        for l in links {
+            if !out_vr[l.from].contains(&l.from_vr) {
+                out_vr[l.from].push(l.from_vr);
+            }
+        }
+        let mut out_start = vec![0; n];
+        let mut total = 0;
+        for c in 0..n {
+            out_start[c] = total;
+            total += out_vr[c].len();
+        }
+        let mut in_vr = vec![vec![]; n];
+        let mut in_slot = vec![vec![]; n];
+        let mut in_transform = vec![vec![]; n];
+        for l in links {
+            let slot = out_start[l.from]
+                + out_vr[l.from]
+                    .iter()
+                    .position(|&v| v == l.from_vr)
+                    .expect("registered above");
+            in_vr[l.to].push(l.to_vr);
+            in_slot[l.to].push(slot);
+            in_transform[l.to].push(l.transform);
+        }
+        let widest = in_vr.iter().map(Vec::len).max().unwrap_or(0);
+        Transfer {
+            out_vr,
+            out_start,
+            in_vr,
+            in_slot,
+            in_transform,
+            slots: vec![T::default(); total],
+            scratch: vec![T::default(); widest],
+        }
+    }
+
+    fn read_outputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        let n = self.out_vr[c].len();
+        if n == 0 {
+            return Ok(());
+        }
+        let s = self.out_start[c];
+        T::get(inst, &self.out_vr[c], &mut self.slots[s..s + n])
+    }
+
+    fn write_inputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        let n = self.in_vr[c].len();
+        if n == 0 {
+            return Ok(());
+        }
+        for i in 0..n {
+            self.scratch[i] = self.slots[self.in_slot[c][i]].apply(self.in_transform[c][i]);
+        }
+        T::set(inst, &self.in_vr[c], &self.scratch[..n])
+    }
+}
+
+/// The connections of every type, in the order the master moves them: Real, Integer, Boolean.
+pub(super) struct Transfers {
+    real: Transfer<f64>,
+    integer: Transfer<i32>,
+    boolean: Transfer<bool>,
+}
+
+impl Transfers {
+    pub fn new(n: usize, links: &[Link]) -> Transfers {
+        let by_type = |b: BaseType| links.iter().filter(|l| l.base == b).collect::<Vec<_>>();
+        Transfers {
+            real: Transfer::new(n, &by_type(BaseType::Real)),
+            integer: Transfer::new(n, &by_type(BaseType::Integer)),
+            boolean: Transfer::new(n, &by_type(BaseType::Boolean)),
+        }
+    }
+
+    /// Sets component `c`'s connected inputs from the outputs last read.
+    #[inline]
+    pub fn write_inputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        self.real.write_inputs(c, inst)?;
+        self.integer.write_inputs(c, inst)?;
+        self.boolean.write_inputs(c, inst)
+    }
+
+    /// Reads component `c`'s connected outputs.
+    #[inline]
+    pub fn read_outputs(&mut self, c: usize, inst: &mut Instance) -> Result<(), FmiError> {
+        self.real.read_outputs(c, inst)?;
+        self.integer.read_outputs(c, inst)?;
+        self.boolean.read_outputs(c, inst)
+    }
+}
+
+/// The caller's inputs of the first component, with the buffer they are filled into (reused
+/// from step to step).
+pub(super) struct External<'a> {
+    fill: &'a ExternalInputs<'a>,
+    values: Vec<ExternalValue>,
+}
+
+impl<'a> External<'a> {
+    pub fn new(fill: &'a ExternalInputs<'a>) -> External<'a> {
+        External {
+            fill,
+            values: Vec::new(),
+        }
+    }
+
+    /// Sets the inputs for time `t` (an Integer or Enumeration from its whole number, a
+    /// Boolean from 0 or not 0; String inputs are not driven).
+    #[inline]
+    pub fn apply(&mut self, inst: &mut Instance, t: f64) -> Result<(), FmiError> {
+        (self.fill)(t, &mut self.values);
+        for &(base, vr, x) in self.values.iter() {
+            match base {
+                BaseType::Real => inst.set_real(&[vr], &[x])?,
+                BaseType::Integer | BaseType::Enumeration => {
+                    inst.set_integer(&[vr], &[x as i32])?
+                }
+                BaseType::Boolean => inst.set_boolean(&[vr], &[x != 0.0])?,
+                BaseType::String => {}
+            }
+        }
+        Ok(())
+    }
+}
