@@ -4,7 +4,7 @@
 mod common;
 
 use fmi_import::LogConfig;
-use orchestrator::master::{Algorithm, Cosimulation, RunError, RunOptions};
+use orchestrator::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions, no_inputs};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System, Value};
 
 fn chain(gain: f64, fail_at: Option<f64>) -> System {
@@ -138,6 +138,50 @@ fn an_fmu_error_stops_the_run_and_keeps_the_results() {
     assert!(text.contains("results recorded until then"), "{text}");
     let r = rows(&dir.path().join("results.csv"));
     assert_eq!(r.last().unwrap()[0], 0.5, "rows up to the failure are kept");
+}
+
+/// The progress a run of `chain(1.0, fail_at)` for 2.5 s at 2^-10 s reports.
+fn progress_of(fail_at: Option<f64>, progress: bool) -> (Vec<Progress>, Result<u64, RunError>) {
+    let cosim = Cosimulation::load(chain(1.0, fail_at)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut opts = options(dir.path(), 2.5, 1.0 / 1024.0, Algorithm::GaussSeidel);
+    opts.progress = progress;
+    let mut seen = vec![];
+    let summary = cosim.run_reporting(&opts, &no_inputs, &mut |p| seen.push(p));
+    (seen, summary.map(|s| s.steps))
+}
+
+#[test]
+fn progress_is_reported_in_order_up_to_the_stop_time_and_only_when_asked() {
+    let (seen, steps) = progress_of(None, true);
+    assert_eq!(steps.unwrap(), 2560);
+    assert_eq!(
+        seen,
+        [
+            Progress::Start { total: 2560 },
+            Progress::Step { done: 1000 },
+            Progress::Step { done: 2000 },
+            Progress::End { done: 2560 },
+        ]
+    );
+    let (seen, steps) = progress_of(None, false);
+    assert_eq!(steps.unwrap(), 2560);
+    assert_eq!(seen, [], "RunOptions::progress false: no report");
+}
+
+#[test]
+fn progress_ends_where_a_failing_run_stopped() {
+    // The step from t = 1.5 s (step 1536) fails.
+    let (seen, result) = progress_of(Some(1.5), true);
+    assert_eq!(result.unwrap_err().exit_code(), 3);
+    assert_eq!(
+        seen,
+        [
+            Progress::Start { total: 2560 },
+            Progress::Step { done: 1000 },
+            Progress::End { done: 1536 },
+        ]
+    );
 }
 
 #[test]

@@ -83,3 +83,83 @@ impl Grid {
         self.start + k as f64 * self.step
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::master::Algorithm;
+
+    fn options(start: f64, stop: f64, step: f64, interval: Option<f64>) -> RunOptions {
+        RunOptions {
+            start,
+            stop,
+            step,
+            algorithm: Algorithm::GaussSeidel,
+            out_dir: None,
+            record: None,
+            interval,
+            collect: false,
+            progress: false,
+            log: fmi_import::LogConfig::default(),
+        }
+    }
+
+    fn refusal(o: RunOptions) -> String {
+        match Grid::new(&o) {
+            Err(e) => e.to_string(),
+            Ok(g) => panic!("accepted: {} steps", g.steps),
+        }
+    }
+
+    #[test]
+    fn points_come_from_the_step_count_and_do_not_drift() {
+        let g = Grid::new(&options(1.0, 1001.0, 1e-3, Some(0.01))).unwrap();
+        assert_eq!((g.steps, g.every), (1_000_000, 10));
+        assert_eq!(g.time(0), 1.0);
+        assert_eq!(g.time(g.steps), 1001.0);
+        // Summing the step a million times drifts; k * h does not.
+        let mut summed = 1.0;
+        for _ in 0..g.steps {
+            summed += 1e-3;
+        }
+        assert_ne!(summed, 1001.0);
+        let empty = Grid::new(&options(2.0, 2.0, 0.1, None)).unwrap();
+        assert_eq!((empty.steps, empty.every), (0, 1));
+    }
+
+    #[test]
+    fn bad_grids_are_refused_with_their_numbers() {
+        assert_eq!(
+            refusal(options(0.0, 1.0, 0.0, None)),
+            "step 0 must be a positive number"
+        );
+        assert_eq!(
+            refusal(options(0.0, 1.0, f64::NAN, None)),
+            "step NaN must be a positive number"
+        );
+        assert_eq!(
+            refusal(options(0.0, f64::INFINITY, 0.1, None)),
+            "the start time 0 s and the stop time inf s must be finite numbers"
+        );
+        assert_eq!(
+            refusal(options(1.0, 0.5, 0.1, None)),
+            "the stop time 0.5 s is before the start time 1 s"
+        );
+        assert_eq!(
+            refusal(options(0.0, 1.0, 0.3, None)),
+            "the run from 0 s to 1 s is not a whole number of 0.3 s steps"
+        );
+        assert_eq!(
+            refusal(options(0.0, 1e300, 1e-3, None)),
+            "the run from 0 s to 1e300 s has 1e303 steps of 0.001 s, more than 2^53"
+        );
+        assert_eq!(
+            refusal(options(0.0, 1.0, 0.1, Some(0.15))),
+            "recording interval 0.15 s is not a whole number of 0.1 s steps"
+        );
+        assert_eq!(
+            refusal(options(0.0, 1.0, 0.1, Some(0.0))),
+            "recording interval 0 s is not a whole number of 0.1 s steps"
+        );
+    }
+}

@@ -200,3 +200,57 @@ impl<'a> External<'a> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::system::Endpoint;
+
+    fn link(from: usize, from_vr: u32, to: usize, to_vr: u32, factor: Option<f64>) -> Link {
+        Link {
+            from,
+            from_vr,
+            to,
+            to_vr,
+            base: BaseType::Real,
+            transform: factor.map(|factor| Linear {
+                factor,
+                offset: 1.0,
+            }),
+            from_name: Endpoint::new(&format!("c{from}"), &format!("v{from_vr}")),
+            to_name: Endpoint::new(&format!("c{to}"), &format!("v{to_vr}")),
+        }
+    }
+
+    #[test]
+    fn each_output_gets_one_slot_in_a_range_per_component_and_inputs_point_into_them() {
+        // Component 2 feeds two inputs of 0 from one output, and one of 1; component 0 feeds 1.
+        let links = [
+            link(2, 7, 0, 1, None),
+            link(0, 3, 1, 4, None),
+            link(2, 7, 0, 2, Some(2.0)),
+            link(2, 9, 1, 5, None),
+        ];
+        let t: Transfer<f64> = Transfer::new(3, &links.iter().collect::<Vec<_>>());
+        assert_eq!(t.out_vr, [vec![3], vec![], vec![7, 9]]);
+        assert_eq!(t.out_start, [0, 1, 1]);
+        assert_eq!(t.slots.len(), 3);
+        assert_eq!(t.in_vr, [vec![1, 2], vec![4, 5], vec![]]);
+        assert_eq!(t.in_slot, [vec![1, 1], vec![0, 2], vec![]]);
+        assert_eq!(t.scratch.len(), 2, "as wide as the widest input set");
+        let f = t.in_transform[0][1].expect("the second input of 0 is transformed");
+        assert_eq!(3.0_f64.apply(Some(f)), 7.0);
+        assert_eq!(3.0_f64.apply(None), 3.0);
+    }
+
+    #[test]
+    fn links_are_split_by_type() {
+        let mut b = link(1, 2, 0, 3, None);
+        b.base = BaseType::Boolean;
+        let all = Transfers::new(2, &[link(1, 1, 0, 1, None), b]);
+        assert_eq!(all.real.in_vr, [vec![1], vec![]]);
+        assert_eq!(all.integer.slots.len(), 0);
+        assert_eq!(all.boolean.in_vr, [vec![3], vec![]]);
+        assert_eq!(all.boolean.out_vr, [vec![], vec![2]]);
+    }
+}
