@@ -389,10 +389,15 @@ fn demo(extra: Vec<String>) -> Result<()> {
         "the estimator FMU's estimators and the filter's options",
     )?;
     // The fleet: the Python bindings, a synthetic fleet of vehicle passes, the Dask pipeline.
-    println!("==> Python bindings into .venv (maturin)");
-    python::ensure_venv()?;
-    python::install_bindings()?;
     let fleet_dir = out.join("fleet");
+    std::fs::create_dir_all(&fleet_dir)
+        .with_context(|| format!("cannot create {}", fleet_dir.display()))?;
+    python::ensure_venv()?;
+    logged(
+        "maturin develop: the Python bindings (track_alignment) into .venv",
+        &mut python::bindings_command(),
+        &fleet_dir.join("bindings.log"),
+    )?;
     let mut synth = Command::new(python::python());
     synth
         .args([

@@ -63,6 +63,13 @@ pub fn ensure_venv() -> Result<PathBuf> {
 /// the libraries `cargo test` compiled, where a release build would compile the workspace again
 /// (minutes of CI); benchmarks build with `maturin develop --release`.
 pub fn install_bindings() -> Result<()> {
+    let mut cmd = bindings_command();
+    let line = command_line(&cmd);
+    run(&mut cmd).with_context(|| format!("`{line}` could not build the Python bindings"))
+}
+
+/// The `maturin develop` command of [`install_bindings`], for a caller that logs its output.
+pub fn bindings_command() -> Command {
     let bin = if cfg!(windows) { "Scripts" } else { "bin" };
     let maturin = venv_dir().join(bin).join("maturin");
     let mut cmd = Command::new(&maturin);
@@ -70,8 +77,7 @@ pub fn install_bindings() -> Result<()> {
         .env("VIRTUAL_ENV", venv_dir())
         .args(["develop", "--manifest-path"])
         .arg(root().join("bindings").join("Cargo.toml"));
-    let line = command_line(&cmd);
-    run(&mut cmd).with_context(|| format!("`{line}` could not build the Python bindings"))
+    cmd
 }
 
 /// Whether an interpreter starts at all (a venv whose base Python was removed does not).

@@ -1,0 +1,255 @@
+//! Tests of the streaming learned filter (`stream.rs`), in a file of their own to keep that one
+//! under 800 lines.
+
+use super::super::bank::tests::sample_bank;
+use super::*;
+
+/// The estimate straight from the taps (file order), for the oracle: channel values of the
+/// cells pushed so far, newest last.
+fn direct(entry: &Entry, window: usize, cells: &[[f64; 5]]) -> f64 {
+    let w = &entry.windows[window];
+    let len = w.past + w.future + 1;
+    let mut e = 0.0;
+    for (c, name) in entry.channels.iter().enumerate() {
+        let slot = CHANNELS.iter().position(|n| n == name).unwrap();
+        for j in 0..len {
+            e += w.taps[c * len + j] * cells[cells.len() - 1 - j][slot];
+        }
+    }
+    e
+}
+
+#[test]
+fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
+    let bank = sample_bank();
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.6,
+        },
+    )
+    .unwrap();
+    assert!((l.lag() - 0.6).abs() < 1e-12);
+    // 0.05 m per sample at 12.5 m/s, 4 samples per 0.2 m cell.
+    let mut grid = Grid::new(0.2, 500.0);
+    let mut cells = vec![];
+    let mut d = 0.0;
+    for k in 0..200 {
+        d += 0.05;
+        let x = [
+            (k as f64 * 0.3).sin(),
+            0.0,
+            0.0,
+            0.0,
+            (k as f64 * 0.11).cos(),
+        ];
+        if let Some(c) = grid.add(d, &x) {
+            cells.extend(c.cells);
+        }
+        l.step(d, 12.5, &x);
+    }
+    let a = 0.25; // 12.5 m/s between 10 and 20
+    // Enough history for the longest window (5 behind, 3 ahead).
+    let e10 = &bank.entries[0];
+    let e20 = &bank.entries[1];
+    let want = (1.0 - a) * direct(e10, 1, &cells) + a * direct(e20, 1, &cells);
+    let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
+    assert!(
+        (got - want).abs() < 1e-12 * want.abs().max(1.0),
+        "{got} {want}"
+    );
+    let want =
+        (1.0 - a) * direct(&bank.entries[2], 1, &cells) + a * direct(&bank.entries[3], 1, &cells);
+    let (got, _) = l.lagged(l.lagged.points[1].distance).unwrap();
+    assert!(
+        (got - want).abs() < 1e-12 * want.abs().max(1.0),
+        "{got} {want}"
+    );
+}
+
+#[test]
+fn per_condition_taps_are_blended_by_the_estimated_contact() {
+    use crate::learned::contact::{ContactModel, SpeedModel};
+    let mut bank = sample_bank();
+    // Two conditions at each speed: the sample taps (0.5) and their negatives (1.0).
+    bank.entries.retain(|e| e.lag == 0);
+    let mut more = bank.entries.clone();
+    for e in &mut bank.entries {
+        e.condition = Some(0.5);
+    }
+    for e in &mut more {
+        e.condition = Some(1.0);
+        for w in &mut e.windows {
+            w.taps.iter_mut().for_each(|t| *t = -*t);
+        }
+    }
+    bank.entries.extend(more);
+    // The scale follows the first feature: 0.75 + 0.1 ln(M_11 / M_00).
+    bank.contact = Some(ContactModel {
+        band: [3.0, 25.0],
+        memory: 10.0,
+        range: [0.5, 1.0],
+        speeds: vec![SpeedModel {
+            speed: 10.0,
+            coefficients: vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.75],
+            rms_error: 0.1,
+        }],
+    });
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.0,
+        },
+    )
+    .unwrap();
+    let mut grid = Grid::new(0.2, 500.0);
+    let mut cells = vec![];
+    let mut d = 0.0;
+    for k in 0..400 {
+        d += 0.05;
+        let u = (k as f64 * 0.3).sin();
+        // Channel 1 is 1.2 x channel 0: ln(1.44) = 0.365, scale 0.786.
+        let x = [u, 1.2 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+        if let Some(c) = grid.add(d, &x) {
+            cells.extend(c.cells);
+        }
+        l.step(d, 10.0, &x);
+    }
+    let s = l.contact_scale();
+    assert!((s - (0.75 + 0.1 * 1.44f64.ln())).abs() < 0.02, "{s}");
+    let b = (s - 0.5) / 0.5;
+    let (lo, hi) = (&bank.entries[0], &bank.entries[2]);
+    assert_eq!((lo.speed, hi.speed, hi.condition), (10.0, 10.0, Some(1.0)));
+    let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+    let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
+    assert!(
+        (got - want).abs() < 1e-12 * want.abs().max(1.0),
+        "{got} {want}"
+    );
+    // A bank without a contact model reports no scale.
+    let plain = Learned::new(
+        &sample_bank(),
+        Choice {
+            roll_rate: false,
+            lag: 0.0,
+        },
+    )
+    .unwrap();
+    assert_eq!(plain.contact_scale(), 0.0);
+}
+
+#[test]
+fn before_its_window_fills_the_lagged_output_is_the_causal_estimate_made_lag_behind() {
+    let mut bank = sample_bank();
+    // Fixed-lag windows from 5 points back only: the causal ones start 1.2 m earlier.
+    for e in bank.entries.iter_mut().filter(|e| e.lag > 0) {
+        e.windows.retain(|w| w.past == 5);
+    }
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.6,
+        },
+    )
+    .unwrap();
+    let (mut d, mut made) = (0.0, vec![]);
+    let mut checked = 0;
+    for k in 0..40 {
+        d = (k + 1) as f64 * 0.05;
+        l.step(d, 15.0, &[(k as f64 * 0.7).sin(), 0.0, 0.0, 0.0, 0.1]);
+        if let Some(p) = l.causal.points.last()
+            && made.last().map(|m: &Point| m.distance) != Some(p.distance)
+        {
+            made.push(*p);
+        }
+        // Before the fixed-lag window fills, every position lag behind that lies between
+        // two causal estimates gets their linear interpolation.
+        let at = d - 0.6;
+        if l.lagged.points.is_empty()
+            && let Some(i) = made.iter().position(|m| m.distance >= at)
+            && i > 0
+        {
+            let (a, b) = (made[i - 1], made[i]);
+            let want =
+                a.value + (at - a.distance) / (b.distance - a.distance) * (b.value - a.value);
+            let (got, std) = l.lagged(d).unwrap();
+            assert!((got - want).abs() < 1e-12, "at {d} m: {got} {want}");
+            assert_eq!(std, b.std);
+            checked += 1;
+        }
+    }
+    assert!(checked >= 2, "{checked} positions checked");
+    assert!(
+        !l.lagged.points.is_empty(),
+        "the lagged window filled by {d} m"
+    );
+}
+
+#[test]
+fn outside_the_speed_range_there_is_no_estimate_and_it_resumes_inside() {
+    let bank = sample_bank();
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.0,
+        },
+    )
+    .unwrap();
+    assert_eq!(l.speed_range(), (10.0, 20.0));
+    let mut d = 0.0;
+    for _ in 0..100 {
+        d += 0.05;
+        l.step(d, 25.0, &[1.0; 5]);
+    }
+    assert!(!l.in_range() && l.causal(d).is_none());
+    for _ in 0..10 {
+        d += 0.05;
+        l.step(d, 15.0, &[1.0; 5]);
+    }
+    assert!(l.in_range() && l.causal(d).is_some());
+}
+
+#[test]
+fn unavailable_choices_are_refused_by_name() {
+    let bank = sample_bank();
+    let e = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: true,
+            lag: 0.0,
+        },
+    )
+    .unwrap_err();
+    assert!(e.contains("four sensors"), "{e}");
+    let e = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 10.0,
+        },
+    )
+    .unwrap_err();
+    assert!(e.contains("lag = 10 m") && e.contains("0.6"), "{e}");
+}
+
+#[test]
+fn extrapolation_is_linear_and_at_most_one_cell_ahead() {
+    let mut t = Track::default();
+    t.push(Point {
+        value: 1.0,
+        std: 0.1,
+        distance: 1.0,
+    });
+    t.push(Point {
+        value: 2.0,
+        std: 0.2,
+        distance: 1.2,
+    });
+    assert!((t.at(1.3).unwrap().0 - 2.5).abs() < 1e-12);
+    assert!((t.at(5.0).unwrap().0 - 3.0).abs() < 1e-12);
+    assert_eq!(t.at(1.0).unwrap(), (2.0, 0.2));
+}
