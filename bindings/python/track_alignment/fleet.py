@@ -75,16 +75,22 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
     n_trim = int(round(options.trim / ds))
     if last - first + 1 <= 2 * n_trim + 4 * int(BANDS["d2"][1] / ds):
         raise RecordingError(f"{path}: covers {position[-1] - position[0]:.0f} m, too short for the D2 band")
-    grid = np.arange(first, last + 1) * ds
-    aligned = np.interp(grid, position, out["alignment"])
+    bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
+    count = np.isfinite(bands["d1"]).astype(np.float64)
+    return Coverage(first, bands, count), segment_sds(first, bands, options)
+
+
+def banded(aligned: np.ndarray, options: Options) -> dict[str, np.ndarray]:
+    """``aligned`` (on the line grid) band-passed in D1 and D2, ``trim`` metres at each end
+    set to NaN (where the zero-phase filter starts and stops)."""
+    n_trim = int(round(options.trim / options.ds))
     bands = {}
     for name, (short, long) in BANDS.items():
-        x = _native.bandpass(aligned, ds, short, long)
+        x = _native.bandpass(aligned, options.ds, short, long)
         x[:n_trim] = np.nan
         x[len(x) - n_trim:] = np.nan
         bands[name] = x
-    count = np.isfinite(bands["d1"]).astype(np.float64)
-    return Coverage(first, bands, count), segment_sds(first, bands, options)
+    return bands
 
 
 def segment_sds(start: int, bands: Mapping[str, np.ndarray], options: Options) -> dict[str, np.ndarray]:
@@ -139,16 +145,8 @@ def truth_sds(path: str | Path, options: Options) -> dict[str, np.ndarray]:
     cols, _ = read_table(path)
     ds = options.ds
     first, last = int(np.ceil(cols["distance"][0] / ds)), int(np.floor(cols["distance"][-1] / ds))
-    grid = np.arange(first, last + 1) * ds
-    aligned = np.interp(grid, cols["distance"], cols["alignment"])
-    n_trim = int(round(options.trim / ds))
-    bands = {}
-    for name, (short, long) in BANDS.items():
-        x = _native.bandpass(aligned, ds, short, long)
-        x[:n_trim] = np.nan
-        x[len(x) - n_trim:] = np.nan
-        bands[name] = x
-    return segment_sds(first, bands, options)
+    aligned = np.interp(np.arange(first, last + 1) * ds, cols["distance"], cols["alignment"])
+    return segment_sds(first, banded(aligned, options), options)
 
 
 def expand(inputs: Sequence[str | Path]) -> list[str]:
