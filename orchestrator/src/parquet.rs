@@ -7,7 +7,7 @@
 //! | schema | one `DOUBLE` column per variable, `REQUIRED`, named as the CSV header would be |
 //! | file key-value metadata `units` | JSON object `{column: unit}` (empty units left out) |
 //! | file key-value metadata `provenance` | JSON: the run's manifest (what produced the file, with which inputs and settings) |
-//! | row groups | [`ROW_GROUP`] rows each, so a long recording streams out and memory stays bounded |
+//! | row groups | [`ROW_GROUP`] rows each from [`write`]; [`ParquetWriter::row_group`] writes them one at a time |
 //!
 //! Reading accepts what other tools write for a table of numbers: `DOUBLE`, `FLOAT`, `INT32`
 //! and `INT64` columns, `REQUIRED` or `OPTIONAL` (a null is refused, naming its column and
@@ -46,10 +46,9 @@ pub struct ParquetTable {
     pub metadata: BTreeMap<String, String>,
 }
 
-/// Streams rows into a Parquet file, a row group at a time.
+/// A Parquet file written a row group at a time, so a long table streams out.
 pub struct ParquetWriter {
     writer: SerializedFileWriter<File>,
-    buffers: Vec<Vec<f64>>,
     path: std::path::PathBuf,
 }
 
@@ -99,54 +98,36 @@ impl ParquetWriter {
             .map_err(|e| err(path, e))?;
         Ok(ParquetWriter {
             writer,
-            buffers: vec![Vec::with_capacity(ROW_GROUP); names.len()],
             path: path.to_path_buf(),
         })
     }
 
-    /// Appends one row (one value per column).
-    pub fn row(&mut self, values: &[f64]) -> Result<(), String> {
-        debug_assert_eq!(values.len(), self.buffers.len());
-        for (b, v) in self.buffers.iter_mut().zip(values) {
-            b.push(*v);
-        }
-        if self.buffers.first().is_some_and(|b| b.len() >= ROW_GROUP) {
-            self.flush()?;
-        }
-        Ok(())
-    }
-
-    fn flush(&mut self) -> Result<(), String> {
-        if self.buffers.first().is_none_or(|b| b.is_empty()) {
-            return Ok(());
-        }
-        let path = self.path.clone();
-        let mut rg = self.writer.next_row_group().map_err(|e| err(&path, e))?;
-        for b in &mut self.buffers {
+    /// Writes one row group of `columns` (one slice per column, of equal length).
+    pub fn row_group(&mut self, columns: &[&[f64]]) -> Result<(), String> {
+        let path = &self.path;
+        let mut rg = self.writer.next_row_group().map_err(|e| err(path, e))?;
+        for c in columns {
             let mut col = rg
                 .next_column()
-                .map_err(|e| err(&path, e))?
-                .ok_or_else(|| err(&path, "fewer columns than the schema"))?;
+                .map_err(|e| err(path, e))?
+                .ok_or_else(|| err(path, "fewer columns than the schema"))?;
             col.typed::<DoubleType>()
-                .write_batch(b, None, None)
-                .map_err(|e| err(&path, e))?;
-            col.close().map_err(|e| err(&path, e))?;
-            b.clear();
+                .write_batch(c, None, None)
+                .map_err(|e| err(path, e))?;
+            col.close().map_err(|e| err(path, e))?;
         }
-        rg.close().map_err(|e| err(&path, e))?;
+        rg.close().map_err(|e| err(path, e))?;
         Ok(())
     }
 
-    /// Writes the last row group and the footer.
-    pub fn finish(mut self) -> Result<(), String> {
-        self.flush()?;
-        let path = self.path.clone();
-        self.writer.close().map_err(|e| err(&path, e))?;
+    /// Writes the footer.
+    pub fn finish(self) -> Result<(), String> {
+        self.writer.close().map_err(|e| err(&self.path, e))?;
         Ok(())
     }
 }
 
-/// Writes whole columns.
+/// Writes whole columns, a row group per [`ROW_GROUP`] rows straight from the slices.
 pub fn write(
     path: &Path,
     names: &[String],
@@ -156,12 +137,10 @@ pub fn write(
 ) -> Result<(), String> {
     let mut w = ParquetWriter::create(path, names, units, provenance)?;
     let n = columns.first().map_or(0, |c| c.len());
-    let mut row = vec![0.0; columns.len()];
-    for k in 0..n {
-        for (r, c) in row.iter_mut().zip(columns) {
-            *r = c[k];
-        }
-        w.row(&row)?;
+    for start in (0..n).step_by(ROW_GROUP) {
+        let end = (start + ROW_GROUP).min(n);
+        let group: Vec<&[f64]> = columns.iter().map(|c| &c[start..end]).collect();
+        w.row_group(&group)?;
     }
     w.finish()
 }

@@ -58,34 +58,23 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
 /// The output CSV text, numbers written as in `results.csv` ([`orchestrator::record`]); `learned`, if
 /// given, adds the learned and hybrid estimates per sample.
 pub fn to_csv(time: &[f64], out: &Processed, learned: Option<&(Vec<f64>, Vec<f64>)>) -> String {
-    let mut s: Vec<u8> = b"time,distance,alignment_filtered,alignment_filtered_std,alignment_smoothed,alignment_smoothed_std".to_vec();
-    if learned.is_some() {
-        s.extend_from_slice(b",alignment_learned,alignment_hybrid");
-    }
+    let (names, columns) = output_columns(time, out, learned);
+    let mut s: Vec<u8> = names.join(",").into_bytes();
     s.push(b'\n');
-    let smoothed = out.smoothed.as_deref();
     let mut buf = ryu::Buffer::new();
-    for (k, t) in time.iter().enumerate() {
-        let (f, fs) = out.filtered[k];
-        let (m, ms) = smoothed.map_or((f64::NAN, f64::NAN), |v| v[k]);
-        let extra = learned.map(|(a, b)| [a[k], b[k]]);
-        let row = [*t, out.distance[k], f, fs, m, ms];
-        for (j, x) in row
-            .into_iter()
-            .chain(extra.into_iter().flatten())
-            .enumerate()
-        {
+    for k in 0..time.len() {
+        for (j, c) in columns.iter().enumerate() {
             if j > 0 {
                 s.push(b',');
             }
-            push_f64(&mut s, x, &mut buf);
+            push_f64(&mut s, c[k], &mut buf);
         }
         s.push(b'\n');
     }
     String::from_utf8(s).expect("digits, signs and letters only")
 }
 
-/// The output's column names and values (as [`to_csv`] writes them), for a Parquet output.
+/// The output's column names and values: what [`to_csv`] and the Parquet output write.
 fn output_columns(
     time: &[f64],
     out: &Processed,

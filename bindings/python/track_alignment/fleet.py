@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from dataclasses import dataclass
 from glob import glob
 from pathlib import Path
@@ -181,7 +182,6 @@ def run(
     """The pipeline over ``recordings`` on ``client`` (a ``dask.distributed.Client``; a
     ``LocalCluster`` with the machine's cores when None). Returns the segments table (pandas)."""
     import dask
-    import pandas as pd
 
     options = options or Options()
     files = expand(recordings)
@@ -213,7 +213,7 @@ def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot:
     n_segments = max(len(averaged["segment"]), *(len(s["segment"]) for s in sds))
 
     def pad(x):
-        return np.concatenate([x, np.full(n_segments - len(x), np.nan)])
+        return np.concatenate([x, np.full(max(0, n_segments - len(x)), np.nan)])[:n_segments]
 
     rows = {"segment": np.arange(n_segments), "start_m": np.arange(n_segments) * options.segment,
             "end_m": (np.arange(n_segments) + 1) * options.segment}
@@ -221,13 +221,14 @@ def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot:
     rows["passes"] = np.isfinite(per_pass["d1"]).sum(axis=0)
     for k in BANDS:
         rows[f"{k}_sd_mm"] = pad(averaged[k])
-        with np.errstate(invalid="ignore"), _quiet():
+        # Segments no pass covers: numpy's 'mean of empty slice' warnings, NaN as wanted.
+        with np.errstate(invalid="ignore"), warnings.catch_warnings(action="ignore", category=RuntimeWarning):
             rows[f"{k}_pass_sd_mean_mm"] = np.nanmean(per_pass[k], axis=0)
             rows[f"{k}_pass_sd_spread_mm"] = np.nanstd(per_pass[k], axis=0)
     if truth is not None:
         t = truth_sds(truth, options)
         for k in BANDS:
-            rows[f"{k}_truth_sd_mm"] = np.concatenate([t[k], np.full(max(0, n_segments - len(t[k])), np.nan)])[:n_segments]
+            rows[f"{k}_truth_sd_mm"] = pad(t[k])
     segments = pd.DataFrame(rows)
     # Segments past the last one any pass covers are not part of the line.
     covered = np.flatnonzero(segments["passes"].to_numpy() > 0)
@@ -241,20 +242,6 @@ def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot:
     if plot:
         plot_map(segments, out / "map.png")
     return segments
-
-
-class _quiet:
-    """Silences numpy's 'mean of empty slice' for segments no pass covers."""
-
-    def __enter__(self):
-        import warnings
-
-        self._w = warnings.catch_warnings()
-        self._w.__enter__()
-        warnings.simplefilter("ignore", category=RuntimeWarning)
-
-    def __exit__(self, *exc):
-        return self._w.__exit__(*exc)
 
 
 def plot_map(segments, path: Path) -> None:
