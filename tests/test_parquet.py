@@ -1,7 +1,8 @@
 """Parquet recordings through the Rust commands (issue 16.2): `orchestrator simulate --input
 x.parquet` and `alignment-studies smooth` read Parquet by extension and give what the same
-signals in CSV give, bit for bit; `smooth --out x.parquet` writes the same values with units and
-provenance that pyarrow (an independent reader) sees; bad files are named."""
+signals in CSV give, bit for bit; `smooth --out x.parquet` and `orchestrator run/simulate
+--results results.parquet` write the same values as their CSV, with units and provenance that
+pyarrow (an independent reader) sees; bad files are named."""
 
 from __future__ import annotations
 
@@ -75,3 +76,52 @@ def test_bad_parquet_files_are_named(recorded, tmp_path):
     p = oc.studies("smooth", holed, "--out", tmp_path / "h.csv", check=None)
     assert p.returncode == 2 and "column 'ws_acc_y' row 6: null" in p.stderr, p.stderr
     assert not (tmp_path / "s.parquet").exists() and not (tmp_path / "h.csv").exists()
+
+
+def test_run_and_simulate_write_parquet_results_equal_to_csv(recorded, tmp_path):
+    """The standard case's results as Parquet: pyarrow reads the CSV run's values bit for bit,
+    its units file as the `units` metadata and its manifest.json as the `provenance`; an estimator
+    replaying them through `simulate --input results.parquet` gives what replaying the CSV gives."""
+    runs = {}
+    for name in ("results.csv", "results.parquet"):
+        out = tmp_path / name.split(".")[1]
+        oc.run("run", *oc.standard_case_args(), "--stop", "1.5", "--quiet", "--out", out, "--results", name)
+        runs[name] = out
+    csv = oc.read_results(runs["results.csv"])
+    table = pq.read_table(runs["results.parquet"] / "results.parquet")
+    assert table.column_names == csv.columns
+    for i, name in enumerate(csv.columns):
+        np.testing.assert_array_equal(table.column(name).to_numpy(), csv.values[:, i], err_msg=name)
+    names, units = oc.read_units(runs["results.csv"] / "results.units.csv")
+    assert json.loads(table.schema.metadata[b"units"]) == {n: u for n, u in zip(names, units) if u}
+    manifest = json.loads((runs["results.parquet"] / "manifest.json").read_text())
+    assert json.loads(table.schema.metadata[b"provenance"]) == manifest
+    assert manifest["files"] == ["results.parquet"] and [f["component"] for f in manifest["fmus"]] == ["vehicle", "estimator"]
+    assert sorted(p.name for p in runs["results.parquet"].iterdir()) == ["manifest.json", "results.parquet"]
+
+    # simulate: the estimator on the recorded sensors, results as Parquet and as CSV.
+    signals, _, _ = recorded
+    est = oc.fmus()["AlignmentEstimator"]
+    for name in ("estimate.csv", "estimate.parquet"):
+        oc.run("simulate", est, "--input", signals, "--replay", "--stop", "2", "--step", "0.001", "--quiet",
+               "--out", tmp_path / "simulate", "--results", name)
+        if name.endswith(".csv"):
+            want = oc.read_results(tmp_path / "simulate" / name)
+    got = pq.read_table(tmp_path / "simulate" / "estimate.parquet")
+    assert got.column_names == want.columns and got.num_rows == 2001
+    for i, name in enumerate(want.columns):
+        np.testing.assert_array_equal(got.column(name).to_numpy(), want.values[:, i], err_msg=name)
+    # The second run into the directory removed the first one's CSV and units (its manifest's).
+    assert sorted(p.name for p in (tmp_path / "simulate").iterdir()) == ["estimate.parquet", "manifest.json"]
+
+    # The next run into the directory, as CSV, removes the Parquet file its manifest lists.
+    oc.run("run", *oc.standard_case_args(), "--stop", "0.1", "--quiet", "--out", runs["results.parquet"])
+    assert not (runs["results.parquet"] / "results.parquet").exists()
+
+
+@pytest.mark.parametrize("name", ["sub/results.parquet", "results.txt", "../results.csv"])
+def test_a_results_name_that_is_not_a_plain_csv_or_parquet_name_is_refused(name, tmp_path):
+    p = oc.run("run", *oc.standard_case_args(), "--stop", "0.1", "--quiet", "--out", tmp_path / "o",
+               "--results", name, check=None)
+    assert p.returncode == 2 and f"--results {name}: expected a plain file name ending in .csv or .parquet" in p.stderr, p.stderr
+    assert not (tmp_path / "o").exists()

@@ -44,6 +44,7 @@ pub fn simulate<'py>(
         step,
         algorithm: Algorithm::GaussSeidel,
         out_dir: None,
+        results: Default::default(),
         record: variables.map(|v| v.iter().map(|n| Endpoint::new(NAME, n)).collect()),
         interval: None,
         progress: false,

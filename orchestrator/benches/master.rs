@@ -6,13 +6,14 @@
 //! docs/references.md section 8.2. Printed, each as the median of 5 runs:
 //! - a bare loop over the same two instances (doStep, getReal, setReal, doStep): the FMUs' own
 //!   cost plus the FFI calls, the floor any master pays;
-//! - our master without recording, and with CSV recording of the two connected variables;
+//! - our master without recording, and recording the two connected variables as CSV and as
+//!   Parquet;
 //! - the master's own cost (master minus bare loop);
 //! - fmpy: a Python Gauss-Seidel loop over FMU2Slave (the loop every fmpy user writes), run by
 //!   tests/bench_fmpy.py, and the ratio to ours.
 
 use fmi_import::{Fmu, LogConfig};
-use orchestrator::master::{Algorithm, Cosimulation, RunOptions};
+use orchestrator::master::{Algorithm, Cosimulation, ResultsFile, RunOptions};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -53,7 +54,7 @@ fn bare_loop(dq: &Path, feed: &Path) -> f64 {
     start.elapsed().as_secs_f64() / STEPS as f64 * 1e6
 }
 
-fn master(system: &System, out: Option<&Path>) -> f64 {
+fn master(system: &System, out: Option<&Path>, results: &str) -> f64 {
     let cosim = Cosimulation::load(system.clone()).unwrap();
     let opts = RunOptions {
         start: 0.0,
@@ -61,6 +62,7 @@ fn master(system: &System, out: Option<&Path>) -> f64 {
         step: H,
         algorithm: Algorithm::GaussSeidel,
         out_dir: out.map(Path::to_path_buf),
+        results: ResultsFile::new(results).unwrap(),
         record: Some(vec![Endpoint::new("dq", "x"), Endpoint::new("feed", "u")]),
         interval: None,
         collect: false,
@@ -112,8 +114,12 @@ fn main() {
     };
     let tmp = tempfile::tempdir().unwrap();
     let bare = median((0..5).map(|_| bare_loop(&dq, &feed)).collect());
-    let plain = median((0..5).map(|_| master(&system, None)).collect());
-    let recorded = median((0..5).map(|_| master(&system, Some(tmp.path()))).collect());
+    let run = |out: Option<&Path>, results: &str| {
+        median((0..5).map(|_| master(&system, out, results)).collect())
+    };
+    let plain = run(None, "results.csv");
+    let recorded = run(Some(tmp.path()), "results.csv");
+    let parquet = run(Some(tmp.path()), "results.parquet");
     println!("Dahlquist -> Feedthrough, {STEPS} steps of {H} s (median of 5):");
     println!("  bare loop (2 doStep + getReal + setReal)   {bare:.3} us/step");
     println!(
@@ -123,6 +129,10 @@ fn main() {
     println!(
         "  orchestrator, CSV of the 2 variables        {recorded:.3} us/step (master's own cost {:.3})",
         recorded - bare
+    );
+    println!(
+        "  orchestrator, Parquet of the 2 variables    {parquet:.3} us/step (master's own cost {:.3})",
+        parquet - bare
     );
 
     let python = root.join(".venv/bin/python");

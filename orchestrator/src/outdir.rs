@@ -26,13 +26,19 @@ pub struct OutputDir {
     dir: PathBuf,
     /// Holds the lock until dropped.
     _lock: File,
+    /// What [`OutputDir::hold`] wrote: its files are the run's outputs.
+    manifest: Option<Manifest>,
 }
 
 impl Drop for OutputDir {
     fn drop(&mut self) {
-        let wrote = ["results.csv", "results.csv.partial"]
-            .iter()
-            .any(|f| self.dir.join(f).exists());
+        // A directory only opened keeps whatever manifest its user wrote.
+        let wrote = self.manifest.as_ref().is_none_or(|m| {
+            m.files.iter().any(|f| {
+                let f = self.dir.join(f);
+                f.exists() || crate::record::partial(&f).exists()
+            })
+        });
         if !wrote {
             let _ = std::fs::remove_file(self.dir.join(MANIFEST));
         }
@@ -106,6 +112,7 @@ impl OutputDir {
         let out = OutputDir {
             dir: dir.to_path_buf(),
             _lock: lock,
+            manifest: None,
         };
         out.remove_stale()?;
         Ok(out)
@@ -113,6 +120,11 @@ impl OutputDir {
 
     pub fn path(&self) -> &Path {
         &self.dir
+    }
+
+    /// The manifest [`OutputDir::hold`] wrote (none for a directory only opened).
+    pub fn manifest(&self) -> Option<&Manifest> {
+        self.manifest.as_ref()
     }
 
     /// Opens `dir` for a run ([`OutputDir::open`]), checks its output `files` (no symlink, FIFO
@@ -126,7 +138,7 @@ impl OutputDir {
         fmus: &[(&str, &Path)],
         settings: &[String],
     ) -> io::Result<OutputDir> {
-        let out = OutputDir::open(dir)?;
+        let mut out = OutputDir::open(dir)?;
         for f in files {
             refuse_special(&out.path().join(f))?;
         }
@@ -142,6 +154,7 @@ impl OutputDir {
             files: files.iter().map(|f| f.to_string()).collect(),
         };
         out.write_manifest(&manifest)?;
+        out.manifest = Some(manifest);
         Ok(out)
     }
 

@@ -87,6 +87,8 @@ impl ParquetWriter {
         let units = serde_json::to_string(&units).map_err(|e| err(path, e))?;
         let props = WriterProperties::builder()
             .set_compression(Compression::SNAPPY)
+            // Measured values rarely repeat: a dictionary costs time and saves nothing.
+            .set_dictionary_enabled(false)
             .set_key_value_metadata(Some(vec![
                 KeyValue::new(UNITS_KEY.into(), units),
                 KeyValue::new(PROVENANCE_KEY.into(), provenance.to_string()),

@@ -15,6 +15,7 @@ fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) ->
         step,
         algorithm,
         out_dir: Some(dir.to_path_buf()),
+        results: Default::default(),
         record: Some(vec![Endpoint::new("vehicle", "ws_acc_y")]),
         interval: None,
         collect: false,

@@ -5,10 +5,13 @@
 
 pub mod export;
 pub mod info;
+mod report;
 pub mod run;
 pub mod simulate;
 
-use crate::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions, RunSummary};
+pub use report::{progress_bar, summary_text};
+
+use crate::master::{Algorithm, Cosimulation, ResultsFile, RunError, RunOptions};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::{Args, ValueEnum};
@@ -28,9 +31,13 @@ pub struct Common {
     /// Start time [s].
     #[arg(long, default_value_t = 0.0)]
     pub start: f64,
-    /// Output directory for results.csv and results.units.csv.
+    /// Output directory for the results (and manifest.json).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// The results file's name in --out: NAME.csv (with NAME.units.csv) or NAME.parquet
+    /// (units and manifest in its metadata).
+    #[arg(long, default_value = "results.csv", value_name = "NAME")]
+    pub results: String,
     /// Record only these variables (component.variable, repeatable or comma-separated); default: every output.
     #[arg(long, value_delimiter = ',')]
     pub record: Vec<String>,
@@ -106,6 +113,7 @@ impl Common {
             step,
             algorithm: Algorithm::GaussSeidel,
             out_dir: (!self.no_record).then(|| self.out.clone()),
+            results: self.results_file()?,
             record,
             interval: self.interval,
             collect: false,
@@ -114,27 +122,39 @@ impl Common {
         })
     }
 
+    /// `--results` checked.
+    pub fn results_file(&self) -> Result<ResultsFile, RunError> {
+        ResultsFile::new(&self.results).map_err(RunError::Config)
+    }
+
     /// The output directory, held for this run ([`OutputDir::hold`]: locked, cleared of the
-    /// previous run's outputs, its `files` checked, the manifest written); none with
-    /// --no-record.
+    /// previous run's outputs, its files checked, the manifest written); none with
+    /// --no-record. The files are the results' and `extra` (what the caller adds); a Parquet
+    /// results file gets the manifest as its provenance.
     pub fn hold_output(
         &self,
+        opts: &mut RunOptions,
         program: &str,
-        files: &[&str],
+        extra: &[&str],
         fmus: &[(&str, &Path)],
         settings: &[String],
     ) -> Result<Option<OutputDir>, RunError> {
         if self.no_record {
             return Ok(None);
         }
-        OutputDir::hold(&self.out, program, files, fmus, settings)
-            .map(Some)
-            .map_err(|e| {
-                RunError::Io(format!(
-                    "cannot write results in {} (nothing was run): {e}",
-                    self.out.display()
-                ))
-            })
+        let mut files = opts.results.files();
+        files.extend(extra.iter().map(|f| f.to_string()));
+        let files: Vec<&str> = files.iter().map(String::as_str).collect();
+        let out = OutputDir::hold(&self.out, program, &files, fmus, settings).map_err(|e| {
+            RunError::Io(format!(
+                "cannot write results in {} (nothing was run): {e}",
+                self.out.display()
+            ))
+        })?;
+        if let Some(m) = out.manifest() {
+            opts.results.provenance = serde_json::to_string(m).expect("a manifest serializes");
+        }
+        Ok(Some(out))
     }
 }
 
@@ -155,58 +175,4 @@ pub fn fmu_sources(given: &[String]) -> Result<crate::ssp::Sources, RunError> {
             ))),
         })
         .collect()
-}
-
-/// The command line's progress bar, drawn on stderr from the master's [`Progress`] reports for a
-/// run of 10 000 steps or more (the master itself draws nothing).
-pub fn progress_bar() -> impl FnMut(Progress) {
-    let mut bar: Option<indicatif::ProgressBar> = None;
-    move |p| match p {
-        Progress::Start { total } if total >= 10_000 => {
-            let b = indicatif::ProgressBar::new(total);
-            b.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{elapsed_precise} [{bar:40}] {percent:>3}% {msg}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-            );
-            bar = Some(b);
-        }
-        Progress::Start { .. } => {}
-        Progress::Step { done } => {
-            if let Some(b) = &bar {
-                b.set_position(done);
-            }
-        }
-        Progress::End { .. } => {
-            if let Some(b) = bar.take() {
-                b.finish_and_clear();
-            }
-        }
-    }
-}
-
-/// What a finished run prints on stderr: steps, time, cost per step and where the rows are.
-pub fn summary_text(summary: &RunSummary) -> String {
-    let mut text = String::new();
-    if let Some(who) = &summary.ended_by {
-        text.push_str(&format!(
-            "'{who}' ended the simulation at t = {} s (fmi2DoStep returned fmi2Discard with fmi2Terminated): the run stops there\n",
-            summary.final_time
-        ));
-    }
-    let per_step = summary.wall.as_secs_f64() / summary.steps.max(1) as f64 * 1e6;
-    text.push_str(&format!(
-        "{} steps to t = {} s in {:.3} s ({:.3} us per step){}",
-        summary.steps,
-        summary.final_time,
-        summary.wall.as_secs_f64(),
-        per_step,
-        summary
-            .results
-            .as_ref()
-            .map(|p| format!("; {} rows in {}", summary.rows, p.display()))
-            .unwrap_or_default()
-    ));
-    text
 }

@@ -73,9 +73,9 @@ pub fn run_system(
         .iter()
         .map(|c| (c.name.as_str(), c.source.as_path()))
         .collect();
-    let mut files = vec!["results.csv", "results.units.csv"];
-    files.extend_from_slice(extra);
-    let out = s.common.hold_output(program, &files, &fmus, &s.set)?;
+    let out = s
+        .common
+        .hold_output(&mut opts, program, extra, &fmus, &s.set)?;
     let summary = cosim.run_reporting(&opts, &no_inputs, &mut progress_bar())?;
     Ok(Finished { summary, out })
 }

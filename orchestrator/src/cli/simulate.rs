@@ -67,12 +67,13 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
             .to_string();
         Some(c.record.iter().map(|r| Endpoint::new(&name, r)).collect())
     };
-    let opts = RunOptions {
+    let mut opts = RunOptions {
         start: c.start,
         stop,
         step,
         algorithm: Algorithm::GaussSeidel,
         out_dir: (!c.no_record).then(|| c.out.clone()),
+        results: c.results_file()?,
         record,
         interval: c.interval,
         collect: false,
@@ -80,8 +81,9 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
         log: c.log_config(),
     };
     let _out = c.hold_output(
+        &mut opts,
         concat!("orchestrator ", env!("CARGO_PKG_VERSION")),
-        &["results.csv", "results.units.csv"],
+        &[],
         &[("fmu", args.fmu.as_path())],
         &args.set,
     )?;

@@ -96,6 +96,7 @@ mod tests {
             step,
             algorithm: Algorithm::GaussSeidel,
             out_dir: None,
+            results: Default::default(),
             record: None,
             interval,
             collect: false,

@@ -27,6 +27,7 @@ mod run;
 mod table;
 mod transfer;
 
+pub use crate::record::ResultsFile;
 pub use algorithm::Algorithm;
 pub use error::RunError;
 pub use table::Table;
@@ -88,8 +89,10 @@ pub struct RunOptions {
     pub stop: f64,
     pub step: f64,
     pub algorithm: Algorithm,
-    /// Where results.csv goes; `None` records nothing.
+    /// Where the results file goes; `None` records nothing.
     pub out_dir: Option<PathBuf>,
+    /// The results file's name in `out_dir` (its extension chooses CSV or Parquet).
+    pub results: ResultsFile,
     /// Variables to record; `None`: every output of every component.
     pub record: Option<Vec<Endpoint>>,
     /// Recording interval [s], a whole number of steps; `None`: every step.

@@ -187,12 +187,13 @@ impl Results {
         let rec = Recording::new(system, mds, opts.record.as_deref())?;
         let recorder = match &opts.out_dir {
             Some(dir) => {
-                let mut r = Recorder::create(dir, &rec.columns, &rec.units).map_err(|e| {
-                    RunError::Io(format!(
-                        "cannot write results in {} (nothing was run): {e}",
-                        dir.display()
-                    ))
-                })?;
+                let mut r = Recorder::create(dir, &opts.results, &rec.columns, &rec.units)
+                    .map_err(|e| {
+                        RunError::Io(format!(
+                            "cannot write results in {} (nothing was run): {e}",
+                            dir.display()
+                        ))
+                    })?;
                 let integral: Vec<usize> = rec
                     .integer
                     .iter()
@@ -250,8 +251,8 @@ impl Results {
             r.row(t, row).map_err(|e| {
                 // A write failing mid-run: say where the run stopped and what is left on disk.
                 RunError::Io(format!(
-                    "{e}; the run stopped at t = {t} s; the rows written until then are in {} (the last one may be incomplete)",
-                    r.partial_path().display()
+                    "{e}; the run stopped at t = {t} s; {}",
+                    r.left_behind()
                 ))
             })?;
         }
@@ -264,14 +265,14 @@ impl Results {
         Ok(())
     }
 
-    /// Closes the results file (renamed to results.csv): the rows recorded, its path and the
-    /// table.
+    /// Closes the results file (renamed from its partial name): the rows recorded, its path
+    /// and the table.
     pub fn finish(self) -> Result<(u64, Option<PathBuf>, Option<Table>), RunError> {
         let io = |e: std::io::Error| RunError::Io(e.to_string());
         let rows = self.table.as_ref().map_or(0, |t| t.data[0].len() as u64);
         match self.recorder {
             Some(r) => {
-                let rows = r.rows;
+                let rows = r.rows();
                 Ok((rows, Some(r.finish().map_err(io)?), self.table))
             }
             None => Ok((rows, None, self.table)),

@@ -148,6 +148,7 @@ fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
         step: STEP,
         algorithm: Algorithm::GaussSeidel,
         out_dir: None,
+        results: Default::default(),
         record: Some(record),
         interval: None,
         progress: false,

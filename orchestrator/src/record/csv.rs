@@ -1,19 +1,17 @@
-//! The results writer: `results.csv` with a `time` column first and one column per recorded
-//! variable named `component.variable`, and `results.units.csv` beside it with the same header
-//! and one row of units (so the data file stays a plain one-header CSV that every tool reads).
+//! The CSV results writer: `results.csv` (or the name the run gives) with a `time` column first
+//! and one column per recorded variable named `component.variable`, and `results.units.csv`
+//! beside it with the same header and one row of units (so the data file stays a plain
+//! one-header CSV that every tool reads).
 //!
-//! Recording costs more than stepping in every master measured (docs/references.md section 8.2), so the
-//! writer formats floats with `ryu` (shortest round-trip representation) into one reused line
-//! buffer and writes through a large `BufWriter`. Rows are written as they come: when a run
-//! fails, everything recorded so far is flushed and kept. The file is written as
-//! `results.csv.partial` and renamed to `results.csv` when the run is finished (or stopped by an
-//! FMU error or an interrupt), so a reader never sees a half-written file under the final name.
+//! Recording costs more than stepping in every master measured (docs/references.md section
+//! 8.2), so the writer formats floats with `ryu` (shortest round-trip representation) into one
+//! reused line buffer and writes through a large `BufWriter`. Rows are written as they come:
+//! when a run fails, everything recorded so far is flushed and kept.
 //!
-//! [`Recorder::create`] is the probe that makes an unwritable destination fail before the run
-//! starts: it creates the directory, writes `results.units.csv` and the header of the partial
+//! [`CsvRecorder::create`] is the probe that makes an unwritable destination fail before the
+//! run starts: it creates the directory, writes the units file and the header of the partial
 //! file, and flushes the header to the file at once, so a missing permission, a path through a
-//! regular file or a full disk is reported then, naming the file. Every I/O error names the
-//! file it happened on.
+//! regular file or a full disk is reported then, naming the file.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -25,11 +23,12 @@ fn naming(path: &Path, action: &str) -> impl FnOnce(io::Error) -> io::Error {
     move |e| io::Error::new(e.kind(), format!("{prefix}: {e}"))
 }
 
-pub struct Recorder {
+pub struct CsvRecorder {
     out: BufWriter<File>,
     line: Vec<u8>,
     partial: PathBuf,
     path: PathBuf,
+    units_path: PathBuf,
     columns: usize,
     /// Columns of Integer, Enumeration or Boolean variables: written as whole numbers.
     integral: Vec<bool>,
@@ -37,16 +36,14 @@ pub struct Recorder {
     finished: bool,
 }
 
-/// A recorder dropped before [`Recorder::finish`] with no row written (the run failed before
+/// A recorder dropped before [`CsvRecorder::finish`] with no row written (the run failed before
 /// it started) removes its files: there is nothing to keep. One with rows keeps the partial
 /// file (a write failed mid-run).
-impl Drop for Recorder {
+impl Drop for CsvRecorder {
     fn drop(&mut self) {
         if !self.finished && self.rows == 0 {
             let _ = std::fs::remove_file(&self.partial);
-            if let Some(dir) = self.partial.parent() {
-                let _ = std::fs::remove_file(dir.join("results.units.csv"));
-            }
+            let _ = std::fs::remove_file(&self.units_path);
         }
     }
 }
@@ -74,14 +71,19 @@ fn csv_field(name: &str) -> String {
     }
 }
 
-impl Recorder {
-    /// Creates `dir/results.csv.partial` with the header (flushed to the file at once, so that
-    /// an unwritable destination fails here), and `dir/results.units.csv`. Errors name the
-    /// directory or file.
-    pub fn create(dir: &Path, columns: &[String], units: &[String]) -> std::io::Result<Recorder> {
+impl CsvRecorder {
+    /// Creates `dir/NAME.partial` with the header (flushed to the file at once, so that an
+    /// unwritable destination fails here), and the units file `dir/STEM.units.csv`. Errors name
+    /// the directory or file.
+    pub fn create(
+        dir: &Path,
+        name: &str,
+        columns: &[String],
+        units: &[String],
+    ) -> std::io::Result<CsvRecorder> {
         std::fs::create_dir_all(dir).map_err(naming(dir, "create the directory"))?;
-        let path = dir.join("results.csv");
-        let partial = dir.join("results.csv.partial");
+        let path = dir.join(name);
+        let partial = super::partial(&path);
         let file = File::create(&partial).map_err(naming(&partial, "create"))?;
         let mut out = BufWriter::with_capacity(1 << 20, file);
         let header: Vec<String> = std::iter::once("time".to_string())
@@ -101,18 +103,19 @@ impl Recorder {
         let unit_row: Vec<String> = std::iter::once("s".to_string())
             .chain(units.iter().map(|u| csv_field(u)))
             .collect();
-        let units_path = dir.join("results.units.csv");
+        let units_path = dir.join(super::units_file(name));
         std::fs::write(
             &units_path,
             format!("{}\n{}\n", header.join(","), unit_row.join(",")),
         )
         .map_err(naming(&units_path, "write"))
         .map_err(|e| undo(e, &[&partial, &units_path]))?;
-        Ok(Recorder {
+        Ok(CsvRecorder {
             out,
             line: Vec::with_capacity(32 * (columns.len() + 1)),
             partial,
             path,
+            units_path,
             columns: columns.len(),
             integral: vec![false; columns.len()],
             rows: 0,
@@ -153,28 +156,19 @@ impl Recorder {
         Ok(())
     }
 
-    /// The file being written (`results.csv.partial`).
+    /// The file being written (`NAME.partial`).
     pub fn partial_path(&self) -> &Path {
         &self.partial
     }
 
-    /// Flushes, syncs and renames to `results.csv`; returns its path. Errors name the file.
+    /// Flushes, syncs and renames the partial file to its name; returns its path. Errors name the file.
     pub fn finish(mut self) -> std::io::Result<PathBuf> {
         self.out.flush().map_err(naming(&self.partial, "write"))?;
         self.out
             .get_ref()
             .sync_all()
             .map_err(naming(&self.partial, "write"))?;
-        std::fs::rename(&self.partial, &self.path).map_err(|e| {
-            io::Error::new(
-                e.kind(),
-                format!(
-                    "cannot rename {} to {}: {e}",
-                    self.partial.display(),
-                    self.path.display()
-                ),
-            )
-        })?;
+        super::rename_into_place(&self.partial, &self.path)?;
         self.finished = true;
         Ok(self.path.clone())
     }
@@ -187,8 +181,9 @@ mod tests {
     #[test]
     fn rows_round_trip_exactly_and_the_file_appears_on_finish() {
         let dir = tempfile::tempdir().unwrap();
-        let mut r = Recorder::create(
+        let mut r = CsvRecorder::create(
             dir.path(),
+            "results.csv",
             &["a.x".into(), "b.y,z".into()],
             &["m".into(), "".into()],
         )
