@@ -7,12 +7,18 @@ pub use crate::report::cases::Group;
 
 /// Runs the groups' cases with a progress bar; `log` gets the lines worth seeing at once.
 pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Report, Error> {
-    crate::report::cases::cases(
+    let mut report = crate::report::cases::cases(
         &a.fmus.fmus()?,
         &a.evaluation(),
         groups,
         &a.out,
         log,
         &progress_bar(a.quiet),
-    )
+    )?;
+    if let Some(doc) = &a.doc {
+        let command: Vec<String> = std::env::args().collect();
+        let text = crate::report::cases::as_document(&report.markdown, &command.join(" "), &a.out);
+        report.file(doc.clone(), text);
+    }
+    Ok(report)
 }

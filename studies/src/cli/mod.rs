@@ -78,6 +78,10 @@ pub struct StudyArgs {
     /// Output directory for the JSON results and report.md.
     #[arg(long, default_value = "out/study")]
     pub out: PathBuf,
+    /// Also write the report's tables, headed by how and when they were made, to FILE: the
+    /// project's docs/results.md is `alignment-studies all --doc docs/results.md`.
+    #[arg(long, value_name = "FILE")]
+    pub doc: Option<PathBuf>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,

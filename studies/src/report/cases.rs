@@ -116,6 +116,53 @@ pub fn cases(
     Ok(report)
 }
 
+/// The report as a document of the repository (docs/results.md): headed by the command and the
+/// time that made it, the figures left in the study's directory `out` (not committed), so the
+/// dated figures live in one generated file instead of module docs.
+pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
+    let mut text = format!(
+        "<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc docs/results.md`. -->\n\n\
+         # Results\n\n\
+         Made by `{command}` ({} {}) on {} UTC. The figures and per-case JSON are in `{}` of that run.\n\n",
+        env!("CARGO_PKG_NAME"),
+        env!("CARGO_PKG_VERSION"),
+        orchestrator::outdir::rfc3339(std::time::SystemTime::now()),
+        out.display()
+    );
+    let body = markdown
+        .strip_prefix("# Alignment estimation study\n\n")
+        .unwrap_or(markdown);
+    for line in body.lines() {
+        if line.starts_with("![") {
+            continue;
+        }
+        // One level down: the document has its own title.
+        if line.starts_with('#') {
+            text.push('#');
+        }
+        text.push_str(&unlinked(line));
+        text.push('\n');
+    }
+    text
+}
+
+/// `[text](file)` links to the run's files as plain `` `file` ``: they are not beside the
+/// document.
+fn unlinked(line: &str) -> String {
+    let mut out = String::new();
+    let mut rest = line;
+    while let Some(mid) = rest.find("](") {
+        let (Some(open), Some(close)) = (rest[..mid].rfind('['), rest[mid..].find(')')) else {
+            break;
+        };
+        out.push_str(&rest[..open]);
+        out.push_str(&format!("`{}`", &rest[mid + 2..mid + close]));
+        rest = &rest[mid + close + 1..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// The time series and figures of the first held-out seed (run once more: the parallel runs
 /// keep only the metrics); the report's paragraph linking them.
 fn first_seed(
@@ -172,4 +219,25 @@ fn first_lateral_mode(fmus: &Fmus) -> Result<fmu_vehicle::modal::Mode, Error> {
     fmu_vehicle::modal::modes(&vehicle, 20.0)
         .first_lateral()
         .ok_or_else(|| "the vehicle has no lightly damped lateral mode at 20 m/s".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_document_has_its_provenance_and_no_links_into_the_run() {
+        let md = "# Alignment estimation study\n\n## Standard case\n\n| a | b |\n|---|---|\n\nSeed 1: time series [s1.csv](s1.csv).\n\n![fig](standard_alignment.svg)\n";
+        let doc = as_document(
+            md,
+            "alignment-studies all --doc d.md",
+            Path::new("out/study"),
+        );
+        assert!(doc.starts_with("<!-- Generated: do not edit."), "{doc}");
+        assert!(doc.contains("Made by `alignment-studies all --doc d.md`"));
+        assert!(doc.contains("`out/study`"));
+        assert!(doc.contains("\n### Standard case\n") && doc.contains("| a | b |"));
+        assert!(doc.contains("Seed 1: time series `s1.csv`."), "{doc}");
+        assert!(!doc.contains("](") && !doc.contains("Alignment estimation study"));
+    }
 }

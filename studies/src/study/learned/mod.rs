@@ -46,21 +46,9 @@
 //! of order 2 ([`causal_hybrid`]), whose complement falls only as `1 / frequency`, so part of the
 //! Kalman filter's D1 error comes through.
 //!
-//! # Measured (`alignment-studies variants`, held-out seeds 1-5, 2026-11-21)
-//! Jrel whole / D1 / D2 / D3, standard case; paper 0.25 / 0.48 / 0.26 / 0.15:
-//! - learned smoother alone 0.66 / 0.09 / 0.15 / 0.89 (its window cannot see D3);
-//! - hybrid with the shaping filter's RTS smoother (split chosen: 30 m) 0.089 / 0.085 / 0.047 /
-//!   0.093;
-//! - fixed lag of 20 m alone 0.62 / 0.10 / 0.22 / 0.82; hybrid with the paper's causal filter
-//!   (split chosen: 40 m) 0.171 / 0.337 / 0.104 / 0.156;
-//! - causal (no look-ahead; 0.2 m grid, since on the 1 m grid the causal anti-alias filter's
-//!   delay of a few metres costs D1: 0.71) alone 0.88 / 0.63 / 0.62 / 1.05, hybrid (split 20 m)
-//!   0.32 / 0.82 / 0.16 / 0.13; with 3 m of look-ahead D1 0.51, hybrid whole 0.27
-//!   (docs/cross-level.md section 6: what this says about causal estimators).
-//!
-//! With the vehicle's Kalker coefficients halved, the taps fitted on the nominal vehicle lose
-//! D1 (0.085 -> 1.08); fitted on both ([`training_runs`] with scales 1 and 0.5) they give D1
-//! 0.17 nominal and 0.23 halved (docs/cross-level.md section 5).
+//! # Measured
+//! The figures (`alignment-studies variants`, held-out seeds) are in docs/cross-level.md,
+//! sections 5 and 6, and in the variants report.
 
 pub(crate) mod contact;
 mod fir;
