@@ -120,7 +120,10 @@ impl Config {
             omega_c: r(vr::PRIOR_OMEGA_C),
         };
         let model = AlignmentModel::from_fmi(v.integer[vr::ALIGNMENT_MODEL as usize], spectrum)?;
-        let gain = Gain::from_fmi(v.integer[vr::GAIN as usize])?;
+        let gain = Gain::from_fmi(
+            v.integer[vr::GAIN as usize],
+            v.integer[vr::ESTIMATOR as usize] == 2,
+        )?;
         let sig = [
             r(vr::SIGMA_ACC_WS),
             r(vr::SIGMA_YAW_RATE),

@@ -1,8 +1,11 @@
 //! The Kalman filter of the paper (section 4.1), with the two corrections every implementation
 //! needs: the gain uses the *inverse* innovation covariance (the paper prints
-//! `K = P H^T (H P H^T + R)` without it), and the covariance update is in Joseph form,
-//! `P = (I - K H) P (I - K H)^T + K R K^T`, then symmetrized, so `P` stays symmetric and
-//! positive semi-definite in floating point.
+//! `K = P H^T (H P H^T + R)` without it), and the covariance update is symmetrized, so `P`
+//! stays symmetric in floating point.
+//!
+//! The update is `P - K (H P)`, which with the optimal gain is the same matrix as Joseph's
+//! `(I - K H) P (I - K H)^T + K R K^T` for a fifth of the products (docs/estimator-fmu.md
+//! gives the measured difference).
 //!
 //! The filter is generic in the state dimension `N`: 7 for the paper's model (alignment as a
 //! random walk), 8 when the alignment's rate is in the state too (see [`crate::prior`]). The
@@ -45,8 +48,9 @@ impl<const N: usize> Kalman<N> {
         let k = chol.solve(&ph_t.transpose()).transpose(); // N x 4
         let nis = innovation.dot(&chol.solve(&innovation));
         self.x += k * innovation;
-        let i_kh = SMatrix::<f64, N, N>::identity() - k * h;
-        let p = i_kh * self.p * i_kh.transpose() + k * r * k.transpose();
+        // P - K S K^T = P - K (H P): with the optimal gain the same matrix as Joseph's
+        // (I - K H) P (I - K H)^T + K R K^T, for a fifth of the products.
+        let p = self.p - k * ph_t.transpose();
         self.p = (p + p.transpose()) * 0.5;
         Some(nis)
     }

@@ -5,7 +5,7 @@
 //! - [`params`]: the simplified model's parameters (Table 2) and their sources;
 //! - [`model`]: the simplified model, its derivation and sign conventions, `F_c` and `H`;
 //! - [`discretize`]: the paper's second-order scheme and the exact one;
-//! - [`filter`]: the Kalman filter (Joseph form);
+//! - [`filter`]: the Kalman filter;
 //! - [`observability`]: the PBH test run at initialization;
 //! - [`calibration`]: Q and R, from the calibration file or the diagonal model;
 //! - [`fmu`]: the FMI variable table and what each FMI phase does.

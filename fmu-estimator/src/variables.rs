@@ -135,7 +135,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_output(vr::EST_XI_RATE, "est_xi_rate", "m/s", 0.0, "Estimated rate of change of the alignment seen by the wheelset (alignment_models 2 and 3; 0 otherwise)"),
     VarSpec::real_parameter(vr::DESIGN_SPEED, "design_speed", "m/s", 0.0, "0: the filter's matrices follow the speed input at every step; > 0: they are built once for this speed, as in the paper (the input still drives the distance)").min(0.0),
     VarSpec::integer_parameter(vr::ALIGNMENT_MODEL, "alignment_model", 1, "Alignment prior: 1 the paper's random walk; 2 integrated random walk; 3 shaping filter of the track spectrum").min(1.0).max(3.0),
-    VarSpec::integer_parameter(vr::GAIN, "gain", 1, "1: time-varying Kalman gain; 2: steady-state gain from the discrete algebraic Riccati equation (constant speed)").min(1.0).max(2.0),
+    VarSpec::integer_parameter(vr::GAIN, "gain", 0, "0: the estimator's own (the paper's filter time-varying; the learned filter's Kalman channel steady-state); 1: time-varying Kalman gain; 2: steady-state gain from the discrete algebraic Riccati equation, scheduled on speed (solved once per 0.01 m/s bin)").min(0.0).max(2.0),
     VarSpec::integer_parameter(vr::DISCRETIZATION, "discretization", 1, "1: the paper's second-order Taylor scheme; 2: exact (matrix exponential)").min(1.0).max(2.0),
     VarSpec::integer_output(vr::SKIPPED_UPDATES, "skipped_updates", 0, "Steps whose measurement update was skipped (non-finite sample or singular innovation covariance)"),
     VarSpec::integer_output(vr::REBUILDS, "rebuilds", 0, "How many times F, H and Q were rebuilt (on a change of speed or step size)"),

@@ -66,7 +66,8 @@ fn variant(name: &str, settings: &[(&str, String)], smooth: bool) -> Variant {
 }
 
 /// The learned filter (estimator FMU default) beside the paper's filter: causal and fixed lag,
-/// with the robust and the nominal-only taps, and with the roll-rate gyroscope.
+/// with the robust and the nominal-only taps, with the Kalman channel's time-varying gain
+/// instead of the default scheduled steady-state one, and with the roll-rate gyroscope.
 pub fn learned_variants() -> Vec<Variant> {
     // Estimator 2 with `extra` settings, judged on `output`.
     let learned = |name: &str, extra: (&str, &str), output: Output| Variant {
@@ -101,6 +102,11 @@ pub fn learned_variants() -> Vec<Variant> {
             "learned, fixed lag 10 m, nominal-only taps",
             nominal,
             Output::Lagged,
+        ),
+        learned(
+            "learned, causal, time-varying Kalman gain (gain 1; the default until 2026-11-24)",
+            ("gain", "1"),
+            Output::Alignment,
         ),
         learned("learned + roll-rate gyro, causal", roll, Output::Alignment),
         learned(
