@@ -31,6 +31,10 @@ pub struct Config {
     pub scheme: Scheme,
     pub model: AlignmentModel,
     pub gain: Gain,
+    /// The gain when the Kalman filter is the estimate itself, not the learned filter's
+    /// channel (`gain` 0 resolves differently: [`Gain::from_fmi`]); what
+    /// [`crate::offline::process`] and the smoother run.
+    pub gain_alone: Gain,
     pub body_noise: BodyNoise,
     /// Measurement noise of the three sensors and of the virtual measurement (paper's model).
     pub r: Mat4,
@@ -124,6 +128,7 @@ impl Config {
             v.integer[vr::GAIN as usize],
             v.integer[vr::ESTIMATOR as usize] == 2,
         )?;
+        let gain_alone = Gain::from_fmi(v.integer[vr::GAIN as usize], false)?;
         let sig = [
             r(vr::SIGMA_ACC_WS),
             r(vr::SIGMA_YAW_RATE),
@@ -198,6 +203,7 @@ impl Config {
             scheme,
             model,
             gain,
+            gain_alone,
             body_noise,
             r: rm,
             prior_sigma_xi,

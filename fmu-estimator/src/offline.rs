@@ -199,7 +199,13 @@ pub fn process(
     samples: &[Sample],
     smooth: bool,
 ) -> Result<Processed, String> {
-    process_learned(config, None, h, samples, smooth)
+    // The Kalman filter is the estimate here: `gain` 0 means its own (time-varying) gain, not
+    // the one the learned filter's channel takes.
+    let alone = Config {
+        gain: config.gain_alone,
+        ..config.clone()
+    };
+    process_learned(&alone, None, h, samples, smooth)
 }
 
 /// [`process`] with the learned filter `learned` (a fresh one, as the FMU builds at
