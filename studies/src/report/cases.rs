@@ -123,7 +123,7 @@ pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
     let mut text = format!(
         "<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc docs/results.md`. -->\n\n\
          # Results\n\n\
-         Made by `{command}` ({} {}) on {} UTC. The figures and per-case JSON are in `{}` of that run.\n\n",
+         Made by `{command}` ({} {}) on {}. The figures and per-case JSON are in `{}` of that run.\n\n",
         env!("CARGO_PKG_NAME"),
         env!("CARGO_PKG_VERSION"),
         orchestrator::outdir::rfc3339(std::time::SystemTime::now()),
@@ -133,14 +133,15 @@ pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
         .strip_prefix("# Alignment estimation study\n\n")
         .unwrap_or(markdown);
     for line in body.lines() {
-        if line.starts_with("![") {
+        // Figures stay in the run's directory; no two blank lines where they were.
+        if line.starts_with("![") || (line.is_empty() && text.ends_with("\n\n")) {
             continue;
         }
-        // One level down: the document has its own title.
-        if line.starts_with('#') {
-            text.push('#');
-        }
-        text.push_str(&unlinked(line));
+        // The report's sections under the document's own title.
+        let line = line
+            .strip_prefix("###")
+            .map_or(line.to_string(), |l| format!("##{l}"));
+        text.push_str(&unlinked(&line));
         text.push('\n');
     }
     text
@@ -227,7 +228,7 @@ mod tests {
 
     #[test]
     fn the_document_has_its_provenance_and_no_links_into_the_run() {
-        let md = "# Alignment estimation study\n\n## Standard case\n\n| a | b |\n|---|---|\n\nSeed 1: time series [s1.csv](s1.csv).\n\n![fig](standard_alignment.svg)\n";
+        let md = "# Alignment estimation study\n\n### Standard case\n\n| a | b |\n|---|---|\n\nSeed 1: time series [s1.csv](s1.csv).\n\n![fig](standard_alignment.svg)\n";
         let doc = as_document(
             md,
             "alignment-studies all --doc d.md",
@@ -236,7 +237,8 @@ mod tests {
         assert!(doc.starts_with("<!-- Generated: do not edit."), "{doc}");
         assert!(doc.contains("Made by `alignment-studies all --doc d.md`"));
         assert!(doc.contains("`out/study`"));
-        assert!(doc.contains("\n### Standard case\n") && doc.contains("| a | b |"));
+        assert!(doc.contains("\n## Standard case\n") && doc.contains("| a | b |"));
+        assert!(!doc.contains("\n\n\n"), "{doc}");
         assert!(doc.contains("Seed 1: time series `s1.csv`."), "{doc}");
         assert!(!doc.contains("](") && !doc.contains("Alignment estimation study"));
     }
