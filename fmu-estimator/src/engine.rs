@@ -378,6 +378,16 @@ mod tests {
         ))
     }
 
+    /// Smooth sensor samples at time `t` (the virtual measurement 0).
+    fn sensors(t: f64) -> Vec4 {
+        Vec4::new(
+            (3.0 * t).sin() * 0.1,
+            (5.0 * t).cos() * 1e-3,
+            (2.0 * t).sin() * 0.05,
+            0.0,
+        )
+    }
+
     fn r() -> Mat4 {
         Mat4::from_diagonal(&Vec4::new(1e-4, 2.5e-7, 1e-4, 25e-6))
     }
@@ -428,13 +438,7 @@ mod tests {
         let speed = |k: usize| 20.0 + 0.3 * (k as f64 * 2e-3).sin(); // 19.7 to 20.3 m/s
         let mut max_diff = 0.0f64;
         for k in 0..3000 {
-            let t = k as f64 * 1e-3;
-            let z = Vec4::new(
-                (3.0 * t).sin() * 0.1,
-                (5.0 * t).cos() * 1e-3,
-                (2.0 * t).sin() * 0.05,
-                0.0,
-            );
+            let z = sensors(k as f64 * 1e-3);
             ss.step(speed(k), 1e-3, &z).unwrap().unwrap();
             let d = space.discrete(speed(k), 1e-3, Scheme::Taylor2);
             let gain = steady_state(&d, &r(), &p0).unwrap().k;
@@ -473,13 +477,7 @@ mod tests {
         let mut b = Engine::new(space, Scheme::Taylor2, Gain::SteadyState, r(), p0);
         let mut max_late = 0.0f64;
         for k in 0..20_000 {
-            let t = k as f64 * 1e-3;
-            let z = Vec4::new(
-                (3.0 * t).sin() * 0.1,
-                (5.0 * t).cos() * 1e-3,
-                (2.0 * t).sin() * 0.05,
-                0.0,
-            );
+            let z = sensors(k as f64 * 1e-3);
             a.step(20.0, 1e-3, &z).unwrap().unwrap();
             b.step(20.0, 1e-3, &z).unwrap().unwrap();
             if k > 15_000 {
