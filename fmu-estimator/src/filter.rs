@@ -85,8 +85,10 @@ mod tests {
         assert_eq!(kf.p, kf.p.transpose());
     }
 
+    /// The update against two textbook forms computed here with an explicit inverse: the
+    /// standard `(I - K H) P` and Joseph's `(I - K H) P (I - K H)^T + K R K^T`.
     #[test]
-    fn joseph_form_equals_the_standard_form_in_exact_arithmetic() {
+    fn the_update_equals_the_standard_and_joseph_forms() {
         let mut kf = Kalman::new(Vec7::zeros(), Mat7::identity());
         let mut h = Mat4x7::zeros();
         for (i, j) in [(0, 0), (0, 3), (1, 4), (2, 5), (2, 1), (3, 6)] {
@@ -96,8 +98,11 @@ mod tests {
         let p0 = kf.p;
         let s = h * p0 * h.transpose() + r;
         let k = p0 * h.transpose() * s.try_inverse().unwrap();
-        let standard = (Mat7::identity() - k * h) * p0;
+        let i_kh = Mat7::identity() - k * h;
+        let standard = i_kh * p0;
+        let joseph = i_kh * p0 * i_kh.transpose() + k * r * k.transpose();
         kf.update(&h, &r, &Vec4::zeros()).unwrap();
         assert!((kf.p - standard).norm() < 1e-12);
+        assert!((kf.p - joseph).norm() < 1e-12);
     }
 }
