@@ -152,13 +152,18 @@ fn bench_options(c: &mut Criterion) {
             })
         });
     }
-    // A speed that changes at every step: the matrices are rebuilt each time.
-    let values = offline::settings(&[("alignment_model".into(), "2".into())]).unwrap();
+    // A speed that changes at every step: the matrices are rebuilt each time, the steady-state
+    // gain taken from its speed bin's (solved once per 0.01 m/s).
+    let values = offline::settings(&[
+        ("alignment_model".into(), "2".into()),
+        ("gain".into(), "2".into()),
+    ])
+    .unwrap();
     let (config, _) = offline::config(&values, None).unwrap();
     let mut core = config.core();
     let mut k = 0u64;
     c.bench_function(
-        "filter step (integrated random walk, new speed every step)",
+        "filter step (integrated random walk, scheduled steady-state gain, new speed every step)",
         |b| {
             b.iter(|| {
                 k += 1;
