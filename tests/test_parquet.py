@@ -80,8 +80,8 @@ def test_bad_parquet_files_are_named(recorded, tmp_path):
 
 def test_run_and_simulate_write_parquet_results_equal_to_csv(recorded, tmp_path):
     """The standard case's results as Parquet: pyarrow reads the CSV run's values bit for bit,
-    its units file as the `units` metadata and its manifest.json as the `provenance`; an estimator
-    replaying them through `simulate --input results.parquet` gives what replaying the CSV gives."""
+    its units file as the `units` metadata and its manifest.json as the `provenance`; `simulate`
+    of the estimator on the recorded sensors writes as Parquet what it writes as CSV."""
     runs = {}
     for name in ("results.csv", "results.parquet"):
         out = tmp_path / name.split(".")[1]

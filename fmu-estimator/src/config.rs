@@ -33,7 +33,9 @@ pub struct Config {
     pub gain: Gain,
     /// The gain when the Kalman filter is the estimate itself, not the learned filter's
     /// channel (`gain` 0 resolves differently: [`Gain::from_fmi`]); what
-    /// [`crate::offline::process`] and the smoother run.
+    /// [`crate::offline::process`] (and its smoother) runs. With the learned filter
+    /// ([`crate::offline::process_learned`], the FMU) the Kalman filter, its fallback output and
+    /// a smoother over it run `gain`.
     pub gain_alone: Gain,
     pub body_noise: BodyNoise,
     /// Measurement noise of the three sensors and of the virtual measurement (paper's model).

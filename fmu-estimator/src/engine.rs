@@ -8,7 +8,7 @@
 //! - [`Gain::SteadyState`]: for a constant speed and step the time-varying gain converges to the
 //!   gain of the discrete algebraic Riccati equation (DARE)
 //!   `P = F P F^T + Q - F P H^T (H P H^T + R)^-1 H P F^T` (`P` the predicted covariance). It is
-//!   computed once per (speed, step) by the doubling algorithm ([`steady_state`], checked by the
+//!   computed once per (speed bin, step) by the doubling algorithm ([`steady_state`], checked by the
 //!   DARE residual), after which a step is two small matrix-vector products:
 //!   `x = F x`, `x += K (z - H x)`. What is lost is the filter's transient after start-up (the
 //!   gain is the converged one from the first step).
@@ -21,10 +21,12 @@
 //! once per bin at the bin's centre and kept, and each step uses the gain of its speed's bin with
 //! the transition and measurement matrices of its exact speed. A measured speed that changes
 //! every sample then costs one DARE per bin visited (about 70 us), not one per sample. The bins
-//! depend on the speed only, so the result does not depend on the order speeds came in, and a
-//! restored FMU state solves the same DAREs again. A speed on the grid (20.0, 17.25) uses its
-//! exact gain; between, the state stays within 3e-5 (relative) of a filter solving the DARE at
-//! every sample's exact speed (`the_scheduled_gain_is_solved_once_per_speed_bin`).
+//! depend on the speed only (and the step the schedule was started with: a master's clock
+//! rounding does not re-solve them), so the result does not depend on the order speeds came
+//! in. A speed on the grid (20.0, 17.25, a `design_speed` of 20) uses its exact gain; between,
+//! at 19.7-20.3 m/s the state stays within 3e-5 (relative, measured; the test asserts 1e-4) of a
+//! filter solving the DARE at every sample's exact speed. The bins are 0.01 m/s wide at every
+//! speed, so the relative mismatch grows as the speed falls (0.1 % of the speed at 5 m/s).
 
 use crate::discretize::Scheme;
 use crate::filter::{Kalman, Mat4, Vec4};
@@ -304,13 +306,16 @@ impl<const N: usize> Engine<N> {
         if let Some(ss) = self.gains.get(&(bin as i64)) {
             return Ok(ss.clone());
         }
-        // k / 100 is the double nearest the bin's centre (k * 0.01 may not be).
-        let centre = bin / GAIN_SPEED_BIN.recip().round();
-        let ss = if centre == d.speed {
+        // k / 100 is the double nearest the bin's centre (k * 0.01 may not be); the lowest bin
+        // is solved at its upper half's middle, not at standstill (the model has 1 / V terms).
+        let centre = (bin / GAIN_SPEED_BIN.recip().round()).max(0.5 * GAIN_SPEED_BIN);
+        // Solved for the schedule's step, not this call's: a master's clock rounding (within
+        // the tolerance of `step::same`) does not change a bin's gain.
+        let ss = if centre == d.speed && d.h == self.gains_h {
             steady_state(d, &self.r, &self.filter.p)?
         } else {
             steady_state(
-                &self.space.discrete(centre, d.h, self.scheme),
+                &self.space.discrete(centre, self.gains_h, self.scheme),
                 &self.r,
                 &self.filter.p,
             )?
@@ -448,7 +453,7 @@ mod tests {
         }
         assert_eq!(ss.rebuilds, 3000, "a new speed every sample");
         assert_eq!(ss.gains.len(), 61, "19.70 ... 20.30 m/s");
-        assert!(max_diff < 1e-3, "{max_diff}");
+        assert!(max_diff < 1e-4, "{max_diff}");
         eprintln!("scheduled vs exact steady-state filter: {max_diff:.3e} of the state's largest");
         for (v, centre) in [(20.004, 20.0), (19.7351, 19.74), (20.3, 20.3)] {
             let mut e = Engine::new(space.clone(), Scheme::Taylor2, Gain::SteadyState, r(), p0);

@@ -176,13 +176,16 @@ impl OutputDir {
                 continue;
             }
             let path = self.dir.join(name);
-            if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
-                std::fs::remove_file(&path).map_err(|e| {
-                    io::Error::new(
-                        e.kind(),
-                        format!("cannot remove {} of the previous run: {e}", path.display()),
-                    )
-                })?;
+            // The file, and what a run stopped by a failed write left of it.
+            for path in [crate::record::partial(&path), path] {
+                if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_file()) {
+                    std::fs::remove_file(&path).map_err(|e| {
+                        io::Error::new(
+                            e.kind(),
+                            format!("cannot remove {} of the previous run: {e}", path.display()),
+                        )
+                    })?;
+                }
             }
         }
         Ok(())
@@ -299,7 +302,12 @@ mod tests {
     fn the_previous_runs_outputs_are_removed_and_nothing_else() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        for f in ["results.csv", "metrics.json", "notes.txt"] {
+        for f in [
+            "results.csv",
+            "results.csv.partial",
+            "metrics.json",
+            "notes.txt",
+        ] {
             std::fs::write(d.join(f), "old").unwrap();
         }
         let m = Manifest {
@@ -318,6 +326,10 @@ mod tests {
         OutputDir::open(d).unwrap().write_manifest(&m).unwrap();
         drop(OutputDir::open(d).unwrap());
         assert!(!d.join("results.csv").exists() && !d.join("metrics.json").exists());
+        assert!(
+            !d.join("results.csv.partial").exists(),
+            "what a failed write left of a listed file goes too"
+        );
         assert!(!d.join(MANIFEST).exists());
         assert!(d.join("notes.txt").exists(), "files no manifest lists stay");
     }

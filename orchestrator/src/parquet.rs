@@ -122,10 +122,10 @@ impl ParquetWriter {
         Ok(())
     }
 
-    /// Writes the footer.
+    /// Writes the footer and syncs the file to disk.
     pub fn finish(self) -> Result<(), String> {
-        self.writer.close().map_err(|e| err(&self.path, e))?;
-        Ok(())
+        let file = self.writer.into_inner().map_err(|e| err(&self.path, e))?;
+        file.sync_all().map_err(|e| err(&self.path, e))
     }
 }
 

@@ -27,7 +27,9 @@ def estimate(
     the speed [m/s] and sensors [m/s2, rad/s] at the end of step ``k``).
 
     ``settings`` are FMU parameters by name (``{"estimator": 1, "lag": 5.0}``);
-    ``calibration`` another calibration file; ``smooth`` adds the Rauch-Tung-Striebel smoother.
+    ``calibration`` another calibration file; ``smooth`` adds the Rauch-Tung-Striebel smoother,
+    run on the filter that ran: with the learned filter (``estimator`` 2, the default) its Kalman
+    channel, whose gain is the scheduled steady-state one unless ``gain`` is 1.
     Float64 contiguous arrays are read in place; other array-likes are converted once.
 
     Returns the FMU's outputs per sample as float64 arrays: ``alignment``, ``alignment_std``,

@@ -4,8 +4,8 @@
 //! row.
 //!
 //! It is created before any FMU is instantiated, because creating it creates the results file
-//! and flushes its header: an unwritable destination or a full disk stops the run before it
-//! starts.
+//! (and, for CSV, flushes its header): an unwritable destination stops the run before it
+//! starts, and for CSV a full disk too.
 
 use super::grid::Grid;
 use super::{RunError, RunOptions, Table};

@@ -225,11 +225,23 @@ impl Run<'_> {
         started: Instant,
     ) -> Result<RunSummary, RunError> {
         let mut final_time = self.grid.time(k);
+        let mut outcome = outcome;
         // As fmpy does: a last row at the ending FMU's last successful time, with every
         // component's outputs as they are (in a system, the others' at their last step).
         if let Outcome::Ended { at: Some(at), .. } = &outcome {
             final_time = *at;
-            self.observe(*at)?;
+            let at = *at;
+            match self
+                .results
+                .as_mut()
+                .map(|r| r.observe(at, &mut self.instances))
+            {
+                None | Some(Ok(())) => {}
+                // Reading that row failed: the rows until then are finished and kept, as
+                // when an FMU fails mid-run.
+                Some(Err(ObserveError::Fmi(e))) => outcome = Outcome::Failed(e),
+                Some(Err(ObserveError::Write(e))) => return Err(e),
+            }
         }
         let (rows, results, table) = match self.results.take() {
             Some(r) => r.finish()?,

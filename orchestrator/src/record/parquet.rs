@@ -1,8 +1,10 @@
 //! The Parquet results writer: the table the CSV writer writes, as one `DOUBLE` column per
 //! variable with the units and the run's manifest in the file's metadata ([`crate::parquet`]).
 //!
-//! Rows are gathered in columns and written a row group ([`ROW_GROUP`] rows, a few MB) at a
-//! time, so a long run streams out in bounded memory. Parquet's index (the footer) is written
+//! Rows are gathered in columns and written a row group at a time, so a long run streams out
+//! in bounded memory: [`ROW_GROUP`] rows, or fewer for a wide table, at most [`GROUP_BYTES`]
+//! (16 MiB) of values, at least 1024 rows. The file's header is only written with the first row
+//! group: a full disk shows then, not before the run (the CSV writer's header probe). Parquet's index (the footer) is written
 //! last, by [`ParquetRecorder::finish`]: a run stopped by an FMU error or an interrupt still
 //! finishes the file, while a write that fails mid-run leaves a partial file no reader opens.
 
@@ -10,11 +12,16 @@ use crate::parquet::{ParquetWriter, ROW_GROUP};
 use std::io;
 use std::path::{Path, PathBuf};
 
+/// The most memory a row group's values take before they are written.
+pub const GROUP_BYTES: usize = 16 << 20;
+
 pub struct ParquetRecorder {
     /// `None` once finished.
     writer: Option<ParquetWriter>,
     /// The rows not yet written, by column, time first.
     pending: Vec<Vec<f64>>,
+    /// Rows per row group.
+    group_rows: usize,
     partial: PathBuf,
     path: PathBuf,
     pub rows: u64,
@@ -55,9 +62,11 @@ impl ParquetRecorder {
             .collect();
         let writer = ParquetWriter::create(&partial, &names, &units, provenance)
             .map_err(|e| io::Error::other(format!("cannot create {e}")))?;
+        let group_rows = (GROUP_BYTES / (8 * names.len())).clamp(1024, ROW_GROUP);
         Ok(ParquetRecorder {
             writer: Some(writer),
-            pending: vec![Vec::with_capacity(ROW_GROUP); names.len()],
+            pending: vec![Vec::with_capacity(group_rows); names.len()],
+            group_rows,
             partial,
             path,
             rows: 0,
@@ -72,7 +81,7 @@ impl ParquetRecorder {
             col.push(v);
         }
         self.rows += 1;
-        if self.pending[0].len() == ROW_GROUP {
+        if self.pending[0].len() == self.group_rows {
             self.write_pending()?;
         }
         Ok(())
@@ -98,21 +107,14 @@ impl ParquetRecorder {
         &self.partial
     }
 
-    /// Writes the last rows and the footer, syncs and renames to `NAME`; returns its path.
+    /// Writes the last rows and the footer, syncs ([`ParquetWriter::finish`]) and renames to
+    /// `NAME`; returns its path.
     pub fn finish(mut self) -> io::Result<PathBuf> {
         self.write_pending()?;
         let writer = self.writer.take().expect("an unfinished recorder");
         writer
             .finish()
             .map_err(|e| io::Error::other(format!("cannot write {e}")))?;
-        std::fs::File::open(&self.partial)
-            .and_then(|f| f.sync_all())
-            .map_err(|e| {
-                io::Error::new(
-                    e.kind(),
-                    format!("cannot write {}: {e}", self.partial.display()),
-                )
-            })?;
         super::rename_into_place(&self.partial, &self.path)?;
         Ok(self.path.clone())
     }

@@ -123,7 +123,10 @@ pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
     let mut text = format!(
         "<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc docs/results.md`. -->\n\n\
          # Results\n\n\
-         Made by `{command}` ({} {}) on {}. The figures and per-case JSON are in `{}` of that run.\n\n",
+         Made by `{command}` ({} {}) on {}. The figures and per-case JSON are in `{}` of that run.\n\n\
+         These are the paper's cases with the paper's filter (`estimator` 1), as the paper measured \
+         them; the estimator FMU's default, the learned filter, is compared on the same seeds by \
+         `alignment-studies variants` (README, docs/accuracy.md).\n\n",
         env!("CARGO_PKG_NAME"),
         env!("CARGO_PKG_VERSION"),
         orchestrator::outdir::rfc3339(std::time::SystemTime::now()),
