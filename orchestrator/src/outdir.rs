@@ -140,7 +140,20 @@ impl OutputDir {
     ) -> io::Result<OutputDir> {
         let mut out = OutputDir::open(dir)?;
         for f in files {
-            refuse_special(&out.path().join(f))?;
+            let path = out.path().join(f);
+            refuse_special(&path)?;
+            // What an earlier run here wrote is gone (`open` removed what its manifest lists):
+            // a file still there is someone else's, and is neither replaced nor, through this
+            // run's manifest, handed to the next run to remove.
+            if path.exists() {
+                return Err(io::Error::new(
+                    io::ErrorKind::AlreadyExists,
+                    format!(
+                        "{} exists and no manifest of an earlier run here lists it: it is not replaced; move it or write elsewhere",
+                        path.display()
+                    ),
+                ));
+            }
         }
         let manifest = Manifest {
             program: program.into(),
@@ -332,6 +345,29 @@ mod tests {
         );
         assert!(!d.join(MANIFEST).exists());
         assert!(d.join("notes.txt").exists(), "files no manifest lists stay");
+    }
+
+    #[test]
+    fn a_file_no_manifest_lists_is_neither_replaced_nor_listed() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(d.join("data.csv"), "mine").unwrap();
+        let e = OutputDir::hold(d, "test", &["data.csv"], &[], &[])
+            .err()
+            .unwrap();
+        assert!(
+            e.to_string().contains("data.csv exists and no manifest"),
+            "{e}"
+        );
+        assert_eq!(std::fs::read_to_string(d.join("data.csv")).unwrap(), "mine");
+        assert!(!d.join(MANIFEST).exists());
+        // Written by a run here (listed in its manifest): the next run replaces it.
+        std::fs::remove_file(d.join("data.csv")).unwrap();
+        let out = OutputDir::hold(d, "test", &["data.csv"], &[], &[]).unwrap();
+        std::fs::write(d.join("data.csv"), "run 1").unwrap();
+        drop(out);
+        OutputDir::hold(d, "test", &["data.csv"], &[], &[]).unwrap();
+        assert!(!d.join("data.csv").exists());
     }
 
     #[cfg(unix)]
