@@ -4,7 +4,7 @@
 use crate::convert::{bad, settings};
 use fmi_import::{LogConfig, fmi2Status};
 use numpy::IntoPyArray;
-use orchestrator::master::{Algorithm, Cosimulation, RunOptions};
+use orchestrator::master::{Cosimulation, RunOptions};
 use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
@@ -39,17 +39,10 @@ pub fn simulate<'py>(
         experiment: Experiment::default(),
     };
     let options = RunOptions {
-        start: 0.0,
-        stop: stop_time,
-        step,
-        algorithm: Algorithm::GaussSeidel,
-        out_dir: None,
-        results: Default::default(),
         record: variables.map(|v| v.iter().map(|n| Endpoint::new(NAME, n)).collect()),
-        interval: None,
-        progress: false,
         log: fmi_import_log(),
         collect: true,
+        ..RunOptions::new(0.0, stop_time, step)
     };
     let table = py.detach(|| {
         let cosim = Cosimulation::load(system).map_err(|e| bad(e.to_string()))?;

@@ -13,7 +13,7 @@
 //!   tests/bench_fmpy.py, and the ratio to ours.
 
 use fmi_import::{Fmu, LogConfig};
-use orchestrator::master::{Algorithm, Cosimulation, ResultsFile, RunOptions};
+use orchestrator::master::{Cosimulation, ResultsFile, RunOptions};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -57,17 +57,10 @@ fn bare_loop(dq: &Path, feed: &Path) -> f64 {
 fn master(system: &System, out: Option<&Path>, results: &str) -> f64 {
     let cosim = Cosimulation::load(system.clone()).unwrap();
     let opts = RunOptions {
-        start: 0.0,
-        stop: STEPS as f64 * H,
-        step: H,
-        algorithm: Algorithm::GaussSeidel,
         out_dir: out.map(Path::to_path_buf),
         results: ResultsFile::new(results).unwrap(),
         record: Some(vec![Endpoint::new("dq", "x"), Endpoint::new("feed", "u")]),
-        interval: None,
-        collect: false,
-        progress: false,
-        log: LogConfig::default(),
+        ..RunOptions::new(0.0, STEPS as f64 * H, H)
     };
     let start = Instant::now();
     cosim.run(&opts).unwrap();

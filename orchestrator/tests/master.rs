@@ -3,7 +3,6 @@
 
 mod common;
 
-use fmi_import::LogConfig;
 use orchestrator::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions, no_inputs};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System, Value};
 
@@ -38,21 +37,14 @@ fn chain(gain: f64, fail_at: Option<f64>) -> System {
 
 fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) -> RunOptions {
     RunOptions {
-        start: 0.0,
-        stop,
-        step,
         algorithm,
         out_dir: Some(dir.to_path_buf()),
-        results: Default::default(),
         record: Some(vec![
             Endpoint::new("dq", "x"),
             Endpoint::new("feed", "y"),
             Endpoint::new("feed", "steps"),
         ]),
-        interval: None,
-        collect: false,
-        progress: false,
-        log: LogConfig::default(),
+        ..RunOptions::new(0.0, stop, step)
     }
 }
 

@@ -4,23 +4,15 @@
 mod common;
 
 use alignment_studies::study::standard_case;
-use fmi_import::LogConfig;
 use orchestrator::master::{Algorithm, Cosimulation, RunOptions};
 use orchestrator::system::Endpoint;
 
 fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) -> RunOptions {
     RunOptions {
-        start: 0.0,
-        stop,
-        step,
         algorithm,
         out_dir: Some(dir.to_path_buf()),
-        results: Default::default(),
         record: Some(vec![Endpoint::new("vehicle", "ws_acc_y")]),
-        interval: None,
-        collect: false,
-        progress: false,
-        log: LogConfig::default(),
+        ..RunOptions::new(0.0, stop, step)
     }
 }
 

@@ -11,7 +11,7 @@ pub mod simulate;
 
 pub use report::{progress_bar, summary_text};
 
-use crate::master::{Algorithm, Cosimulation, ResultsFile, RunError, RunOptions};
+use crate::master::{Cosimulation, ResultsFile, RunError, RunOptions};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::{Args, ValueEnum};
@@ -107,18 +107,25 @@ impl Common {
                     .collect::<Result<Vec<_>, _>>()?,
             )
         };
+        self.run_options(stop, step, record)
+    }
+
+    /// The run's options from the command line, with the stop time, step and recorded
+    /// variables the command resolved.
+    pub fn run_options(
+        &self,
+        stop: f64,
+        step: f64,
+        record: Option<Vec<Endpoint>>,
+    ) -> Result<RunOptions, RunError> {
         Ok(RunOptions {
-            start: self.start,
-            stop,
-            step,
-            algorithm: Algorithm::GaussSeidel,
             out_dir: (!self.no_record).then(|| self.out.clone()),
             results: self.results_file()?,
             record,
             interval: self.interval,
-            collect: false,
             progress: !self.quiet,
             log: self.log_config(),
+            ..RunOptions::new(self.start, stop, step)
         })
     }
 

@@ -1,7 +1,7 @@
 //! `orchestrator simulate FMU`: one FMU, optionally driven by input signals from a CSV file.
 
 use super::{Common, progress_bar, split_assignment};
-use crate::master::{Algorithm, RunError, RunOptions, RunSummary};
+use crate::master::{RunError, RunSummary};
 use crate::system::Endpoint;
 use clap::Args;
 use std::path::PathBuf;
@@ -67,19 +67,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
             .to_string();
         Some(c.record.iter().map(|r| Endpoint::new(&name, r)).collect())
     };
-    let mut opts = RunOptions {
-        start: c.start,
-        stop,
-        step,
-        algorithm: Algorithm::GaussSeidel,
-        out_dir: (!c.no_record).then(|| c.out.clone()),
-        results: c.results_file()?,
-        record,
-        interval: c.interval,
-        collect: false,
-        progress: !c.quiet,
-        log: c.log_config(),
-    };
+    let mut opts = c.run_options(stop, step, record)?;
     let _out = c.hold_output(
         &mut opts,
         concat!("orchestrator ", env!("CARGO_PKG_VERSION")),

@@ -87,21 +87,11 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::master::Algorithm;
 
     fn options(start: f64, stop: f64, step: f64, interval: Option<f64>) -> RunOptions {
         RunOptions {
-            start,
-            stop,
-            step,
-            algorithm: Algorithm::GaussSeidel,
-            out_dir: None,
-            results: Default::default(),
-            record: None,
             interval,
-            collect: false,
-            progress: false,
-            log: fmi_import::LogConfig::default(),
+            ..RunOptions::new(start, stop, step)
         }
     }
 

@@ -105,6 +105,27 @@ pub struct RunOptions {
     pub log: LogConfig,
 }
 
+impl RunOptions {
+    /// A run from `start` to `stop` in steps of `step`: Gauss-Seidel, nothing recorded or
+    /// kept, no progress reports, the default FMU log. Callers change what they need with
+    /// struct update syntax, so a new option is defaulted here once.
+    pub fn new(start: f64, stop: f64, step: f64) -> RunOptions {
+        RunOptions {
+            start,
+            stop,
+            step,
+            algorithm: Algorithm::GaussSeidel,
+            out_dir: None,
+            results: ResultsFile::default(),
+            record: None,
+            interval: None,
+            collect: false,
+            progress: false,
+            log: LogConfig::default(),
+        }
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct RunSummary {
     pub steps: u64,

@@ -6,7 +6,7 @@ use crate::Error;
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
 use model_description::BaseType;
-use orchestrator::master::{Algorithm, Cosimulation, ExternalValue, RunOptions, Table};
+use orchestrator::master::{Cosimulation, ExternalValue, RunOptions, Table};
 use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use std::path::PathBuf;
 
@@ -143,20 +143,13 @@ pub const STEP: f64 = 1e-3;
 
 fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
     RunOptions {
-        start: 0.0,
-        stop,
-        step: STEP,
-        algorithm: Algorithm::GaussSeidel,
-        out_dir: None,
-        results: Default::default(),
         record: Some(record),
-        interval: None,
-        progress: false,
         log: LogConfig {
             min_status: fmi_import::fmi2Status::Error,
             ..LogConfig::default()
         },
         collect: true,
+        ..RunOptions::new(0.0, stop, STEP)
     }
 }
 
