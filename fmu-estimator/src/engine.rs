@@ -282,7 +282,7 @@ impl<const N: usize> Engine<N> {
                 && self.steady_bin == Some(bin)
                 && fmi_abi::step::same(self.gains_h, d.h);
             if !kept {
-                let ss = self.scheduled_gain(&d)?;
+                let ss = self.scheduled_gain(&d, bin)?;
                 self.filter.p = ss.p_filt;
                 self.steady = Some(ss);
                 self.steady_bin = Some(bin);
@@ -296,19 +296,18 @@ impl<const N: usize> Engine<N> {
         Ok(())
     }
 
-    /// The steady-state filter of `d`'s speed bin, solved at the bin's centre once.
-    fn scheduled_gain(&mut self, d: &Discrete<N>) -> Result<SteadyState<N>, String> {
+    /// The steady-state filter of speed bin `bin` (`d`'s), solved at the bin's centre once.
+    fn scheduled_gain(&mut self, d: &Discrete<N>, bin: i64) -> Result<SteadyState<N>, String> {
         if !fmi_abi::step::same(self.gains_h, d.h) || self.gains.len() >= GAIN_BINS_KEPT {
             self.gains.clear();
             self.gains_h = d.h;
         }
-        let bin = (d.speed / GAIN_SPEED_BIN).round();
-        if let Some(ss) = self.gains.get(&(bin as i64)) {
+        if let Some(ss) = self.gains.get(&bin) {
             return Ok(ss.clone());
         }
         // k / 100 is the double nearest the bin's centre (k * 0.01 may not be); the lowest bin
         // is solved at its upper half's middle, not at standstill (the model has 1 / V terms).
-        let centre = (bin / GAIN_SPEED_BIN.recip().round()).max(0.5 * GAIN_SPEED_BIN);
+        let centre = (bin as f64 / GAIN_SPEED_BIN.recip().round()).max(0.5 * GAIN_SPEED_BIN);
         // Solved for the schedule's step, not this call's: a master's clock rounding (within
         // the tolerance of `step::same`) does not change a bin's gain.
         let ss = if centre == d.speed && d.h == self.gains_h {
@@ -320,7 +319,7 @@ impl<const N: usize> Engine<N> {
                 &self.filter.p,
             )?
         };
-        self.gains.insert(bin as i64, ss.clone());
+        self.gains.insert(bin, ss.clone());
         Ok(ss)
     }
 

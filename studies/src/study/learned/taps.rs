@@ -173,11 +173,11 @@ fn run(
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
-/// The channel is the time-varying filter's (`gain` 1), as the shipped taps were fitted; the
-/// FMU's scheduled steady-state channel equals it at the training's constant speeds once the
-/// start-up has passed.
+/// The channel is the time-varying filter's ([`offline::process`] runs the Kalman filter with
+/// its own gain), as the shipped taps were fitted; the FMU's scheduled steady-state channel
+/// equals it at the training's constant speeds once the start-up has passed.
 fn on_grid(rec: &Record) -> Result<GridRun, String> {
-    let values = offline::settings(&[("gain".into(), "1".into())])?;
+    let values = offline::settings(&[])?;
     let (config, _) = offline::config(&values, None)?;
     let out = offline::process(&config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
