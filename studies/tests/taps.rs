@@ -1,6 +1,6 @@
 //! The shipped tap bank is what `alignment-studies taps` makes: the 20 m/s entries regenerated
 //! here (training and validation runs of the packaged vehicle FMU, the fit) equal the shipped
-//! file's, byte for byte. The whole bank (six speeds) takes minutes; one speed exercises every
+//! file's, byte for byte. The whole bank (eleven speeds) takes minutes; one speed exercises every
 //! step of the fit.
 
 mod common;

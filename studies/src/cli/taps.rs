@@ -13,7 +13,11 @@ pub struct TapsArgs {
     #[command(flatten)]
     pub fmus: StandardFmus,
     /// Speeds of the bank [m/s].
-    #[arg(long, value_delimiter = ',', default_value = "5,10,15,20,25,30")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "5,7.5,10,12.5,15,17.5,20,22.5,25,27.5,30"
+    )]
     pub speeds: Vec<f64>,
     /// Kalker-coefficient scales of the training runs (one run each): each condition gets its
     /// own taps, blended at run time by the contact model fitted with them.

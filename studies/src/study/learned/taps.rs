@@ -121,7 +121,9 @@ impl Options {
     /// The shipped bank's settings.
     pub fn shipped() -> Options {
         Options {
-            speeds: vec![5.0, 10.0, 15.0, 20.0, 25.0, 30.0],
+            speeds: vec![
+                5.0, 7.5, 10.0, 12.5, 15.0, 17.5, 20.0, 22.5, 25.0, 27.5, 30.0,
+            ],
             kalker_scales: vec![1.0, 0.75, 0.5],
             per_condition: true,
             lags: vec![10.0],
