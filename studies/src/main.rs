@@ -40,7 +40,8 @@ enum Command {
     Robustness(StudyArgs),
     /// The resonance cases at the vehicle's first lateral mode.
     Resonance(StudyArgs),
-    /// Every case, in parallel.
+    /// Every case, in parallel. Each case runs with the paper's filter and with the FMU's
+    /// default, the learned filter.
     All(StudyArgs),
     /// Beyond the paper: the estimator's options (alignment prior, steady-state gain, RTS
     /// smoother, speed following) against the paper's filter, at constant and variable speed.

@@ -68,7 +68,7 @@ pub fn cases(
                 cases::resonance(mode.frequency, 20.0)
             }
         };
-        plan.push((g, group));
+        plan.push((g, cases::with_learned(group)));
     }
     let total: usize = plan.iter().map(|(_, c)| c.len()).sum::<usize>() * seeds.len();
     progress(Progress::Runs(total));
@@ -124,9 +124,11 @@ pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
         "<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc docs/results.md`. -->\n\n\
          # Results\n\n\
          Made by `{command}` ({} {}) on {}. The figures and per-case JSON are in `{}` of that run.\n\n\
-         These are the paper's cases with the paper's filter (`estimator` 1), as the paper measured \
-         them; the estimator FMU's default, the learned filter, is compared on the same seeds by \
-         `alignment-studies variants` (README, docs/accuracy.md).\n\n",
+         These are the paper's cases, each measured with the paper's filter (`estimator` 1), as the \
+         paper did, and with the estimator FMU's default, the learned filter (`estimator` 2, causal \
+         output `alignment`; rows \"learned filter\"). Its other outputs and options (fixed lag, \
+         roll-rate gyroscope, contact conditions, variable speed) are compared by \
+         `alignment-studies variants` (docs/cross-level.md, section 6).\n\n",
         env!("CARGO_PKG_NAME"),
         env!("CARGO_PKG_VERSION"),
         orchestrator::outdir::rfc3339(std::time::SystemTime::now()),

@@ -131,6 +131,25 @@ pub fn resonance(frequency: f64, speed: f64) -> Vec<Case> {
     ]
 }
 
+/// The name a case's learned-filter twin gets ([`with_learned`]).
+pub const LEARNED_SUFFIX: &str = ", learned filter (FMU default)";
+
+/// Each case followed by its twin with the estimator FMU's default, the learned filter
+/// (`estimator` 2; the twin's setting comes after the user's `--set`): the paper's cases measure
+/// the paper's filter, and the reader sees the new estimator beside it on the same seeds.
+pub fn with_learned(cases: Vec<Case>) -> Vec<Case> {
+    cases
+        .into_iter()
+        .flat_map(|c| {
+            let mut twin = c.clone();
+            twin.name.push_str(LEARNED_SUFFIX);
+            twin.estimator
+                .insert(0, set("estimator", Value::Integer(2)));
+            [c, twin]
+        })
+        .collect()
+}
+
 /// Mean and sample standard deviation over the seeds, per band.
 #[derive(Debug, Clone, Serialize)]
 pub struct Spread {
@@ -296,4 +315,27 @@ pub fn markdown(title: &str, results: &[CaseResult]) -> String {
         s.push('\n');
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_case_is_followed_by_its_learned_twin_which_overrides_the_estimator() {
+        let cases = with_learned(robustness(0.2));
+        assert_eq!(cases.len(), 2 * robustness(0.2).len());
+        for pair in cases.chunks(2) {
+            let (paper, twin) = (&pair[0], &pair[1]);
+            assert!(!paper.name.contains(LEARNED_SUFFIX));
+            assert_eq!(twin.name, format!("{}{LEARNED_SUFFIX}", paper.name));
+            assert_eq!(twin.vehicle, paper.vehicle);
+            assert_eq!(twin.paper, paper.paper);
+            // The twin's own settings follow its estimator choice, so the case's conicity
+            // still applies; the paper's case sets no estimator (runs::standard_run puts 1 first).
+            assert_eq!(twin.estimator[0], set("estimator", Value::Integer(2)));
+            assert_eq!(twin.estimator[1..], paper.estimator[..]);
+            assert!(paper.estimator.iter().all(|(n, _)| n != "estimator"));
+        }
+    }
 }
