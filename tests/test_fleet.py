@@ -58,7 +58,7 @@ def segment_errors(coverages, sds_truth, options, n: int) -> dict[str, np.ndarra
     return {k: sds[k][:m] / sds_truth[k][:m] - 1.0 for k in fleet.BANDS}
 
 
-def test_segment_sds_agree_with_the_truth_and_improve_with_passes(fleet_dir):
+def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fleet_dir):
     options = fleet.Options()
     files = fleet.expand([fleet_dir])
     coverages = [fleet.estimate_pass(f, options)[0] for f in files]
@@ -70,8 +70,39 @@ def test_segment_sds_agree_with_the_truth_and_improve_with_passes(fleet_dir):
     # truth's and D2 within 10 % (the learned estimator's D2 amplitude is about 5 % low).
     assert np.nanmax(np.abs(curve[50]["d1"])) < 0.05, curve[50]
     assert np.nanmax(np.abs(curve[50]["d2"])) < 0.10, curve[50]
-    # Averaging removes the passes' independent errors: D1 improves as passes are added.
-    assert rms[50]["d1"] < rms[5]["d1"] < rms[1]["d1"], rms
+    # The pipeline's average is the passes' mean, against numpy's on the stacked passes.
+    total = coverages[0]
+    for c in coverages[1:]:
+        total = fleet.add(total, c)
+    stacked = np.full((len(coverages), len(total.count)), np.nan)
+    for row, c in zip(stacked, coverages):
+        row[c.start - total.start:c.start - total.start + len(c.count)] = c.bands["d1"]
+    covered = total.count > 0
+    np.testing.assert_allclose(total.bands["d1"][covered] / total.count[covered],
+                               np.nanmean(stacked[:, covered], axis=0), rtol=1e-9, atol=1e-15)
+    assert (total.count == np.isfinite(stacked).sum(axis=0)).all()
+    # Measured, not asserted (docs/python.md): the learned estimator's D1 error is nearly the
+    # same on every pass over a track (it comes from the track's cross-level), so averaging
+    # 5 or 50 passes moves the segment SDs' error by a fraction of a percent.
+    signal = {n: d1_signal_error(coverages, fleet_dir / "truth.parquet", options, n) for n in (1, 5, 50)}
+    print("rms D1 error of the passes' average against the truth [mm]:", signal)
+
+
+def d1_signal_error(coverages, truth_file, options, n: int) -> float:
+    """Rms [mm] of the first `n` passes' average D1 band minus the truth's, where all `n` cover."""
+    total = coverages[0]
+    for c in coverages[1:n]:
+        total = fleet.add(total, c)
+    cols, _ = recordings.read_table(truth_file)
+    ds = options.ds
+    first = int(np.ceil(cols["distance"][0] / ds))
+    last = int(np.floor(cols["distance"][-1] / ds))
+    truth = fleet.banded(np.interp(np.arange(first, last + 1) * ds, cols["distance"], cols["alignment"]), options)["d1"]
+    lo, hi = max(first, total.start), min(last + 1, total.start + len(total.count))
+    count = total.count[lo - total.start:hi - total.start]
+    mean = total.bands["d1"][lo - total.start:hi - total.start] / np.maximum(count, 1)
+    err = np.where(count == n, mean, np.nan) - truth[lo - first:hi - first]
+    return float(np.sqrt(np.nanmean(err ** 2)) * 1e3)
 
 
 def test_parquet_recordings_round_trip_with_units_and_provenance(fleet_dir, tmp_path):

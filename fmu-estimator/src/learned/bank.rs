@@ -4,7 +4,7 @@
 //! # Format (version 2; version 1, without contact conditions, is still read)
 //! | part | content |
 //! |---|---|
-//! | first line | `learned-taps 1 <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
+//! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
 //! | header | TOML, UTF-8: [`Header`] (grid, window, high-pass, provenance, and every entry's windows without their taps) |
 //! | data | the taps, little-endian `f32`, entry after entry, window after window in header order |
 //!

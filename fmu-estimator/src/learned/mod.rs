@@ -21,7 +21,7 @@ pub use stream::{Choice, Learned};
 ///
 /// | file | trained on | use |
 /// |---|---|---|
-/// | `learned.taps` | Kalker 100 % and 50 % | the default: robust to wheel and rail wear |
+/// | `learned.taps` | Kalker 100, 75 and 50 %, taps per condition | the default: blended by the contact estimated from the sensors, robust to wheel and rail wear |
 /// | `learned-nominal.taps` | Kalker 100 % only | a vehicle whose contact is known to be nominal |
 pub const SHIPPED: [&str; 2] = ["learned.taps", "learned-nominal.taps"];
 
