@@ -406,9 +406,7 @@ impl Learned {
             .max(1);
         let contact = bank.contact.clone().filter(|_| !conditions.is_empty());
         Ok(Learned {
-            moments: contact
-                .as_ref()
-                .map(|c| Moments::new(bank.grid, c.band, c.memory)),
+            moments: contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
             selection: Arc::new(Selection {
                 speeds,
@@ -472,14 +470,12 @@ impl Learned {
         for cell in &closed.cells {
             self.history.push(cell);
             if let Some(m) = self.moments.as_mut() {
-                m.push(cell);
+                m.push(cell, speed);
             }
         }
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
             // Nominal until the features exist (the first cells of a run).
-            self.contact_scale = m
-                .features()
-                .map_or(model.range[1], |f| model.estimate(&f, speed));
+            self.contact_scale = model.estimate_from(m).unwrap_or(model.range[1]);
         }
         let s = &self.selection.speeds;
         self.in_range = speed >= s[0] && speed <= s[s.len() - 1];

@@ -110,8 +110,9 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
     for k in 0..400 {
         d += 0.05;
         let u = (k as f64 * 0.3).sin();
-        // Channel 1 is 1.2 x channel 0: ln(1.44) = 0.365, scale 0.786.
-        let x = [u, 1.2 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+        // Channel 1 is 0.12 x channel 0: at 10 m/s, over the speed and its square
+        // (contact::SPEED_POWER), 1.2 times: ln(1.44) = 0.365, scale 0.786.
+        let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
         if let Some(c) = grid.add(d, &x) {
             cells.extend(c.cells);
         }

@@ -14,15 +14,15 @@ use nalgebra::{DMatrix, DVector};
 /// Start of each run left out \[m\].
 pub const WARM_UP: f64 = CONTACT_MEMORY;
 
-/// The features of every cell of a run past the warm-up.
-fn features(run: &GridRun) -> Vec<[f64; FEATURES]> {
-    let mut m = Moments::new(GRID, CONTACT_BAND, CONTACT_MEMORY);
+/// The features of every cell of a run at `speed` past the warm-up.
+fn features(run: &GridRun, speed: f64) -> Vec<[f64; FEATURES]> {
+    let mut m = Moments::new(GRID, CONTACT_BAND, CONTACT_MEMORY, &[speed]);
     let skip = (WARM_UP / GRID).round() as usize;
     let mut out = vec![];
     for (i, cell) in run.cells.cells.iter().enumerate() {
-        m.push(cell);
+        m.push(cell, speed);
         if i >= skip
-            && let Some(f) = m.features()
+            && let Some(f) = m.features(0)
         {
             out.push(f);
         }
@@ -39,7 +39,7 @@ pub(super) fn fit(
     let n = FEATURES + 1;
     let (mut ata, mut aty) = (DMatrix::<f64>::zeros(n, n), DVector::<f64>::zeros(n));
     for (k, r) in training {
-        for f in features(r) {
+        for f in features(r, speed) {
             let a = DVector::from_iterator(n, f.iter().copied().chain([1.0]));
             ata += &a * a.transpose();
             aty += &a * *k;
@@ -54,7 +54,7 @@ pub(super) fn fit(
     let coefficients: Vec<f64> = coefficients.iter().copied().collect();
     let (mut sq, mut count) = (0.0, 0usize);
     for (k, r) in validation {
-        for f in features(r) {
+        for f in features(r, speed) {
             let e: f64 = f.iter().zip(&coefficients).map(|(x, c)| x * c).sum::<f64>()
                 + coefficients[FEATURES]
                 - k;
