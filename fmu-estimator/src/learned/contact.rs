@@ -255,18 +255,22 @@ fn shares(speeds: &[f64], v: f64) -> Vec<(usize, f64)> {
 mod tests {
     use super::*;
 
+    /// Uniform noise in [-0.5, 0.5) from a 64-bit linear congruential generator.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     #[test]
     fn features_are_scale_free_and_see_correlation() {
         // Channel 1 = 3 x channel 0 (perfectly correlated), channel 2 independent noise.
         let mut a = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
         let mut b = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
-        let mut seed = 1u64;
-        let mut noise = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut noise = uniform(1);
         // At 1 m/s the speed quotients (SPEED_POWER) leave the channels as they are.
         for _ in 0..20_000 {
             let (u, w) = (noise(), noise());
@@ -320,13 +324,7 @@ mod tests {
         m.check().unwrap();
         let mut moments = m.moments(0.2);
         assert_eq!(m.estimate_from(&moments), None);
-        let mut seed = 7u64;
-        let mut noise = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut noise = uniform(7);
         // Yaw rate 3 (at 10 m/s) and 2 (at 20 m/s) times the wheelset acceleration, each
         // scaled as the speed scales them (SPEED_POWER): ln(M11/M00) = ln 9, then ln 4.
         let n = 2000;
