@@ -57,7 +57,8 @@ pub const FEATURES: usize = 5;
 /// following a track wave `y(s)` has `y'' V^2` of lateral acceleration and `psi' V` of yaw rate,
 /// so the quotients keep the cells of one set (speeds up to one bank step apart) on one scale.
 pub const SPEED_POWER: [i32; 3] = [2, 1, 2];
-/// The speed below which the quotients are not taken further \[m/s\].
+/// The smallest speed the quotients divide by \[m/s\] (cells below the model's lowest speed
+/// are left out of the moments anyway).
 const MIN_SPEED: f64 = 1.0;
 
 /// The fitted estimator of the contact condition, as the tap bank holds it.
@@ -118,7 +119,8 @@ impl ContactModel {
 
     /// The Kalker-coefficient scale the moments indicate: each speed's model applied to the
     /// features of the cells near that speed, the estimates averaged with weights of how much
-    /// recent track each set holds over the model's squared error there. Cells are never judged
+    /// recent track each set holds, times how full its memory is, over the model's squared
+    /// error there. Cells are never judged
     /// by another speed's model, so a run's slow start does not bias the estimate while the
     /// train accelerates. `None` before any set has features. `moments` must have been made with
     /// this model's speeds ([`Self::moments`]).
@@ -133,7 +135,11 @@ impl ContactModel {
             if !e.is_finite() {
                 continue;
             }
-            let w = moments.sets[i].recent / m.rms_error.max(1e-3).powi(2);
+            // A young set's features are far noisier than the model's error (fitted after a
+            // full memory): its weight grows with its cells until the memory is full.
+            let set = &moments.sets[i];
+            let full = set.n.min(moments.memory_points) / moments.memory_points;
+            let w = set.recent * full / m.rms_error.max(1e-3).powi(2);
             sum += w * e.clamp(self.range[0], self.range[1]);
             weight += w;
         }
@@ -189,13 +195,20 @@ impl Moments {
 
     /// One closed cell (channels in [`super::grid::CHANNELS`] order) at `speed`: its moments go
     /// to the sets of the two speeds around it, in the linear-interpolation shares.
+    ///
+    /// The filters see every cell; the moments only those within the model's speeds (where the
+    /// taps are used; below the lowest, the quotients by a small speed would let a standing
+    /// start dominate the lowest set).
     pub fn push(&mut self, cell: &[f64; 5], speed: f64) {
-        let v = speed.abs().max(MIN_SPEED);
+        let v = speed.max(MIN_SPEED);
         let x: [f64; 3] = std::array::from_fn(|i| {
             let [hp, lp] = &mut self.filters[i];
             lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(SPEED_POWER[i])
         });
-        if x.iter().any(|v| !v.is_finite()) || self.sets.is_empty() {
+        let (Some(lo), Some(hi)) = (self.speeds.first(), self.speeds.last()) else {
+            return;
+        };
+        if x.iter().any(|v| !v.is_finite()) || !(speed >= *lo && speed <= *hi) {
             return;
         }
         let decay = 1.0 - 1.0 / self.memory_points;
@@ -324,6 +337,14 @@ mod tests {
         m.check().unwrap();
         let mut moments = m.moments(0.2);
         assert_eq!(m.estimate_from(&moments), None);
+        // Outside the model's speeds (and at no speed) the cells are not counted.
+        let mut outside = m.moments(0.2);
+        for v in [5.0, 25.0, f64::NAN, -10.0] {
+            for k in 0..100 {
+                outside.push(&[k as f64, 2.0, 3.0 * k as f64, 0.0, 0.0], v);
+            }
+        }
+        assert_eq!(m.estimate_from(&outside), None);
         let mut noise = uniform(7);
         // Yaw rate 3 (at 10 m/s) and 2 (at 20 m/s) times the wheelset acceleration, each
         // scaled as the speed scales them (SPEED_POWER): ln(M11/M00) = ln 9, then ln 4.

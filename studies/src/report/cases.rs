@@ -68,7 +68,13 @@ pub fn cases(
                 cases::resonance(mode.frequency, 20.0)
             }
         };
-        plan.push((g, cases::with_learned(group)));
+        // A user who chose the estimator (--set estimator.estimator=N) gets that one only.
+        let group = if fmus.estimator_number("estimator").is_some() {
+            group
+        } else {
+            cases::with_learned(group)
+        };
+        plan.push((g, group));
     }
     let total: usize = plan.iter().map(|(_, c)| c.len()).sum::<usize>() * seeds.len();
     progress(Progress::Runs(total));

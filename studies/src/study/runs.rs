@@ -242,9 +242,10 @@ pub fn standard_run(
         .cloned()
         .chain(vehicle)
         .collect();
-    // The paper's cases measure the paper's filter (estimator 1), unless the user asks for
-    // another with --set estimator.estimator=2; `alignment-studies variants` compares the FMU's
-    // default learned filter with it.
+    // The paper's cases measure the paper's filter (estimator 1) unless the case or the user
+    // (--set estimator.estimator=2) sets another: the study's cases come last, so
+    // `cases::with_learned`'s twins run the learned filter; `alignment-studies variants`
+    // compares its outputs and options.
     system.components[1].parameters = std::iter::once(("estimator".to_string(), Value::Integer(1)))
         .chain(fmus.estimator_settings.iter().cloned())
         .chain(estimator)
