@@ -171,6 +171,9 @@ struct MomentSet {
     n: f64,
     /// How much of the last `memory` metres of track this set holds (decays with distance).
     recent: f64,
+    /// The features of `m`, updated when a cell changes it: every closed cell reads every
+    /// set's features, but changes at most two sets.
+    features: Option<[f64; FEATURES]>,
 }
 
 impl Moments {
@@ -187,6 +190,7 @@ impl Moments {
                     m: [[0.0; 3]; 3],
                     n: 0.0,
                     recent: 0.0,
+                    features: None,
                 })
                 .collect(),
             memory_points: (memory / ds).max(1.0),
@@ -228,26 +232,32 @@ impl Moments {
                     *m += a * (x[r] * x[c] - *m);
                 }
             }
+            set.features = features_of(&set.m);
         }
     }
 
     /// The features ([module docs](self)) of the set of speed index `i`; `None` while a channel
     /// has no variance there yet.
     pub fn features(&self, i: usize) -> Option<[f64; FEATURES]> {
-        let m = &self.sets.get(i)?.m;
-        let (v0, v1, v2) = (m[0][0], m[1][1], m[2][2]);
-        if !(v0 > 0.0 && v1 > 0.0 && v2 > 0.0) {
-            return None;
-        }
-        let f = [
-            (v1 / v0).ln(),
-            (v2 / v0).ln(),
-            m[0][1] / (v0 * v1).sqrt(),
-            m[0][2] / (v0 * v2).sqrt(),
-            m[1][2] / (v1 * v2).sqrt(),
-        ];
-        f.iter().all(|v| v.is_finite()).then_some(f)
+        self.sets.get(i)?.features
     }
+}
+
+/// The features of the moments `m` ([module docs](self)); `None` while a channel has no
+/// variance.
+fn features_of(m: &[[f64; 3]; 3]) -> Option<[f64; FEATURES]> {
+    let (v0, v1, v2) = (m[0][0], m[1][1], m[2][2]);
+    if !(v0 > 0.0 && v1 > 0.0 && v2 > 0.0) {
+        return None;
+    }
+    let f = [
+        (v1 / v0).ln(),
+        (v2 / v0).ln(),
+        m[0][1] / (v0 * v1).sqrt(),
+        m[0][2] / (v0 * v2).sqrt(),
+        m[1][2] / (v1 * v2).sqrt(),
+    ];
+    f.iter().all(|v| v.is_finite()).then_some(f)
 }
 
 /// The indices of the speeds around `v` and their linear-interpolation shares (the end speed
