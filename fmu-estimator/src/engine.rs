@@ -382,6 +382,12 @@ mod tests {
         ))
     }
 
+    /// The paper's state space with the default parameters, and a small initial covariance.
+    fn paper() -> (StateSpace<7>, SMatrix<f64, 7, 7>) {
+        let space = StateSpace::paper(&Params::default(), noise(), true);
+        (space, SMatrix::identity() * 1e-6)
+    }
+
     /// Smooth sensor samples at time `t` (the virtual measurement 0).
     fn sensors(t: f64) -> Vec4 {
         Vec4::new(
@@ -434,9 +440,7 @@ mod tests {
     /// exact speed (the unscheduled steady-state filter, computed here by hand).
     #[test]
     fn the_scheduled_gain_is_solved_once_per_speed_bin() {
-        let p = Params::default();
-        let space = StateSpace::paper(&p, noise(), true);
-        let p0 = SMatrix::<f64, 7, 7>::identity() * 1e-6;
+        let (space, p0) = paper();
         let mut ss = Engine::new(space.clone(), Scheme::Taylor2, Gain::SteadyState, r(), p0);
         let mut exact = SVector::<f64, 7>::zeros();
         let speed = |k: usize| 20.0 + 0.3 * (k as f64 * 2e-3).sin(); // 19.7 to 20.3 m/s
@@ -474,9 +478,7 @@ mod tests {
     /// its transient has died out.
     #[test]
     fn steady_and_time_varying_filters_agree_after_the_transient() {
-        let p = Params::default();
-        let space = StateSpace::paper(&p, noise(), true);
-        let p0 = SMatrix::<f64, 7, 7>::identity() * 1e-6;
+        let (space, p0) = paper();
         let mut a = Engine::new(space.clone(), Scheme::Taylor2, Gain::TimeVarying, r(), p0);
         let mut b = Engine::new(space, Scheme::Taylor2, Gain::SteadyState, r(), p0);
         let mut max_late = 0.0f64;
@@ -497,9 +499,7 @@ mod tests {
     /// in a 20 s run before), and the estimate is the exact step's to rounding.
     #[test]
     fn a_masters_clock_rounding_is_not_a_new_step() {
-        let p = Params::default();
-        let space = StateSpace::paper(&p, noise(), true);
-        let p0 = SMatrix::<f64, 7, 7>::identity() * 1e-6;
+        let (space, p0) = paper();
         let mut exact = Engine::new(space.clone(), Scheme::Taylor2, Gain::TimeVarying, r(), p0);
         let mut jittered = Engine::new(space, Scheme::Taylor2, Gain::TimeVarying, r(), p0);
         let mut t_ns = 0u64;
@@ -520,15 +520,8 @@ mod tests {
 
     #[test]
     fn nan_samples_are_skipped_and_counted() {
-        let p = Params::default();
-        let space = StateSpace::paper(&p, noise(), true);
-        let mut e = Engine::new(
-            space,
-            Scheme::Taylor2,
-            Gain::TimeVarying,
-            r(),
-            SMatrix::identity() * 1e-6,
-        );
+        let (space, p0) = paper();
+        let mut e = Engine::new(space, Scheme::Taylor2, Gain::TimeVarying, r(), p0);
         let z = Vec4::new(f64::NAN, 0.0, 0.0, 0.0);
         assert_eq!(e.step(20.0, 1e-3, &z).unwrap(), Err(Skip::NonFinite));
         assert_eq!(e.skipped, 1);
