@@ -47,11 +47,17 @@ def test_one_and_two_workers_give_identical_segment_tables(fleet_dir, tmp_path):
     assert (tmp_path / "one" / "map.png").stat().st_size > 10_000
 
 
-def segment_errors(coverages, sds_truth, options, n: int) -> dict[str, np.ndarray]:
-    """Relative error per segment of the SD of the first `n` passes' average."""
+def first_passes(coverages, n: int):
+    """The sum (fleet.add) of the first `n` passes' coverages."""
     total = coverages[0]
     for c in coverages[1:n]:
         total = fleet.add(total, c)
+    return total
+
+
+def segment_errors(coverages, sds_truth, options, n: int) -> dict[str, np.ndarray]:
+    """Relative error per segment of the SD of the first `n` passes' average."""
+    total = first_passes(coverages, n)
     mean = {k: np.where(total.count > 0, x / np.maximum(total.count, 1), np.nan) for k, x in total.bands.items()}
     sds = fleet.segment_sds(total.start, mean, options)
     m = min(len(sds["d1"]), len(sds_truth["d1"]))
@@ -71,9 +77,7 @@ def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fle
     assert np.nanmax(np.abs(curve[50]["d1"])) < 0.05, curve[50]
     assert np.nanmax(np.abs(curve[50]["d2"])) < 0.10, curve[50]
     # The pipeline's average is the passes' mean, against numpy's on the stacked passes.
-    total = coverages[0]
-    for c in coverages[1:]:
-        total = fleet.add(total, c)
+    total = first_passes(coverages, len(coverages))
     stacked = np.full((len(coverages), len(total.count)), np.nan)
     for row, c in zip(stacked, coverages):
         row[c.start - total.start:c.start - total.start + len(c.count)] = c.bands["d1"]
@@ -90,15 +94,10 @@ def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fle
 
 def d1_signal_error(coverages, truth_file, options, n: int) -> float:
     """Rms [mm] of the first `n` passes' average D1 band minus the truth's, where all `n` cover."""
-    total = coverages[0]
-    for c in coverages[1:n]:
-        total = fleet.add(total, c)
-    cols, _ = recordings.read_table(truth_file)
-    ds = options.ds
-    first = int(np.ceil(cols["distance"][0] / ds))
-    last = int(np.floor(cols["distance"][-1] / ds))
-    truth = fleet.banded(np.interp(np.arange(first, last + 1) * ds, cols["distance"], cols["alignment"]), options)["d1"]
-    lo, hi = max(first, total.start), min(last + 1, total.start + len(total.count))
+    total = first_passes(coverages, n)
+    first, bands = fleet.truth_bands(truth_file, options)
+    truth = bands["d1"]
+    lo, hi = max(first, total.start), min(first + len(truth), total.start + len(total.count))
     count = total.count[lo - total.start:hi - total.start]
     mean = total.bands["d1"][lo - total.start:hi - total.start] / np.maximum(count, 1)
     err = np.where(count == n, mean, np.nan) - truth[lo - first:hi - first]

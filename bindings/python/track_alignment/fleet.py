@@ -141,13 +141,19 @@ def tree_sum(items: list) -> Any:
     return level[0]
 
 
-def truth_sds(path: str | Path, options: Options) -> dict[str, np.ndarray]:
-    """Per-segment SDs of a truth file (``distance``, ``alignment``), processed as a pass."""
+def truth_bands(path: str | Path, options: Options) -> tuple[int, dict[str, np.ndarray]]:
+    """A truth file (``distance``, ``alignment``) on the line grid from index ``first``,
+    band-passed as a pass is: ``(first, bands)``."""
     cols, _ = read_table(path)
     ds = options.ds
     first, last = int(np.ceil(cols["distance"][0] / ds)), int(np.floor(cols["distance"][-1] / ds))
     aligned = np.interp(np.arange(first, last + 1) * ds, cols["distance"], cols["alignment"])
-    return segment_sds(first, banded(aligned, options), options)
+    return first, banded(aligned, options)
+
+
+def truth_sds(path: str | Path, options: Options) -> dict[str, np.ndarray]:
+    """Per-segment SDs of a truth file (``distance``, ``alignment``), processed as a pass."""
+    return segment_sds(*truth_bands(path, options), options)
 
 
 def expand(inputs: Sequence[str | Path]) -> list[str]:
