@@ -60,6 +60,10 @@ pub struct Entry {
     pub lag: usize,
     /// The ridge chosen on the validation seeds (relative to the mean diagonal).
     pub ridge: f64,
+    /// The weights of whole, D1, D2 and D3 in the fit's objective, chosen with the ridge
+    /// (absent in banks fitted before 2026-11-25: all 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band_weights: Option<[f64; 4]>,
     /// The mean objective on the validation seeds with that ridge.
     pub validation_objective: f64,
     /// The Kalker-coefficient scales this entry was trained and validated on, where they differ
@@ -289,6 +293,7 @@ pub(crate) mod tests {
             channels: vec!["ws_acc_y".into(), "kalman".into()],
             lag,
             ridge: 1e-6,
+            band_weights: Some([1.0, 10.0, 10.0, 1.0]),
             validation_objective: 0.1,
             kalker_scales: vec![],
             condition: None,

@@ -100,11 +100,12 @@ pub fn taps(fmus: &Fmus, o: &Options, out: &Path, log: &dyn Fn(&str)) -> Result<
             .map(|c| format!("Kalker {:>3} %", c * 100.0))
             .unwrap_or_default();
         lines.push(format!(
-            "{:>5} m/s {condition} {:<48} lag {:>4} m: ridge {:.0e}, validation objective {:.4}, rms error {:.3} mm",
+            "{:>5} m/s {condition} {:<48} lag {:>4} m: ridge {:.0e}, band weights {:?}, validation objective {:.4}, rms error {:.3} mm",
             e.speed,
             e.channels.join(","),
             e.lag as f64 * bank.grid,
             e.ridge,
+            e.band_weights.unwrap_or([1.0; 4]),
             e.validation_objective,
             w.rms_error * 1e3
         ));

@@ -98,6 +98,16 @@ pub fn variants(
     // computes them (the built-in tap bank), under the conditions the taps must hold in.
     let three_quarters = variants::record_seeds(fmus, &a.seeds, Conditions::KalkerThreeQuarters)?;
     let fmu_rows = variants::learned_variants();
+    // The variable-speed profile's references: constant speeds over its distance (the sensors
+    // see less of the track at lower speed, so the profile's figure lies among these).
+    let mut at_speeds = vec![];
+    for v in [10, 15, 20] {
+        let records = variants::record_seeds(fmus, &a.seeds, Conditions::ConstantSpeed(v))?;
+        for mut r in variants::compare(&records, &fmu_rows[..3])? {
+            r.name = format!("{}, {v} m/s", r.name);
+            at_speeds.push(r);
+        }
+    }
     let fmu_tables: Vec<(&str, &str, Vec<variants::VariantResult>)> = vec![
         (
             "standard",
@@ -118,6 +128,11 @@ pub fn variants(
             "variable_speed",
             "Variable speed (0 -> 20 -> 10 m/s, 50 s; the learned filter blends its taps by speed, below 5 m/s the paper's filter)",
             variants::compare(&variable, &fmu_rows)?,
+        ),
+        (
+            "constant_speed_640m",
+            "Constant speeds over the variable-speed profile's 640 m (its references)",
+            at_speeds,
         ),
     ];
     let mut md = String::from(

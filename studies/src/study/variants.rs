@@ -39,6 +39,9 @@ pub fn profile(t: f64) -> f64 {
 
 /// Duration of [`profile`].
 pub const PROFILE_STOP: f64 = 50.0;
+/// Distance [`profile`] covers \[m\]: 200 m accelerating, 200 cruising at 20 m/s, 150 braking,
+/// 90 at 10 m/s.
+pub const PROFILE_DISTANCE: f64 = 640.0;
 
 /// One way of running the estimator.
 #[derive(Debug, Clone, Serialize)]
@@ -70,13 +73,13 @@ fn variant(name: &str, settings: &[(&str, String)], smooth: bool) -> Variant {
 /// instead of the default scheduled steady-state one, and with the roll-rate gyroscope.
 pub fn learned_variants() -> Vec<Variant> {
     // Estimator 2 with `extra` settings, judged on `output`.
-    let learned = |name: &str, extra: (&str, &str), output: Output| Variant {
-        output,
-        ..variant(
-            name,
-            &[("estimator", "2".into()), (extra.0, extra.1.to_string())],
-            false,
-        )
+    let learned = |name: &str, extra: &[(&str, &str)], output: Output| {
+        let mut settings = vec![("estimator", "2".to_string())];
+        settings.extend(extra.iter().map(|(k, v)| (*k, v.to_string())));
+        Variant {
+            output,
+            ..variant(name, &settings, false)
+        }
     };
     let three = ("use_roll_rate", "false");
     let nominal = ("tap_file", "learned-nominal.taps");
@@ -87,32 +90,41 @@ pub fn learned_variants() -> Vec<Variant> {
             &[("estimator", "1".into())],
             false,
         ),
-        learned("learned, causal (FMU default)", three, Output::Alignment),
+        learned("learned, causal (FMU default)", &[three], Output::Alignment),
         learned(
             "learned, fixed lag 10 m (alignment_lagged)",
-            three,
+            &[three],
             Output::Lagged,
         ),
         learned(
             "learned, causal, nominal-only taps (tap_file learned-nominal.taps)",
-            nominal,
+            &[nominal],
             Output::Alignment,
         ),
         learned(
             "learned, fixed lag 10 m, nominal-only taps",
-            nominal,
+            &[nominal],
             Output::Lagged,
         ),
         learned(
             "learned, causal, time-varying Kalman gain (gain 1; the default until 2026-11-24)",
-            ("gain", "1"),
+            &[("gain", "1")],
             Output::Alignment,
         ),
-        learned("learned + roll-rate gyro, causal", roll, Output::Alignment),
+        learned(
+            "learned + roll-rate gyro, causal",
+            &[roll],
+            Output::Alignment,
+        ),
         learned(
             "learned + roll-rate gyro, fixed lag 10 m",
-            roll,
+            &[roll],
             Output::Lagged,
+        ),
+        learned(
+            "learned + roll-rate gyro, causal, nominal-only taps",
+            &[roll, nominal],
+            Output::Alignment,
         ),
     ]
 }
@@ -346,6 +358,9 @@ pub enum Conditions {
     /// The standard case with the vehicle's Kalker coefficients at 75 % (between the learned
     /// filter's training conditions, 100 % and 50 %).
     KalkerThreeQuarters,
+    /// The standard track at this constant speed \[m/s\] over [`PROFILE_DISTANCE`]: the
+    /// references for the variable-speed profile, which spends its distance at 10-20 m/s.
+    ConstantSpeed(u32),
 }
 
 /// Records the given seeds in parallel.
@@ -374,6 +389,16 @@ pub fn record_seeds(
                         settings,
                         PROFILE_STOP,
                         Some(&profile),
+                        Some("ws_roll_rate"),
+                    );
+                }
+                Conditions::ConstantSpeed(v) => {
+                    let v = f64::from(v);
+                    return record_with(
+                        fmus,
+                        settings,
+                        (PROFILE_DISTANCE / v).round(),
+                        Some(&move |_| v),
                         Some("ws_roll_rate"),
                     );
                 }
@@ -407,6 +432,17 @@ pub fn markdown(title: &str, seeds: &[u32], results: &[VariantResult]) -> String
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_profile_covers_its_distance() {
+        // The trapezoid rule is exact on the piecewise-linear profile at a 0.5 s step.
+        let h = 0.5;
+        let n = (PROFILE_STOP / h) as usize;
+        let d: f64 = (0..n)
+            .map(|i| 0.5 * h * (profile(i as f64 * h) + profile((i + 1) as f64 * h)))
+            .sum();
+        assert!((d - PROFILE_DISTANCE).abs() < 1e-9, "{d}");
+    }
 
     #[test]
     fn the_profile_accelerates_cruises_and_brakes() {
