@@ -558,9 +558,12 @@ pub fn serialize<M: Model>(snap: &Snapshot<M>) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
+/// `RTGS3`, the GUID and the model's state layout, each NUL-terminated (`RTGS2` had no layout).
 fn state_header<M: Model>() -> Vec<u8> {
-    let mut header = b"RTGS2\0".to_vec();
+    let mut header = b"RTGS3\0".to_vec();
     header.extend_from_slice(M::INFO.guid.as_bytes());
+    header.push(0);
+    header.extend_from_slice(M::STATE_LAYOUT.as_bytes());
     header.push(0);
     header
 }
@@ -576,9 +579,10 @@ pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
     let header = state_header::<M>();
     let Some(rest) = bytes.strip_prefix(header.as_slice()) else {
         return Err(format!(
-            "the serialized state was not made by {} (GUID {}) or by this version of it",
+            "the serialized state was not made by {} (GUID {}, state layout '{}') or by this build of it",
             M::INFO.model_name,
-            M::INFO.guid
+            M::INFO.guid,
+            M::STATE_LAYOUT
         ));
     };
     let (Some(len), Some(sum)) = (rest.get(..8), rest.get(8..16)) else {

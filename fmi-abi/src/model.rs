@@ -51,6 +51,12 @@ pub struct InstantiateContext {
 /// serializable (fmi2SerializeFMUstate).
 pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
     const INFO: ModelInfo;
+    /// The layout of the model's serialized state, written into every serialized FMU state
+    /// beside the GUID: a state whose layout differs is refused with a message instead of being
+    /// decoded into wrong values (the GUID names the interface, which can stay the same while
+    /// the internal state changes). A model whose state layout can change between builds sets
+    /// it to a fingerprint of its sources; empty: the GUID alone decides.
+    const STATE_LAYOUT: &'static str = "";
 
     fn variables() -> &'static [VarSpec];
 

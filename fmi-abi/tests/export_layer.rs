@@ -38,6 +38,7 @@ impl Model for Toy {
         default_stop: 1.0,
         default_step: 0.1,
     };
+    const STATE_LAYOUT: &'static str = "toy-layout-1";
     fn variables() -> &'static [VarSpec] {
         VARS
     }
@@ -560,6 +561,25 @@ fn fmu_state_and_its_serialization_replay_bit_for_bit() {
     );
     assert_eq!(unsafe { x::set_fmu_state::<Toy>(f.c, s2) }, fmi2Status::OK);
     assert_eq!(run(&f), first);
+    // A state of another layout (another build of the same FMU) is refused, naming the layout.
+    let mut other = bytes.clone();
+    let text: Vec<u8> = other.iter().map(|c| *c as u8).collect();
+    let at = text
+        .windows(b"toy-layout-1".len())
+        .position(|w| w == b"toy-layout-1")
+        .expect("the header carries the layout");
+    other[at + b"toy-layout-".len()] = b'2' as c_char;
+    let mut s4: fmi2FMUstate = std::ptr::null_mut();
+    assert_eq!(
+        unsafe { x::deserialize_fmu_state::<Toy>(f.c, other.as_ptr(), size, &mut s4) },
+        fmi2Status::Error
+    );
+    assert!(
+        f.last().3.contains("state layout 'toy-layout-1'"),
+        "{}",
+        f.last().3
+    );
+    assert!(s4.is_null());
     // Corrupt bytes are refused with a message.
     bytes[0] = b'X' as c_char;
     let mut s3: fmi2FMUstate = std::ptr::null_mut();

@@ -97,6 +97,9 @@ impl Model for Estimator {
         default_stop: 20.0,
         default_step: 0.001,
     };
+    /// The sources' and tap banks' fingerprint (build.rs): a state saved by another build is
+    /// refused.
+    const STATE_LAYOUT: &'static str = env!("ESTIMATOR_STATE_LAYOUT");
 
     fn variables() -> &'static [VarSpec] {
         VARIABLES
