@@ -2,7 +2,7 @@
 //!
 //! - [`types`]: the C types of the FMI 2.0 headers (also used by the orchestrator to import).
 //! - [`variables`]: the variable table an FMU declares, and the value store built from it.
-//! - [`model`]: the [`Model`](model::Model) trait, the only thing an FMU crate implements.
+//! - [`model`]: the [`Model`] trait, the only thing an FMU crate implements.
 //! - [`instance`]: one instance and the co-simulation state machine, in safe Rust.
 //! - [`export`]: the 34 C entry points, generic over the model; [`export_fmu!`] instantiates them.
 //! - [`description`]: modelDescription.xml and documentation generated from the variable table.

@@ -66,9 +66,9 @@ impl Sample {
 /// Estimates per sample.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Processed {
-    /// Distance travelled at each sample [m].
+    /// Distance travelled at each sample \[m\].
     pub distance: Vec<f64>,
-    /// The causal filter's alignment estimate and its standard deviation [m].
+    /// The causal filter's alignment estimate and its standard deviation \[m\].
     pub filtered: Vec<(f64, f64)>,
     /// The smoothed estimate and its standard deviation (when asked for).
     pub smoothed: Option<Vec<(f64, f64)>>,

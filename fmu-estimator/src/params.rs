@@ -16,23 +16,23 @@ use serde::{Deserialize, Serialize};
 /// Physical parameters of the simplified model (SI units, see `model` for the meaning).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Params {
-    /// Wheelset mass [kg].
+    /// Wheelset mass \[kg\].
     pub m: f64,
     /// Wheelset yaw moment of inertia [kg m2].
     pub i: f64,
-    /// Half the lateral distance between the wheel-rail contact points [m].
+    /// Half the lateral distance between the wheel-rail contact points \[m\].
     pub l: f64,
-    /// Half the lateral distance between the longitudinal primary suspension elements [m].
+    /// Half the lateral distance between the longitudinal primary suspension elements \[m\].
     pub l_s: f64,
     /// Tread conicity [-].
     pub alpha: f64,
-    /// Rolling radius of the centred wheelset [m].
+    /// Rolling radius of the centred wheelset \[m\].
     pub r_0: f64,
-    /// Suspended mass carried by the wheelset: a quarter car body plus half a bogie frame [kg].
+    /// Suspended mass carried by the wheelset: a quarter car body plus half a bogie frame \[kg\].
     pub m_f: f64,
-    /// Kalker longitudinal creep coefficient per wheel [N].
+    /// Kalker longitudinal creep coefficient per wheel \[N\].
     pub f11: f64,
-    /// Kalker lateral creep coefficient per wheel [N].
+    /// Kalker lateral creep coefficient per wheel \[N\].
     pub f22: f64,
     /// Kalker lateral/spin creep coefficient per wheel [N m].
     pub f23: f64,
@@ -125,7 +125,7 @@ impl Params {
 
 include!(concat!(env!("OUT_DIR"), "/calibrated.rs"));
 
-/// The default sigma of the 8-state priors' virtual measurement [m]: the calibration file's
+/// The default sigma of the 8-state priors' virtual measurement \[m\]: the calibration file's
 /// `prior_sigma_xi` (tuned on the calibration seed), or 5 mm, the paper's value for its own
 /// virtual measurement.
 pub const PRIOR_SIGMA_XI: f64 = calibrated("prior_sigma_xi", 0.005);

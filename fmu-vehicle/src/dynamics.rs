@@ -189,7 +189,7 @@ pub struct Vehicle {
     /// Longitudinal position of each wheelset in the vehicle (from the car centre, forward).
     pub wheelset_x: [f64; 4],
     bogie_x: [f64; 2],
-    /// Static normal load per wheel of each wheelset [N].
+    /// Static normal load per wheel of each wheelset \[N\].
     pub static_wheel_load: [f64; 4],
     creep: CreepLaw,
 }

@@ -71,7 +71,7 @@ pub fn subsystem(a: &DMatrix<f64>, dofs: &[usize]) -> DMatrix<f64> {
     DMatrix::from_fn(idx.len(), idx.len(), |i, j| a[(idx[i], idx[j])])
 }
 
-/// One mode: eigenvalue, damped frequency [Hz] and damping ratio.
+/// One mode: eigenvalue, damped frequency \[Hz\] and damping ratio.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mode {
     pub eigenvalue: Complex<f64>,

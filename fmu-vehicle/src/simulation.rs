@@ -216,7 +216,7 @@ pub struct Simulation {
     pub roll_rng: NoiseRng,
     pub q: Dof,
     pub qd: Dof,
-    /// Position of the leading wheelset along the track [m].
+    /// Position of the leading wheelset along the track \[m\].
     pub s: f64,
     pub outputs: Outputs,
     pub substeps: u64,

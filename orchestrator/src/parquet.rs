@@ -7,7 +7,7 @@
 //! | schema | one `DOUBLE` column per variable, `REQUIRED`, named as the CSV header would be |
 //! | file key-value metadata `units` | JSON object `{column: unit}` (empty units left out) |
 //! | file key-value metadata `provenance` | JSON: the run's manifest (what produced the file, with which inputs and settings) |
-//! | row groups | [`ROW_GROUP`] rows each from [`write`]; [`ParquetWriter::row_group`] writes them one at a time |
+//! | row groups | [`ROW_GROUP`] rows each from [`write()`]; [`ParquetWriter::row_group`] writes them one at a time |
 //!
 //! Reading accepts what other tools write for a table of numbers: `DOUBLE`, `FLOAT`, `INT32`
 //! and `INT64` columns, `REQUIRED` or `OPTIONAL` (a null is refused, naming its column and

@@ -1,7 +1,7 @@
 //! `cargo xtask fmu`: build the FMU crates in release and pack each into `<target>/fmu/<id>.fmu`.
 //!
 //! The archive (FMI 2.0 section 2.3, docs/references.md section 7.4): modelDescription.xml,
-//! binaries/<platform>/<id>.<ext>, resources/..., documentation/index.html. Deflate, forward
+//! `binaries/<platform>/<id>.<ext>`, resources/..., documentation/index.html. Deflate, forward
 //! slashes, and reproducible: entries sorted by name, every timestamp 1980-01-01 00:00, unix
 //! permissions 0644 (0755 for the shared library), no extra fields. The same sources give the
 //! same bytes, so the .fmu can be compared or cached by hash.

@@ -311,7 +311,7 @@ fn by_speed(
     Ok((speeds, table))
 }
 
-/// What [`Learned::select`] needs to know of the FMU's configuration.
+/// What [`Learned::new`] needs to know of the FMU's configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Choice {
     /// Use the taps fitted with the wheelset roll-rate gyroscope.

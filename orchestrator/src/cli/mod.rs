@@ -22,13 +22,13 @@ use std::path::{Path, PathBuf};
 /// The options every run shares (`run`, `simulate`).
 #[derive(Args, Clone, Debug)]
 pub struct Common {
-    /// Stop time [s] (default: the system's, else the first FMU's default experiment).
+    /// Stop time \[s\] (default: the system's, else the first FMU's default experiment).
     #[arg(long)]
     pub stop: Option<f64>,
-    /// Communication step [s] (default: the system's, else the first FMU's default step).
+    /// Communication step \[s\] (default: the system's, else the first FMU's default step).
     #[arg(long)]
     pub step: Option<f64>,
-    /// Start time [s].
+    /// Start time \[s\].
     #[arg(long, default_value_t = 0.0)]
     pub start: f64,
     /// Output directory for the results (and manifest.json).
@@ -41,7 +41,7 @@ pub struct Common {
     /// Record only these variables (component.variable, repeatable or comma-separated); default: every output.
     #[arg(long, value_delimiter = ',')]
     pub record: Vec<String>,
-    /// Recording interval [s], a whole number of steps (default: every step).
+    /// Recording interval \[s\], a whole number of steps (default: every step).
     #[arg(long)]
     pub interval: Option<f64>,
     /// Do not write results.

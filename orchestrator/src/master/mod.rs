@@ -95,7 +95,7 @@ pub struct RunOptions {
     pub results: ResultsFile,
     /// Variables to record; `None`: every output of every component.
     pub record: Option<Vec<Endpoint>>,
-    /// Recording interval [s], a whole number of steps; `None`: every step.
+    /// Recording interval \[s\], a whole number of steps; `None`: every step.
     pub interval: Option<f64>,
     /// Also keep the recorded rows in memory ([`RunSummary::table`]), for the studies.
     pub collect: bool,

@@ -139,7 +139,7 @@ pub fn parse_ssd_with(xml: &str, base_dir: &Path, sources: &Sources) -> Result<S
 }
 
 /// Writes `system` as an .ssp archive: SystemStructure.ssd plus every component's FMU copied to
-/// resources/<component>.fmu. Connectors are typed from each FMU's modelDescription.xml. The
+/// `resources/<component>.fmu`. Connectors are typed from each FMU's modelDescription.xml. The
 /// archive is written to a temporary file next to `out` and renamed into place.
 pub fn write_ssp(system: &System, out: &Path) -> Result<(), SspError> {
     write::write_ssp(system, out)

@@ -15,15 +15,15 @@ pub struct LearnArgs {
     /// Track seed of the training run.
     #[arg(long, default_value_t = CALIBRATION_SEED)]
     pub seed: u32,
-    /// Length of the training run [s], more than 40.
+    /// Length of the training run \[s\], more than 40.
     #[arg(long, default_value_t = 1000.0)]
     pub stop: f64,
-    /// Look-ahead [m] (rounded to grid points) for an on-board filter combined with the
+    /// Look-ahead \[m\] (rounded to grid points) for an on-board filter combined with the
     /// paper's causal filter, 0 for a causal one; absent: the offline smoother (60 m each
     /// way) with the shaping filter's RTS smoother.
     #[arg(long)]
     pub lag: Option<f64>,
-    /// Grid step along the track [m] the sensors are decimated to (finer costs more: the
+    /// Grid step along the track \[m\] the sensors are decimated to (finer costs more: the
     /// window is 60 m whatever the step).
     #[arg(long, default_value_t = crate::study::learned::GRID)]
     pub grid: f64,

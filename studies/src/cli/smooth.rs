@@ -10,7 +10,7 @@ use std::path::PathBuf;
 pub struct SmoothArgs {
     /// The recorded signals: CSV, or Parquet by the .parquet extension.
     pub input: PathBuf,
-    /// The table to write (time, distance, alignment_filtered[_std], alignment_smoothed[_std]):
+    /// The table to write (time, distance, alignment_filtered\[_std\], alignment_smoothed\[_std\]):
     /// Parquet if it ends in .parquet, else CSV.
     #[arg(long, default_value = "out/smoothed.csv")]
     pub out: PathBuf,

@@ -26,7 +26,7 @@ pub struct TapsArgs {
     /// One set of taps fitted on every condition's runs at once, no contact model.
     #[arg(long)]
     pub pooled: bool,
-    /// Lags of the fixed-lag entries [m].
+    /// Lags of the fixed-lag entries \[m\].
     #[arg(long, value_delimiter = ',', default_value = "10")]
     pub lags: Vec<f64>,
     /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).

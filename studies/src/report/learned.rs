@@ -13,12 +13,12 @@ use std::path::Path;
 pub struct LearnOptions {
     /// Track seed of the training run.
     pub seed: u32,
-    /// Length of the training run [s], more than 40.
+    /// Length of the training run \[s\], more than 40.
     pub stop: f64,
-    /// Look-ahead [m] of an on-board filter combined with the paper's causal filter (0:
+    /// Look-ahead \[m\] of an on-board filter combined with the paper's causal filter (0:
     /// causal); `None`: the offline smoother with the shaping filter's RTS smoother.
     pub lag: Option<f64>,
-    /// Grid step along the track [m] the sensors are decimated to.
+    /// Grid step along the track \[m\] the sensors are decimated to.
     pub grid: f64,
     /// Kalker-coefficient scales of the vehicle to train on, one run each.
     pub kalker_scales: Vec<f64>,

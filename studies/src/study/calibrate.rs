@@ -37,13 +37,13 @@ pub struct Calibration {
     pub seed: u32,
     pub speed: f64,
     pub step: f64,
-    /// Factors applied to the virtual measurement's variance R[4,4] and the alignment's
-    /// process noise Q[7,7] (1 and 1: the paper's calibration; see [`tune`]).
+    /// Factors applied to the virtual measurement's variance R\[4,4\] and the alignment's
+    /// process noise Q\[7,7\] (1 and 1: the paper's calibration; see [`tune`]).
     pub virtual_scale: f64,
     pub xi_scale: f64,
     /// Whole-band Jrel on the calibration seed with the chosen factors, when tuned.
     pub tuned_jrel: Option<f64>,
-    /// The 8-state priors' virtual-measurement sigma [m] and the whole-band Jrel it gave on the
+    /// The 8-state priors' virtual-measurement sigma \[m\] and the whole-band Jrel it gave on the
     /// calibration seed (integrated random walk), when tuned ([`tune_prior`]).
     pub prior_sigma_xi: Option<f64>,
     pub prior_jrel: Option<f64>,

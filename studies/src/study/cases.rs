@@ -22,7 +22,7 @@ pub struct Case {
     pub name: String,
     pub vehicle: Settings,
     pub estimator: Settings,
-    /// The paper's figures for this case (J [mm], Jrel per band), when it reports them.
+    /// The paper's figures for this case (J \[mm\], Jrel per band), when it reports them.
     pub paper: Option<[(f64, f64); 4]>,
 }
 
@@ -100,7 +100,7 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
     ]
 }
 
-/// The resonance cases (the paper's Table 6) for a first lateral mode at `frequency` [Hz].
+/// The resonance cases (the paper's Table 6) for a first lateral mode at `frequency` \[Hz\].
 pub fn resonance(frequency: f64, speed: f64) -> Vec<Case> {
     let wavelength = speed / frequency;
     let harmonic = vec![

@@ -10,7 +10,7 @@
 //! minimized by Nelder-Mead.
 //!
 //! Misfit: `J_ls = mean((y_sm - y)^2) / var(y) + mean((psi_sm - psi)^2) / var(psi)`. The paper
-//! sums the squared errors of the state vector; `y` [m] and `psi` [rad] have different units and
+//! sums the squared errors of the state vector; `y` \[m\] and `psi` \[rad\] have different units and
 //! sizes, so each is normalized by its variance (otherwise the fit would ignore one of them).
 //! The search runs on the logarithms of `p_opt`, bounded to 1/30 ... 30 times the paper's
 //! Table 2 values (a quadratic penalty outside), which keeps the model's measurement equations

@@ -23,7 +23,7 @@ use serde::Serialize;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Band {
     pub name: &'static str,
-    /// Shortest and longest wavelength [m].
+    /// Shortest and longest wavelength \[m\].
     pub short: f64,
     pub long: f64,
 }
@@ -55,12 +55,12 @@ pub const ORDER: usize = 4;
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Accuracy {
-    /// rms of the error [mm].
+    /// rms of the error \[mm\].
     #[serde(rename = "J_mm")]
     pub j_mm: f64,
     #[serde(rename = "Jrel")]
     pub jrel: f64,
-    /// rms of the band-passed truth [mm].
+    /// rms of the band-passed truth \[mm\].
     pub truth_rms_mm: f64,
 }
 

@@ -2,7 +2,7 @@
 //! library: text is emitted as SVG `<text>` elements with an estimated layout, rendered by the
 //! viewer's own fonts).
 //!
-//! - [`estimate_vs_truth`]: estimated and true alignment [mm] over distance, whole band and
+//! - [`estimate_vs_truth`]: estimated and true alignment \[mm\] over distance, whole band and
 //!   D1, D2, D3 (each band-passed as the metrics do: common 0.05 m grid, zero-phase Butterworth,
 //!   10 m trimmed at each end);
 //! - [`spectra`]: amplitude spectra of estimate and truth over wavelength, log-log, 1-250 m;
@@ -146,8 +146,8 @@ struct Grid {
     t: Vec<f64>,
 }
 
-/// Estimated against true alignment [mm] over distance [m] in four stacked panels: the whole
-/// band and D1, D2, D3. `estimate` and `truth` are sampled at the same `distance` [m] (values in
+/// Estimated against true alignment \[mm\] over distance \[m\] in four stacked panels: the whole
+/// band and D1, D2, D3. `estimate` and `truth` are sampled at the same `distance` \[m\] (values in
 /// m); each panel band-passes both on a 0.05 m grid and drops the first and last 10 m.
 pub fn estimate_vs_truth(
     path: &Path,
@@ -257,7 +257,7 @@ pub fn amplitude_spectrum(x: &[f64], ds: f64) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// Amplitude spectra [mm] of estimate and truth (both sampled at `distance`, values in m) over
+/// Amplitude spectra \[mm\] of estimate and truth (both sampled at `distance`, values in m) over
 /// wavelength 1-250 m, log-log, on the metrics' 0.05 m grid without band-pass.
 pub fn spectra(
     path: &Path,
@@ -323,7 +323,7 @@ pub fn spectra(
     root.present().map_err(err(path))
 }
 
-/// The vehicle's wheelset lateral displacement `y` [mm] and yaw `psi` [mrad] against the
+/// The vehicle's wheelset lateral displacement `y` \[mm\] and yaw `psi` \[mrad\] against the
 /// identified simplified model's, over time, two panels.
 pub fn model_adjustment(path: &Path, id: &Identification) -> Result<(), String> {
     let n = id.time.len();
@@ -514,11 +514,11 @@ pub fn case_bars(path: &Path, results: &[CaseResult], title: &str) -> Result<(),
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeSeries {
     pub time: Vec<f64>,
-    /// [m]
+    /// \[m\]
     pub distance: Vec<f64>,
-    /// True alignment [m].
+    /// True alignment \[m\].
     pub truth: Vec<f64>,
-    /// Estimated alignment [m].
+    /// Estimated alignment \[m\].
     pub estimate: Vec<f64>,
 }
 

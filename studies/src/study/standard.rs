@@ -5,7 +5,7 @@
 use super::metrics::{BANDS, BandMetrics, evaluate};
 use orchestrator::master::Table;
 
-/// The paper's standard case, J [mm] / Jrel per band (its Tables 3 and 4).
+/// The paper's standard case, J \[mm\] / Jrel per band (its Tables 3 and 4).
 pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [
     ("whole", 0.36, 0.25),
     ("D1", 0.21, 0.48),

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
 
-/// The variable-speed profile [m/s] at time `t` [s] (see the module docs); 50 s long.
+/// The variable-speed profile \[m/s\] at time `t` \[s\] (see the module docs); 50 s long.
 pub fn profile(t: f64) -> f64 {
     match t {
         t if t < 1.0 => 0.0,
@@ -246,7 +246,7 @@ pub struct VariantResult {
     pub name: String,
     pub settings: Vec<(String, String)>,
     pub smooth: bool,
-    /// (band, mean Jrel, standard deviation, mean J [mm]).
+    /// (band, mean Jrel, standard deviation, mean J \[mm\]).
     pub bands: Vec<(String, f64, f64, f64)>,
     pub per_seed: Vec<BandMetrics>,
 }
@@ -282,7 +282,7 @@ fn summarize(v: &Variant, per_seed: Vec<BandMetrics>) -> VariantResult {
     }
 }
 
-/// Length of the calibration seed's run the learned smoother is trained on [s] (8 km).
+/// Length of the calibration seed's run the learned smoother is trained on \[s\] (8 km).
 pub const LEARNING_STOP: f64 = 1000.0;
 
 /// The on-board learned filter's look-ahead in grid points (20 m, 1 s at 20 m/s).
