@@ -730,4 +730,34 @@ mod tests {
         let (_, full_est, _) = apply(&run, &channels, &full, 5, 0);
         assert_eq!(&est[3..], &full_est[..]);
     }
+
+    #[test]
+    fn with_a_lag_each_position_is_estimated_from_the_cells_up_to_lag_ahead() {
+        let run = synthetic(12);
+        let channels = [1, 3];
+        // Windows of past 1 and 4 cells, both looking 2 cells ahead (len past + 3).
+        let short: Vec<f64> = (0..2 * 4).map(|i| 0.3 * i as f64 - 1.0).collect();
+        let full: Vec<f64> = (0..2 * 7).map(|i| 0.7 - 0.1 * i as f64).collect();
+        let (pos, est) =
+            apply_from_start(&run, &channels, &[(short.clone(), 1), (full.clone(), 4)], 2);
+        // Positions 1..=9: one cell of history behind at least, two cells ahead at most.
+        assert_eq!(pos, (1..10).map(|t| t as f64 * GRID).collect::<Vec<_>>());
+        let by_hand = |taps: &[f64], len: usize, newest: usize| -> f64 {
+            let mut e = 0.0;
+            for (ci, c) in channels.iter().enumerate() {
+                for j in 0..len {
+                    e += taps[ci * len + j] * run.cells.cells[newest - j][*c];
+                }
+            }
+            e
+        };
+        for t in 1..10 {
+            let want = if t < 4 {
+                by_hand(&short, 4, t + 2)
+            } else {
+                by_hand(&full, 7, t + 2)
+            };
+            assert_eq!(est[t - 1], want, "position {t}");
+        }
+    }
 }
