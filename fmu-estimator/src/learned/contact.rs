@@ -219,10 +219,7 @@ impl Moments {
         for set in &mut self.sets {
             set.recent *= decay;
         }
-        for (i, w) in shares(&self.speeds, speed) {
-            if !(w > 0.0) {
-                continue;
-            }
+        for (i, w) in super::weights(&self.speeds, speed) {
             let set = &mut self.sets[i];
             set.n += w;
             set.recent += w;
@@ -258,20 +255,6 @@ fn features_of(m: &[[f64; 3]; 3]) -> Option<[f64; FEATURES]> {
         m[1][2] / (v1 * v2).sqrt(),
     ];
     f.iter().all(|v| v.is_finite()).then_some(f)
-}
-
-/// The indices of the speeds around `v` and their linear-interpolation shares (the end speed
-/// alone beyond the ends).
-fn shares(speeds: &[f64], v: f64) -> Vec<(usize, f64)> {
-    let i = speeds.partition_point(|s| *s <= v);
-    if i == 0 {
-        vec![(0, 1.0)]
-    } else if i == speeds.len() {
-        vec![(i - 1, 1.0)]
-    } else {
-        let a = (v - speeds[i - 1]) / (speeds[i] - speeds[i - 1]);
-        vec![(i - 1, 1.0 - a), (i, a)]
-    }
 }
 
 #[cfg(test)]
@@ -329,16 +312,6 @@ mod tests {
                 },
             ],
         }
-    }
-
-    #[test]
-    fn a_cell_is_shared_by_the_two_speeds_around_it() {
-        let s = [10.0, 20.0];
-        assert_eq!(shares(&s, 15.0), vec![(0, 0.5), (1, 0.5)]);
-        assert_eq!(shares(&s, 12.5), vec![(0, 0.75), (1, 0.25)]);
-        assert_eq!(shares(&s, 5.0), vec![(0, 1.0)]);
-        assert_eq!(shares(&s, 25.0), vec![(1, 1.0)]);
-        assert_eq!(shares(&s, 20.0), vec![(1, 1.0)]);
     }
 
     #[test]

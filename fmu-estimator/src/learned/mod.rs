@@ -25,6 +25,21 @@ pub use stream::{Choice, Learned};
 /// | `learned-nominal.taps` | Kalker 100 % only | a vehicle whose contact is known to be nominal |
 pub const SHIPPED: [&str; 2] = ["learned.taps", "learned-nominal.taps"];
 
+/// Linear interpolation weights of `v` on the ascending `xs`: one or two (index, weight) pairs,
+/// zero weights left out; the end points beyond the ends. The taps are blended by it in speed
+/// and contact condition, and a cell's contact moments shared between the speeds around it.
+pub(crate) fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
+    if xs.len() == 1 {
+        return vec![(0, 1.0)];
+    }
+    let i = xs.partition_point(|x| *x <= v).clamp(1, xs.len() - 1);
+    let a = ((v - xs[i - 1]) / (xs[i] - xs[i - 1])).clamp(0.0, 1.0);
+    [(i - 1, 1.0 - a), (i, a)]
+        .into_iter()
+        .filter(|(_, w)| *w > 0.0)
+        .collect()
+}
+
 /// A tap bank shipped in the FMU's resources ([`SHIPPED`]), as built into this library
 /// (offline processing without an unpacked FMU); `None` for any other name.
 pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
@@ -94,5 +109,22 @@ impl Learned {
             lagged_std,
             active,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::weights;
+
+    #[test]
+    fn interpolation_weights_share_between_the_two_nodes_around_and_hold_the_ends() {
+        let s = [10.0, 20.0];
+        assert_eq!(weights(&s, 15.0), vec![(0, 0.5), (1, 0.5)]);
+        assert_eq!(weights(&s, 12.5), vec![(0, 0.75), (1, 0.25)]);
+        assert_eq!(weights(&s, 10.0), vec![(0, 1.0)]);
+        assert_eq!(weights(&s, 5.0), vec![(0, 1.0)]);
+        assert_eq!(weights(&s, 25.0), vec![(1, 1.0)]);
+        assert_eq!(weights(&s, 20.0), vec![(1, 1.0)]);
+        assert_eq!(weights(&[7.0], 3.0), vec![(0, 1.0)]);
     }
 }

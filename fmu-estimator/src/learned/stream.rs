@@ -24,6 +24,7 @@
 use super::bank::{Bank, Entry};
 use super::contact::{ContactModel, Moments};
 use super::grid::{CHANNELS, Grid, ROLL_RATE};
+use super::weights;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -253,20 +254,6 @@ pub struct Learned {
     moments: Option<Moments>,
     /// The estimated Kalker-coefficient scale (0 without a contact model).
     contact_scale: f64,
-}
-
-/// Linear interpolation weights of `v` on the ascending `xs`: one or two (index, weight) pairs,
-/// zero weights left out; the end points beyond the ends.
-fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
-    if xs.len() == 1 {
-        return vec![(0, 1.0)];
-    }
-    let i = xs.partition_point(|x| *x <= v).clamp(1, xs.len() - 1);
-    let a = ((v - xs[i - 1]) / (xs[i] - xs[i - 1])).clamp(0.0, 1.0);
-    [(i - 1, 1.0 - a), (i, a)]
-        .into_iter()
-        .filter(|(_, w)| *w > 0.0)
-        .collect()
 }
 
 /// The windows of `entries` by ascending speed, and per speed one per condition of
