@@ -65,8 +65,8 @@ pub const STARTS: [f64; 6] = [1.0, 2.0, 5.0, 10.0, 20.0, 40.0];
 /// undo the high-pass's phase at 70-200 m.
 pub const KALMAN_HIGHPASS: f64 = 1000.0;
 /// Weights of whole, D1, D2 and D3 in the fit's objective, tried per speed, sensor set,
-/// condition and lag with every ridge and chosen with it by the plain objective (all four 1) on the validation runs,
-/// estimated from each run's start as the FMU does. A weight above 1 on D1 and D2 makes the fit
+/// condition and lag with every ridge and chosen with it by the plain objective (all four 1)
+/// on the validation runs, estimated from each run's start as the FMU does. A weight above 1 on D1 and D2 makes the fit
 /// spend less of its window on the 70-200 m waves, where one 10 km training run holds few
 /// independent waves and the estimate depends on the start. On the validation seeds, nominal
 /// taps alone with each weighting fixed (the ridge chosen on the full window), 400 m runs (the
@@ -358,25 +358,23 @@ fn window_at(run: &GridRun, channels: &[usize], taps: &[f64], len: usize, newest
     e
 }
 
-/// The estimates of a window on a run's grid (where its history exists), with positions.
+/// The estimates of a window on a run's grid (where its history exists), and their errors.
 fn apply(
     run: &GridRun,
     channels: &[usize],
     taps: &[f64],
     past: usize,
     future: usize,
-) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+) -> (Vec<f64>, Vec<f64>) {
     let len = past + future + 1;
     let n = run.cells.cells.len();
-    let (mut pos, mut est, mut err) = (vec![], vec![], vec![]);
+    let (mut est, mut err) = (vec![], vec![]);
     for m in (len - 1)..n {
         let e = window_at(run, channels, taps, len, m);
-        let at = m - future;
-        pos.push(run.position[at]);
         est.push(e);
-        err.push(e - run.target[at]);
+        err.push(e - run.target[m - future]);
     }
-    (pos, est, err)
+    (est, err)
 }
 
 /// The estimates of a run from its start, as the FMU makes them: for each cell `t` with
@@ -405,9 +403,9 @@ fn apply_from_start(
     (pos, est)
 }
 
-/// `sum_b Jrel_b^2` (mean over the validation runs) of the causal estimates made from each
-/// run's start with the start windows, as the FMU makes them: what the ridge and the band
-/// weights are chosen by.
+/// `sum_b Jrel_b^2` (mean over the validation runs) of the estimates `future` cells behind the
+/// newest made from each run's start with the start windows, as the FMU makes them: what the
+/// ridge and the band weights are chosen by.
 fn validate_from_start(
     runs: &[GridRun],
     channels: &[usize],
@@ -437,7 +435,7 @@ fn rms_error(
 ) -> f64 {
     let (mut sq, mut n) = (0.0, 0usize);
     for r in runs {
-        let (_, _, err) = apply(r, channels, taps, past, future);
+        let (_, err) = apply(r, channels, taps, past, future);
         sq += err.iter().map(|e| e * e).sum::<f64>();
         n += err.len();
     }
@@ -542,8 +540,11 @@ fn fit_speed(
                 .map(|b| Fit::new(&train, channels.clone(), span, b))
                 .collect::<Result<_, _>>()?;
             let pasts: Vec<usize> = STARTS.iter().map(|s| points(*s)).chain([past]).collect();
-            let choose = |lag: usize| -> Result<(usize, f64, f64), String> {
-                let tried: Vec<(usize, f64, f64)> = (0..fits.len())
+            // The weighting, ridge, plain validation objective and windows (taps, past) of the
+            // best choice for a lag.
+            type Choice = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
+            let choose = |lag: usize| -> Result<Choice, String> {
+                let tried: Vec<Choice> = (0..fits.len())
                     .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
                     .collect::<Vec<_>>()
                     .par_iter()
@@ -552,16 +553,12 @@ fn fit_speed(
                             .iter()
                             .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
                             .collect::<Result<_, String>>()?;
-                        Ok((
-                            f,
-                            ridge,
-                            validate_from_start(&valid, &channels, &windows, lag)?,
-                        ))
+                        let objective = validate_from_start(&valid, &channels, &windows, lag)?;
+                        Ok((f, ridge, objective, windows))
                     })
                     .collect::<Result<_, String>>()?;
                 Ok(tried
-                    .iter()
-                    .copied()
+                    .into_iter()
                     .min_by(|a, b| a.2.total_cmp(&b.2))
                     .expect("ridges"))
             };
@@ -571,21 +568,16 @@ fn fit_speed(
                 scales.clone()
             };
             for lag in std::iter::once(0).chain(lags.iter().copied()) {
-                let (chosen, ridge, validation_objective) = choose(lag)?;
-                let fit = &fits[chosen];
-                let windows: Vec<Window> = pasts
-                    .par_iter()
-                    .map(|p| {
-                        let taps = fit.solve(*p, lag, ridge)?;
-                        let rms_error = rms_error(&valid, &channels, &taps, *p, lag);
-                        Ok(Window {
-                            past: *p,
-                            future: lag,
-                            rms_error,
-                            taps,
-                        })
+                let (chosen, ridge, validation_objective, solved) = choose(lag)?;
+                let windows: Vec<Window> = solved
+                    .into_par_iter()
+                    .map(|(taps, past)| Window {
+                        past,
+                        future: lag,
+                        rms_error: rms_error(&valid, &channels, &taps, past, lag),
+                        taps,
                     })
-                    .collect::<Result<_, String>>()?;
+                    .collect();
                 entries.push(Entry {
                     speed,
                     channels: channels.iter().map(|c| CHANNELS[*c].to_string()).collect(),
@@ -704,6 +696,18 @@ mod tests {
         }
     }
 
+    /// A window's estimate written out: tap `j` of channel `c` times that channel `j` cells
+    /// before `newest`.
+    fn by_hand(run: &GridRun, channels: &[usize], taps: &[f64], len: usize, newest: usize) -> f64 {
+        let mut e = 0.0;
+        for (ci, c) in channels.iter().enumerate() {
+            for j in 0..len {
+                e += taps[ci * len + j] * run.cells.cells[newest - j][*c];
+            }
+        }
+        e
+    }
+
     #[test]
     fn from_the_start_each_cell_takes_the_longest_window_its_history_covers() {
         let run = synthetic(12);
@@ -715,19 +719,14 @@ mod tests {
         // No window fits before two cells of history; from five the full one, as `apply`.
         assert_eq!(pos.len(), 12 - 2);
         assert_eq!(pos[0], 2.0 * GRID);
-        let by_hand = |taps: &[f64], len: usize, m: usize| -> f64 {
-            let mut e = 0.0;
-            for (ci, c) in channels.iter().enumerate() {
-                for j in 0..len {
-                    e += taps[ci * len + j] * run.cells.cells[m - j][*c];
-                }
-            }
-            e
-        };
         for m in 2..5 {
-            assert_eq!(est[m - 2], by_hand(&short, 3, m), "cell {m}");
+            assert_eq!(
+                est[m - 2],
+                by_hand(&run, &channels, &short, 3, m),
+                "cell {m}"
+            );
         }
-        let (_, full_est, _) = apply(&run, &channels, &full, 5, 0);
+        let (full_est, _) = apply(&run, &channels, &full, 5, 0);
         assert_eq!(&est[3..], &full_est[..]);
     }
 
@@ -742,20 +741,11 @@ mod tests {
             apply_from_start(&run, &channels, &[(short.clone(), 1), (full.clone(), 4)], 2);
         // Positions 1..=9: one cell of history behind at least, two cells ahead at most.
         assert_eq!(pos, (1..10).map(|t| t as f64 * GRID).collect::<Vec<_>>());
-        let by_hand = |taps: &[f64], len: usize, newest: usize| -> f64 {
-            let mut e = 0.0;
-            for (ci, c) in channels.iter().enumerate() {
-                for j in 0..len {
-                    e += taps[ci * len + j] * run.cells.cells[newest - j][*c];
-                }
-            }
-            e
-        };
         for t in 1..10 {
             let want = if t < 4 {
-                by_hand(&short, 4, t + 2)
+                by_hand(&run, &channels, &short, 4, t + 2)
             } else {
-                by_hand(&full, 7, t + 2)
+                by_hand(&run, &channels, &full, 7, t + 2)
             };
             assert_eq!(est[t - 1], want, "position {t}");
         }
