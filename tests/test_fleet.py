@@ -48,11 +48,10 @@ def test_one_and_two_workers_give_identical_segment_tables(fleet_dir, tmp_path):
 
 
 def first_passes(coverages, n: int):
-    """The sum (fleet.add) of the first `n` passes' coverages."""
-    total = coverages[0]
-    for c in coverages[1:n]:
-        total = fleet.add(total, c)
-    return total
+    """The sum of the first `n` passes' coverages, by the pipeline's own reduction (fleet.tree_sum)."""
+    import dask
+
+    return dask.compute(fleet.tree_sum(coverages[:n]))[0]
 
 
 def segment_errors(coverages, sds_truth, options, n: int) -> dict[str, np.ndarray]:
