@@ -264,8 +264,9 @@ impl Model for Estimator {
         };
         v.boolean[vr::UPDATED as usize] = updated;
         if let Some(l) = self.learned.as_mut() {
-            let x = [x[0], x[1], x[2], x[3], core.alignment().0];
-            l.step(v.real[vr::DISTANCE as usize], speed, &x);
+            let (kalman, kalman_std) = core.alignment();
+            let x = [x[0], x[1], x[2], x[3], kalman];
+            l.step(v.real[vr::DISTANCE as usize], speed, &x, kalman_std);
             let (lo, hi) = l.speed_range();
             let outside = !(speed >= lo && speed <= hi);
             if outside && !self.outside {

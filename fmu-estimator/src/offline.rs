@@ -286,10 +286,12 @@ fn run(
             }
             steps += 1;
             if let Some(l) = learned.as_mut() {
+                let (kalman, kalman_std) = core.alignment();
                 l.step(
                     distance,
                     s.speed,
-                    &crate::learned::channels(s, core.alignment().0),
+                    &crate::learned::channels(s, kalman),
+                    kalman_std,
                 );
             }
         }

@@ -47,7 +47,7 @@ fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
         if let Some(c) = grid.add(d, &x) {
             cells.extend(c.cells);
         }
-        l.step(d, 12.5, &x);
+        l.step(d, 12.5, &x, 0.0);
     }
     let a = 0.25; // 12.5 m/s between 10 and 20
     // Enough history for the longest window (5 behind, 3 ahead).
@@ -116,7 +116,7 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
         if let Some(c) = grid.add(d, &x) {
             cells.extend(c.cells);
         }
-        l.step(d, 10.0, &x);
+        l.step(d, 10.0, &x, 0.0);
     }
     let s = l.contact_scale();
     assert!((s - (0.75 + 0.1 * 1.44f64.ln())).abs() < 0.02, "{s}");
@@ -160,7 +160,7 @@ fn before_its_window_fills_the_lagged_output_is_the_causal_estimate_made_lag_beh
     let mut checked = 0;
     for k in 0..40 {
         d = (k + 1) as f64 * 0.05;
-        l.step(d, 15.0, &[(k as f64 * 0.7).sin(), 0.0, 0.0, 0.0, 0.1]);
+        l.step(d, 15.0, &[(k as f64 * 0.7).sin(), 0.0, 0.0, 0.0, 0.1], 0.0);
         if let Some(p) = l.causal.points.last()
             && made.last().map(|m: &Point| m.distance) != Some(p.distance)
         {
@@ -204,12 +204,12 @@ fn outside_the_speed_range_there_is_no_estimate_and_it_resumes_inside() {
     let mut d = 0.0;
     for _ in 0..100 {
         d += 0.05;
-        l.step(d, 25.0, &[1.0; 5]);
+        l.step(d, 25.0, &[1.0; 5], 0.0);
     }
     assert!(!l.in_range() && l.causal(d).is_none());
     for _ in 0..10 {
         d += 0.05;
-        l.step(d, 15.0, &[1.0; 5]);
+        l.step(d, 15.0, &[1.0; 5], 0.0);
     }
     assert!(l.in_range() && l.causal(d).is_some());
 }
@@ -253,4 +253,49 @@ fn extrapolation_is_linear_and_at_most_one_cell_ahead() {
     assert!((t.at(1.3).unwrap().0 - 2.5).abs() < 1e-12);
     assert!((t.at(5.0).unwrap().0 - 3.0).abs() < 1e-12);
     assert_eq!(t.at(1.0).unwrap(), (2.0, 0.2));
+}
+
+#[test]
+fn where_no_learned_estimate_was_made_the_lagged_output_is_the_kalman_one_made_there() {
+    let mut bank = sample_bank();
+    // Causal windows from 5 points back only: the first 1.2 m have the Kalman estimate alone.
+    for e in &mut bank.entries {
+        e.windows.retain(|w| w.past == 5);
+    }
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.6,
+        },
+    )
+    .unwrap();
+    // A Kalman estimate linear in distance: the delay line's interpolation between the cells'
+    // closings gives it back exactly at any position in between.
+    let kalman = |d: f64| 10.0 + d;
+    let (mut d, mut checked) = (0.0, [0, 0]);
+    // Start (15 m/s, inside the range), then 25 m/s (outside), then back inside.
+    for k in 0..200 {
+        let speed = if (80..160).contains(&k) { 25.0 } else { 15.0 };
+        d += 0.05;
+        let x = [(k as f64 * 0.7).sin(), 0.0, 0.0, 0.0, kalman(d)];
+        l.step(d, speed, &x, 0.5);
+        let at = d - 0.6;
+        let e = l.estimate(d, (kalman(d), 0.5));
+        let (got, std) = (e.lagged, e.lagged_std);
+        // The first metre (Kalman points from 0.2 m to 1.0 m) and well inside the excursion.
+        let first = (0.2..=1.0).contains(&at);
+        let outside = k >= 80 + 12 + 4 && k < 160;
+        if first || outside {
+            assert!(
+                (got - kalman(at)).abs() < 1e-9 && std == 0.5,
+                "step {k}, at {at} m: {got} (std {std}), made there {}",
+                kalman(at)
+            );
+            checked[usize::from(outside)] += 1;
+        }
+    }
+    assert!(checked[0] >= 10 && checked[1] >= 50, "{checked:?}");
+    // Back inside, the learned fixed-lag estimate resumed.
+    assert!(!l.lagged.points.is_empty() && l.in_range());
 }
