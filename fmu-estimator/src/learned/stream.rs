@@ -21,6 +21,10 @@
 //! learned estimate over the first metre, an error the evaluation's D3 band-pass spreads over
 //! a 400 m record: nominal 10 m lag D3 0.153 -> 0.141 on validation seed 103.)
 //!
+//! Taps fitted at constant speed meet, while the speed changes, windows whose cells were
+//! recorded at other speeds: the history keeps each cell divided by its speed's
+//! [`SPEED_POWER`], and the estimate multiplies it back by the current speed's.
+//!
 //! A bank with per-condition taps (a contact model, [`super::contact`]) is blended in the
 //! contact condition too: every closed cell updates the contact features, the model turns them
 //! into a Kalker-coefficient scale, and the taps of the two trained conditions around it are
@@ -77,14 +81,15 @@ impl Windows {
         Windows(w)
     }
 
-    /// The estimate from the longest window `filled` points of history cover, and its rms error.
-    fn apply(&self, hist: &History) -> Option<(f64, f64)> {
+    /// The estimate from the longest window `filled` points of history cover, and its rms error;
+    /// `gain` per channel slot brings the history's speed quotients back to the current speed.
+    fn apply(&self, hist: &History, gain: &[f64; 5]) -> Option<(f64, f64)> {
         let w = self.0.iter().rev().find(|w| w.len <= hist.filled)?;
         let mut e = 0.0;
         for (c, slot) in w.slots.iter().enumerate() {
             let x = hist.latest(*slot, w.len);
             let t = &w.taps[c * w.len..(c + 1) * w.len];
-            e += dot(t, x);
+            e += gain[*slot] * dot(t, x);
         }
         Some((e, w.rms_error))
     }
@@ -109,6 +114,29 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
         r += x * y;
     }
     r
+}
+
+/// The power of the speed each channel ([`CHANNELS`]) is divided by in the history. The taps
+/// were fitted at constant speed; while the speed changes, the cells of a window were recorded
+/// at other speeds than the current one, and the quotients rescale each to the current speed
+/// (at constant speed they cancel: the standard case is unchanged to rounding).
+///
+/// | channel | power | why |
+/// |---|---|---|
+/// | `ws_acc_y`, `frame_acc_y` | 1.5 | a wheelset following a track wave `y(s)` has `y'' V^2` of lateral acceleration, but the gravity of its roll (cross-level) `g phi` does not grow with speed and dominates the long waves (70 m at 20 m/s: `V^2 (2 pi / 70)^2 = 3.2` against `g / 1.5 m = 6.5` per metre of amplitude) |
+/// | `ws_yaw_rate`, `ws_roll_rate` | 1 | `psi' V` and `phi' V` |
+/// | `kalman` | 0 | already a distance |
+///
+/// The powers were chosen on the validation seeds 102-106 (variable-speed profile, mean whole
+/// Jrel over the seven learned variants of `alignment-studies variants`; accelerations / rates):
+/// 0 / 0 (no quotients) 0.138, 0.5 / 0.5 0.135, 1 / 1 0.133, 1.5 / 1 0.132, 2 / 1 0.138 (its
+/// gyro fixed-lag output 0.168 against 0.153 without quotients), 2 / 1 with the roll rate at 0
+/// worse still (0.203), 1 / 0 0.135.
+pub const SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
+
+/// `V^SPEED_POWER` per channel.
+fn speed_factors(v: f64) -> [f64; 5] {
+    std::array::from_fn(|c| v.powf(SPEED_POWER[c]))
 }
 
 /// The bank's entries for one sensor set and lag, by speed, then by contact condition.
@@ -467,8 +495,10 @@ impl Learned {
         let Some(closed) = self.grid.add(distance, x) else {
             return;
         };
+        let quotient = speed_factors(speed.max(self.selection.speeds[0]));
         for cell in &closed.cells {
-            self.history.push(cell);
+            self.history
+                .push(&std::array::from_fn(|c| cell[c] / quotient[c]));
             if let Some(m) = self.moments.as_mut() {
                 m.push(cell, speed);
             }
@@ -500,11 +530,12 @@ impl Learned {
         } else {
             weights(&sel.conditions, self.contact_scale)
         };
+        let gain = speed_factors(speed);
         let blend = |set: &[Vec<Windows>], hist: &History| -> Option<(f64, f64)> {
             let (mut e, mut r) = (0.0, 0.0);
             for (s, a) in &by_speed {
                 for (c, b) in &by_condition {
-                    let (ei, ri) = set[*s][*c].apply(hist)?;
+                    let (ei, ri) = set[*s][*c].apply(hist, &gain)?;
                     e += a * b * ei;
                     r += a * b * ri;
                 }

@@ -299,3 +299,60 @@ fn where_no_learned_estimate_was_made_the_lagged_output_is_the_kalman_one_made_t
     // Back inside, the learned fixed-lag estimate resumed.
     assert!(!l.lagged.points.is_empty() && l.in_range());
 }
+
+#[test]
+fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
+    let bank = sample_bank();
+    let mut l = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.0,
+        },
+    )
+    .unwrap();
+    // Speed rising from 4 m/s (below the bank's 10 m/s: its cells count as 10 m/s) to 16 m/s.
+    let speed = |k: usize| 4.0 + 0.06 * k as f64;
+    let mut grid = Grid::new(0.2, 500.0);
+    let (mut cells, mut speeds) = (vec![], vec![]);
+    let mut d = 0.0;
+    for k in 0..200 {
+        d += 0.05;
+        let x = [
+            (k as f64 * 0.3).sin(),
+            0.0,
+            0.0,
+            0.0,
+            (k as f64 * 0.11).cos(),
+        ];
+        if let Some(c) = grid.add(d, &x) {
+            speeds.extend(c.cells.iter().map(|_| speed(k)));
+            cells.extend(c.cells);
+        }
+        l.step(d, speed(k), &x, 0.0);
+    }
+    let now = speed(199);
+    assert!(now > 15.0 && *speeds.last().unwrap() == now);
+    // Each cell as it would have been at the current speed.
+    let rescaled: Vec<[f64; 5]> = cells
+        .iter()
+        .zip(&speeds)
+        .map(|(c, v)| std::array::from_fn(|i| c[i] * (now / v.max(10.0)).powf(SPEED_POWER[i])))
+        .collect();
+    let a = (now - 10.0) / 10.0;
+    let want = (1.0 - a) * direct(&bank.entries[0], 1, &rescaled)
+        + a * direct(&bank.entries[1], 1, &rescaled);
+    let last = *l.causal.points.last().unwrap();
+    assert!(
+        (last.value - want).abs() < 1e-12 * want.abs().max(1.0),
+        "{} {want}",
+        last.value
+    );
+    // The accelerations' quotient matters: without it the estimate differs.
+    let plain =
+        (1.0 - a) * direct(&bank.entries[0], 1, &cells) + a * direct(&bank.entries[1], 1, &cells);
+    assert!(
+        (plain - want).abs() > 1e-3 * want.abs().max(1e-3),
+        "{plain} {want}"
+    );
+}
