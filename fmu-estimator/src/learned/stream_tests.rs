@@ -285,7 +285,7 @@ fn where_no_learned_estimate_was_made_the_lagged_output_is_the_kalman_one_made_t
         let (got, std) = (e.lagged, e.lagged_std);
         // The first metre (Kalman points from 0.2 m to 1.0 m) and well inside the excursion.
         let first = (0.2..=1.0).contains(&at);
-        let outside = k >= 80 + 12 + 4 && k < 160;
+        let outside = (80 + 12 + 4..160).contains(&k);
         if first || outside {
             assert!(
                 (got - kalman(at)).abs() < 1e-9 && std == 0.5,
