@@ -3,10 +3,10 @@
 //! modelDescription.xml and the binary, carry the calibrated values; the file's noise matrices
 //! are read at run time. A parameter the file does not name keeps the paper's Table 2 value.
 //!
-//! It also fingerprints the sources and the shipped tap banks (`ESTIMATOR_STATE_LAYOUT`, 64-bit
-//! FNV-1a over every `src/**/*.rs` path and content and the banks): the FMU writes it into its
-//! serialized states, so that a state saved by another build, whose internal layout may differ,
-//! is refused with a message instead of being decoded into wrong values.
+//! It also fingerprints the sources and the shipped tap banks (`ESTIMATOR_STATE_LAYOUT`, see the
+//! `state-layout` crate): the FMU writes it into its serialized states, so that a state saved by
+//! another build, whose internal layout may differ, is refused with a message instead of being
+//! decoded into wrong values.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -72,7 +72,7 @@ fn main() {
 
     // The tap banks are built into the library for offline use. Before the first
     // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
-    let mut layout = Fnv::default();
+    let mut layout = state_layout::Fingerprint::of_sources();
     for name in ["learned.taps", "learned-nominal.taps"] {
         let taps = manifest.join("resources").join(name);
         println!("cargo::rerun-if-changed={}", taps.display());
@@ -81,47 +81,5 @@ fn main() {
         layout.add(&bytes);
         std::fs::write(out_dir.join(name), bytes).expect("writing the tap bank");
     }
-    let src = manifest.join("src");
-    println!("cargo::rerun-if-changed={}", src.display());
-    let mut files = vec![];
-    sources(&src, &mut files);
-    files.sort();
-    for f in &files {
-        let rel = f.strip_prefix(&manifest).expect("under the manifest");
-        layout.add(rel.to_string_lossy().replace('\\', "/").as_bytes());
-        layout
-            .add(&std::fs::read(f).unwrap_or_else(|e| panic!("cannot read {}: {e}", f.display())));
-    }
-    println!("cargo::rustc-env=ESTIMATOR_STATE_LAYOUT={:016x}", layout.0);
-}
-
-/// Every `.rs` file under `dir`.
-fn sources(dir: &std::path::Path, out: &mut Vec<PathBuf>) {
-    let entries =
-        std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()));
-    for e in entries {
-        let p = e.expect("a directory entry").path();
-        if p.is_dir() {
-            sources(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
-/// 64-bit FNV-1a, each part followed by its length (so that parts cannot run into each other).
-struct Fnv(u64);
-
-impl Default for Fnv {
-    fn default() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv {
-    fn add(&mut self, bytes: &[u8]) {
-        for b in bytes.iter().chain(&(bytes.len() as u64).to_le_bytes()) {
-            self.0 = (self.0 ^ *b as u64).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
+    println!("cargo::rustc-env=ESTIMATOR_STATE_LAYOUT={}", layout.hex());
 }

@@ -197,6 +197,28 @@ def run_steps(slave: Slave, samples: np.ndarray, t0: float, h: float, speed: flo
     return out
 
 
+def assert_another_builds_state_is_refused(slave: Slave) -> None:
+    """Serializes the slave's current state and checks that a copy whose state-layout
+    fingerprint differs (another build) is refused with a message naming the layout. The header
+    is RTGS3, the GUID and the build's fingerprint (16 hex digits), each NUL-terminated."""
+    state = slave.fmu.getFMUstate()
+    blob = slave.fmu.serializeFMUstate(state)
+    slave.fmu.freeFMUstate(state)
+    magic, _guid, layout = blob.split(b"\0")[:3]
+    assert magic == b"RTGS3" and len(layout) == 16
+    int(layout, 16)
+    changed = layout[:-1] + (b"0" if layout[-1:] != b"0" else b"1")
+    other = blob.replace(b"\0" + layout + b"\0", b"\0" + changed + b"\0", 1)
+    assert other != blob
+    try:
+        slave.fmu.deSerializeFMUstate(other)
+    except Exception:
+        pass
+    else:
+        raise AssertionError("a state with another layout fingerprint was accepted")
+    assert "state layout" in slave.log.messages(ERROR)[-1]
+
+
 def step_samples(signals: dict[str, np.ndarray]) -> np.ndarray:
     """The n - 1 rows of sensor samples for stepping through a run sampled at n instants: row k
     holds the samples at t_(k+1), the end of step k."""

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
 
-from fmi_harness import ERROR, OK, Slave, slave_factory
+from fmi_harness import ERROR, OK, Slave, assert_another_builds_state_is_refused, slave_factory
 from project import packaged_fmus
 
 H = 1e-3
@@ -130,6 +130,13 @@ def test_restored_and_deserialized_states_replay_bit_identically(make_vehicle):
     other.fmu.setFMUstate(restored)
     other.fmu.freeFMUstate(restored)
     assert np.array_equal(run(other, 500, t0=1.0), first)
+
+
+def test_a_state_of_another_build_is_refused_naming_its_layout(make_vehicle):
+    s = make_vehicle("layout")
+    assert initialize(s) == OK
+    run(s, 100)
+    assert_another_builds_state_is_refused(s)
 
 
 def test_reset_gives_a_fresh_instance(make_vehicle):

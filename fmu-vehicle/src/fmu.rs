@@ -633,6 +633,8 @@ impl Model for RailVehicle {
         default_stop: 20.0,
         default_step: 0.001,
     };
+    /// A fingerprint of the sources, by build.rs: a state saved by another build is refused.
+    const STATE_LAYOUT: &'static str = env!("VEHICLE_STATE_LAYOUT");
 
     fn variables() -> &'static [VarSpec] {
         VARIABLES
