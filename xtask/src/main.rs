@@ -2,7 +2,7 @@
 //!
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
 //! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo fmt --check, cargo clippy
-//!   with warnings denied, cargo test, packaging, the Python harness (tests/, run with pytest in
+//!   and cargo doc with warnings denied, cargo test, packaging, the Python harness (tests/, run with pytest in
 //!   `.venv`, created on demand), and a summary;
 //! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
 //!   the estimator variants with `alignment-studies` (the studies on top of the orchestrator).
@@ -23,7 +23,7 @@ usage: cargo xtask <command>
 commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
-                               cargo fmt --check, clippy -D warnings, cargo test --workspace, packaging, pytest tests/ in .venv
+                               cargo fmt --check, clippy and doc -D warnings, cargo test --workspace, packaging, pytest tests/ in .venv
   demo [-- <study args>]       package the FMUs, run the standard case and the studies (alignment-studies)
   help                         this text";
 
@@ -192,6 +192,16 @@ fn test(o: TestOptions) -> Result<bool> {
                     "-D",
                     "warnings",
                 ]);
+                workspace::run(&mut cmd)
+            },
+        ));
+        // The crate docs hold the derivations: a broken link or a malformed doc comment fails.
+        stages.push(timed(
+            "cargo doc --workspace --no-deps (RUSTDOCFLAGS=-D warnings)",
+            || {
+                let mut cmd = workspace::cargo();
+                cmd.args(["doc", "--workspace", "--no-deps"])
+                    .env("RUSTDOCFLAGS", "-D warnings");
                 workspace::run(&mut cmd)
             },
         ));
