@@ -134,9 +134,10 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// worse still (0.203), 1 / 0 0.135.
 pub const SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
 
-/// `V^SPEED_POWER` per channel.
+/// `V^SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
-    std::array::from_fn(|c| v.powf(SPEED_POWER[c]))
+    let v15 = v * v.sqrt();
+    [v15, v, v15, v, 1.0]
 }
 
 /// The bank's entries for one sensor set and lag, by speed, then by contact condition.

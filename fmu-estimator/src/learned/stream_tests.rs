@@ -356,3 +356,13 @@ fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
         "{plain} {want}"
     );
 }
+
+#[test]
+fn the_speed_factors_are_the_documented_powers() {
+    for v in [0.3, 5.0, 12.5, 30.0] {
+        let f = speed_factors(v);
+        for (c, p) in SPEED_POWER.iter().enumerate() {
+            assert!((f[c] - v.powf(*p)).abs() <= 1e-14 * v.powf(*p), "{v} {c}");
+        }
+    }
+}
