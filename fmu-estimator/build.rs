@@ -6,7 +6,9 @@
 //! It also fingerprints the sources and the shipped tap banks (`ESTIMATOR_STATE_LAYOUT`, see the
 //! `state-layout` crate): the FMU writes it into its serialized states, so that a state saved by
 //! another build, whose internal layout may differ, is refused with a message instead of being
-//! decoded into wrong values.
+//! decoded into wrong values. That fingerprint, extended by the calibration file and the crates
+//! that write the modelDescription.xml, is the FMU's GUID (`ESTIMATOR_GUID`): a new one whenever
+//! the FMU changes.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -82,4 +84,11 @@ fn main() {
         std::fs::write(out_dir.join(name), bytes).expect("writing the tap bank");
     }
     println!("cargo::rustc-env=ESTIMATOR_STATE_LAYOUT={}", layout.hex());
+    // The GUID: the same, with what else reaches the modelDescription.xml.
+    let mut guid = layout;
+    guid.add_file(&file);
+    for dep in ["fmi-abi", "modelDescription"] {
+        guid.add_crate(&manifest.join("..").join(dep));
+    }
+    println!("cargo::rustc-env=ESTIMATOR_GUID={}", guid.guid());
 }

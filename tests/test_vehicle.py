@@ -6,6 +6,7 @@ reads a measured track, and refuses impossible parameters with a message naming 
 from __future__ import annotations
 
 import threading
+import uuid
 from pathlib import Path
 
 import fmpy
@@ -82,7 +83,12 @@ def test_declares_the_names_the_other_parts_rely_on(vehicle_md):
     assert by_name["track_seed"].type == "Integer" and by_name["track_seed"].causality == "parameter"
     for name in ["conicity", "kalker_scale", "spectrum", "lateral_irregularity", "vertical_irregularity", "sensor_noise", "sigma_acc", "sigma_gyro", "harmonic_amplitude", "harmonic_wavelength"]:
         assert by_name[name].causality == "parameter", name
-    assert vehicle_md.guid != fmpy.read_model_description(str(packaged_fmus()["AlignmentEstimator"])).guid
+    estimator_guid = fmpy.read_model_description(str(packaged_fmus()["AlignmentEstimator"])).guid
+    assert vehicle_md.guid != estimator_guid
+    # Both are made by the build from what shapes the FMU (crate state-layout): RFC 9562
+    # version 8 (custom) UUIDs, no braces.
+    for g in (vehicle_md.guid, estimator_guid):
+        assert uuid.UUID(g).version == 8 and str(uuid.UUID(g)) == g, g
 
 
 def test_standard_run_through_simulate_fmu_has_plausible_signals(vehicle_path):

@@ -13,7 +13,9 @@ pub struct ModelInfo {
     pub model_name: &'static str,
     /// The shared library name and the `modelIdentifier` attribute.
     pub model_identifier: &'static str,
-    /// Unique per FMU (libcosim caches by GUID); no braces (libcosim #533).
+    /// Unique per FMU and version (libcosim caches by GUID); no braces (libcosim #533). Our FMUs
+    /// make it at build time from what shapes them (crate `state-layout`), so it changes
+    /// whenever the modelDescription.xml may.
     pub guid: &'static str,
     pub description: &'static str,
     pub author: &'static str,

@@ -89,7 +89,8 @@ impl Model for Estimator {
     const INFO: ModelInfo = ModelInfo {
         model_name: "AlignmentEstimator",
         model_identifier: "AlignmentEstimator",
-        guid: "7d0c3f4e-5b1a-4c8e-9a52-3e6f1d2b8a41",
+        // By build.rs from the sources and what shapes the modelDescription: new when they change.
+        guid: env!("ESTIMATOR_GUID"),
         description: "Kalman filter estimate of the lateral alignment of a straight railway track from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer (Munoz, Ros, Escalona).",
         author: "railway track-geometry toolkit",
         version: env!("CARGO_PKG_VERSION"),

@@ -625,7 +625,8 @@ impl Model for RailVehicle {
     const INFO: ModelInfo = ModelInfo {
         model_name: "RailVehicle",
         model_identifier: "RailVehicle",
-        guid: "c3a9e1f2-6d47-4b8a-b0e5-91f2d4a7c6e3",
+        // By build.rs from the sources and what shapes the modelDescription: new when they change.
+        guid: env!("VEHICLE_GUID"),
         description: "A metro car (car body, two bogies, four wheelsets) on an irregular straight track with lateral and vertical dynamics, Kalker creep and virtual inertial sensors.",
         author: "railway track-geometry toolkit",
         version: env!("CARGO_PKG_VERSION"),

@@ -11,6 +11,10 @@
 //! | every `src/**/*.rs` | its path relative to the crate (with `/`), then its content |
 //! | each extra part (e.g. a built-in tap bank) | its name, then its bytes |
 //!
+//! The same fingerprint, extended by what else shapes the modelDescription.xml (the resources
+//! that set parameter defaults, the crates that write the XML), gives the FMU its GUID
+//! ([`Fingerprint::guid`]): a new one whenever the FMU changes.
+//!
 //! 64-bit FNV-1a, each part followed by its length so that parts cannot run into each other.
 //! Not a cryptographic hash: it tells builds apart, it does not authenticate them.
 //!
@@ -55,6 +59,26 @@ impl Fingerprint {
         }
     }
 
+    /// Adds another crate's sources (a path dependency that shapes the FMU, e.g. the one that
+    /// writes its modelDescription.xml), telling cargo to run the build script again when they
+    /// change.
+    pub fn add_crate(&mut self, crate_dir: &Path) {
+        println!(
+            "cargo::rerun-if-changed={}",
+            crate_dir.join("src").display()
+        );
+        self.add_sources(crate_dir);
+    }
+
+    /// Adds a file (its name, then its bytes; an absent file as empty), telling cargo to run
+    /// the build script again when it changes.
+    pub fn add_file(&mut self, path: &Path) {
+        println!("cargo::rerun-if-changed={}", path.display());
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        self.add(name.unwrap_or_default().as_bytes());
+        self.add(&std::fs::read(path).unwrap_or_default());
+    }
+
     /// The fingerprint of the calling build script's crate sources (`CARGO_MANIFEST_DIR`),
     /// telling cargo to run the script again when they change.
     pub fn of_sources() -> Fingerprint {
@@ -68,6 +92,25 @@ impl Fingerprint {
     /// 16 lowercase hex digits.
     pub fn hex(&self) -> String {
         format!("{:016x}", self.0)
+    }
+
+    /// A GUID for the FMU this fingerprint describes, in the UUID form (RFC 9562, version 8:
+    /// custom bits): the fingerprint's 64 bits and those of it continued by one more part
+    /// (`"guid"`), with the version and variant bits set, no braces (libcosim #533). An FMU whose
+    /// build inputs change gets a new GUID, as FMI 2.0 intends for a new modelDescription.xml.
+    pub fn guid(&self) -> String {
+        let mut more = *self;
+        more.add(b"guid");
+        let hi = (self.0 & !0xf000) | 0x8000; // version 8 in bits 48-51 of the UUID
+        let lo = (more.0 & !(0b11 << 62)) | (0b10 << 62); // variant 10
+        format!(
+            "{:08x}-{:04x}-{:04x}-{:04x}-{:012x}",
+            hi >> 32,
+            (hi >> 16) & 0xffff,
+            hi & 0xffff,
+            lo >> 48,
+            lo & 0xffff_ffff_ffff
+        )
     }
 }
 
@@ -124,6 +167,30 @@ mod tests {
         assert_ne!(of(&[b"a", b"b"]), of(&[b"b", b"a"]));
         assert_eq!(of(&[b"a", b"b"]), of(&[b"a", b"b"]));
         assert_eq!(of(&[b"x"]).hex().len(), 16);
+    }
+
+    #[test]
+    fn the_guid_is_a_version_8_uuid_that_follows_the_fingerprint() {
+        let of = |part: &[u8]| {
+            let mut f = Fingerprint::default();
+            f.add(part);
+            f.guid()
+        };
+        let g = of(b"sources");
+        let groups: Vec<&str> = g.split('-').collect();
+        assert_eq!(
+            groups.iter().map(|x| x.len()).collect::<Vec<_>>(),
+            [8, 4, 4, 4, 12],
+            "{g}"
+        );
+        assert!(
+            g.chars()
+                .all(|c| c == '-' || c.is_ascii_hexdigit() && !c.is_ascii_uppercase())
+        );
+        assert!(groups[2].starts_with('8'), "version 8: {g}");
+        assert!("89ab".contains(&groups[3][..1]), "variant 10: {g}");
+        assert_eq!(of(b"sources"), g);
+        assert_ne!(of(b"sources, changed"), g);
     }
 
     #[test]
