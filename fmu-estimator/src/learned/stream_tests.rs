@@ -19,17 +19,33 @@ fn direct(entry: &Entry, window: usize, cells: &[[f64; 5]]) -> f64 {
     e
 }
 
+/// The learned filter with the three-sensor taps of `bank` and the fixed lag `lag` \[m\].
+fn three_sensors(bank: &Bank, lag: f64) -> Learned {
+    Learned::new(
+        bank,
+        Choice {
+            roll_rate: false,
+            lag,
+        },
+    )
+    .unwrap()
+}
+
+/// Sample `k` of a test record: a sine in the first channel, a cosine in the Kalman channel.
+fn sample(k: usize) -> [f64; 5] {
+    [
+        (k as f64 * 0.3).sin(),
+        0.0,
+        0.0,
+        0.0,
+        (k as f64 * 0.11).cos(),
+    ]
+}
+
 #[test]
 fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
     let bank = sample_bank();
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.6,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.6);
     assert!((l.lag() - 0.6).abs() < 1e-12);
     // 0.05 m per sample at 12.5 m/s, 4 samples per 0.2 m cell.
     let mut grid = Grid::new(0.2, 500.0);
@@ -37,13 +53,7 @@ fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
     let mut d = 0.0;
     for k in 0..200 {
         d += 0.05;
-        let x = [
-            (k as f64 * 0.3).sin(),
-            0.0,
-            0.0,
-            0.0,
-            (k as f64 * 0.11).cos(),
-        ];
+        let x = sample(k);
         if let Some(c) = grid.add(d, &x) {
             cells.extend(c.cells);
         }
@@ -96,14 +106,7 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
             rms_error: 0.1,
         }],
     });
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.0,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.0);
     let mut grid = Grid::new(0.2, 500.0);
     let mut cells = vec![];
     let mut d = 0.0;
@@ -148,14 +151,7 @@ fn before_its_window_fills_the_lagged_output_is_the_causal_estimate_made_lag_beh
     for e in bank.entries.iter_mut().filter(|e| e.lag > 0) {
         e.windows.retain(|w| w.past == 5);
     }
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.6,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.6);
     let (mut d, mut made) = (0.0, vec![]);
     let mut checked = 0;
     for k in 0..40 {
@@ -192,14 +188,7 @@ fn before_its_window_fills_the_lagged_output_is_the_causal_estimate_made_lag_beh
 #[test]
 fn outside_the_speed_range_there_is_no_estimate_and_it_resumes_inside() {
     let bank = sample_bank();
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.0,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.0);
     assert_eq!(l.speed_range(), (10.0, 20.0));
     let mut d = 0.0;
     for _ in 0..100 {
@@ -262,14 +251,7 @@ fn where_no_learned_estimate_was_made_the_lagged_output_is_the_kalman_one_made_t
     for e in &mut bank.entries {
         e.windows.retain(|w| w.past == 5);
     }
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.6,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.6);
     // A Kalman estimate linear in distance: the delay line's interpolation between the cells'
     // closings gives it back exactly at any position in between.
     let kalman = |d: f64| 10.0 + d;
@@ -303,14 +285,7 @@ fn where_no_learned_estimate_was_made_the_lagged_output_is_the_kalman_one_made_t
 #[test]
 fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
     let bank = sample_bank();
-    let mut l = Learned::new(
-        &bank,
-        Choice {
-            roll_rate: false,
-            lag: 0.0,
-        },
-    )
-    .unwrap();
+    let mut l = three_sensors(&bank, 0.0);
     // Speed rising from 4 m/s (below the bank's 10 m/s: its cells count as 10 m/s) to 16 m/s.
     let speed = |k: usize| 4.0 + 0.06 * k as f64;
     let mut grid = Grid::new(0.2, 500.0);
@@ -318,13 +293,7 @@ fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
     let mut d = 0.0;
     for k in 0..200 {
         d += 0.05;
-        let x = [
-            (k as f64 * 0.3).sin(),
-            0.0,
-            0.0,
-            0.0,
-            (k as f64 * 0.11).cos(),
-        ];
+        let x = sample(k);
         if let Some(c) = grid.add(d, &x) {
             speeds.extend(c.cells.iter().map(|_| speed(k)));
             cells.extend(c.cells);
