@@ -6,8 +6,9 @@
 //! It also fingerprints the sources and the shipped tap banks (`ESTIMATOR_STATE_LAYOUT`, see the
 //! `state-layout` crate): the FMU writes it into its serialized states, so that a state saved by
 //! another build, whose internal layout may differ, is refused with a message instead of being
-//! decoded into wrong values. That fingerprint, extended by the calibration file and the crates
-//! that write the modelDescription.xml, is the FMU's GUID (`ESTIMATOR_GUID`): a new one whenever
+//! decoded into wrong values (Cargo.lock counts too: the encoding follows serde and postcard).
+//! That fingerprint, extended by the calibration file, the package version and the crates that
+//! write the modelDescription.xml, is the FMU's GUID (`ESTIMATOR_GUID`): a new one whenever
 //! the FMU changes.
 
 use std::collections::BTreeMap;
@@ -75,6 +76,8 @@ fn main() {
     // The tap banks are built into the library for offline use. Before the first
     // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
     let mut layout = state_layout::Fingerprint::of_sources();
+    // The serialized state's encoding also follows the dependencies (serde, postcard).
+    layout.add_text_file(&manifest.join("..").join("Cargo.lock"));
     for name in ["learned.taps", "learned-nominal.taps"] {
         let taps = manifest.join("resources").join(name);
         println!("cargo::rerun-if-changed={}", taps.display());
@@ -86,7 +89,8 @@ fn main() {
     println!("cargo::rustc-env=ESTIMATOR_STATE_LAYOUT={}", layout.hex());
     // The GUID: the same, with what else reaches the modelDescription.xml.
     let mut guid = layout;
-    guid.add_file(&file);
+    guid.add_text_file(&file);
+    guid.add(env!("CARGO_PKG_VERSION").as_bytes());
     for dep in ["fmi-abi", "modelDescription"] {
         guid.add_crate(&manifest.join("..").join(dep));
     }

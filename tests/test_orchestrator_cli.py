@@ -6,6 +6,7 @@ Systems with Dahlquist/Feedthrough are .ssd files written into each test's tmp d
 
 from __future__ import annotations
 
+import uuid
 import zipfile
 
 import numpy as np
@@ -184,7 +185,8 @@ def test_info_on_the_estimator():
     p = oc.run("info", fmu)
     out = p.stdout
     # The GUID is made at build time (state-layout crate); fmpy reads the one in the archive.
-    assert fmpy.read_model_description(str(fmu)).guid in out
+    guid = fmpy.read_model_description(str(fmu)).guid
+    assert guid in out and uuid.UUID(guid).version == 8
     assert "model identifier AlignmentEstimator" in out
     rows = {line.split()[0]: line.split() for line in out.splitlines() if line.startswith("  ") and line.split()}
     for name, causality in (("ws_acc_y", "input"), ("ws_yaw_rate", "input"), ("frame_acc_y", "input"), ("speed", "input"),

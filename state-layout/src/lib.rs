@@ -8,8 +8,13 @@
 //!
 //! | part | hashed as |
 //! |---|---|
-//! | every `src/**/*.rs` | its path relative to the crate (with `/`), then its content |
-//! | each extra part (e.g. a built-in tap bank) | its name, then its bytes |
+//! | every `src/**/*.rs` but test-only `*_tests.rs` | its path relative to the crate (with `/`), then its text with CRLF as LF |
+//! | each extra part (e.g. a built-in tap bank) | its name, then its bytes (text files: CRLF as LF) |
+//!
+//! The same commit gives the same fingerprint on every machine (a Windows checkout's CRLF line
+//! ends are read as LF). Any edit of a hashed source, a comment included, gives a new one: a
+//! saved state of the old build is then refused, which errs on the safe side. An untracked
+//! scratch `.rs` file in `src/` counts too.
 //!
 //! The same fingerprint, extended by what else shapes the modelDescription.xml (the resources
 //! that set parameter defaults, the crates that write the XML), gives the FMU its GUID
@@ -44,8 +49,8 @@ impl Fingerprint {
         }
     }
 
-    /// Adds every `.rs` file under `crate_dir/src` (sorted by path): its relative path, then
-    /// its content.
+    /// Adds every `.rs` file under `crate_dir/src` (sorted by path) but the test-only
+    /// `*_tests.rs`: its relative path, then its text with CRLF as LF.
     pub fn add_sources(&mut self, crate_dir: &Path) {
         let mut files = vec![];
         sources(&crate_dir.join("src"), &mut files);
@@ -53,9 +58,9 @@ impl Fingerprint {
         for f in &files {
             let rel = f.strip_prefix(crate_dir).expect("under the crate");
             self.add(rel.to_string_lossy().replace('\\', "/").as_bytes());
-            self.add(
-                &std::fs::read(f).unwrap_or_else(|e| panic!("cannot read {}: {e}", f.display())),
-            );
+            let bytes =
+                std::fs::read(f).unwrap_or_else(|e| panic!("cannot read {}: {e}", f.display()));
+            self.add(&lf(bytes));
         }
     }
 
@@ -70,13 +75,13 @@ impl Fingerprint {
         self.add_sources(crate_dir);
     }
 
-    /// Adds a file (its name, then its bytes; an absent file as empty), telling cargo to run
-    /// the build script again when it changes.
-    pub fn add_file(&mut self, path: &Path) {
+    /// Adds a text file (its name, then its text with CRLF as LF; an absent file as empty),
+    /// telling cargo to run the build script again when it changes.
+    pub fn add_text_file(&mut self, path: &Path) {
         println!("cargo::rerun-if-changed={}", path.display());
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
         self.add(name.unwrap_or_default().as_bytes());
-        self.add(&std::fs::read(path).unwrap_or_default());
+        self.add(&lf(std::fs::read(path).unwrap_or_default()));
     }
 
     /// The fingerprint of the calling build script's crate sources (`CARGO_MANIFEST_DIR`),
@@ -114,7 +119,21 @@ impl Fingerprint {
     }
 }
 
-/// Every `.rs` file under `dir`.
+/// `bytes` with every CRLF as LF.
+fn lf(bytes: Vec<u8>) -> Vec<u8> {
+    if !bytes.windows(2).any(|w| w == b"\r\n") {
+        return bytes;
+    }
+    let mut out = Vec::with_capacity(bytes.len());
+    for (i, b) in bytes.iter().enumerate() {
+        if !(*b == b'\r' && bytes.get(i + 1) == Some(&b'\n')) {
+            out.push(*b);
+        }
+    }
+    out
+}
+
+/// Every `.rs` file under `dir` but the test-only `*_tests.rs` (compiled only into tests).
 fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
     let entries =
         std::fs::read_dir(dir).unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()));
@@ -122,7 +141,9 @@ fn sources(dir: &Path, out: &mut Vec<PathBuf>) {
         let p = e.expect("a directory entry").path();
         if p.is_dir() {
             sources(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
+        } else if p.extension().is_some_and(|x| x == "rs")
+            && !p.to_string_lossy().ends_with("_tests.rs")
+        {
             out.push(p);
         }
     }
@@ -207,6 +228,17 @@ mod tests {
         };
         let before = of(&dir);
         std::fs::write(dir.join("src/notes.txt"), "changed, still not a source").unwrap();
+        std::fs::write(dir.join("src/sub/b_tests.rs"), "#[test] fn t() {}").unwrap();
+        assert_eq!(
+            of(&dir),
+            before,
+            "a text file and a test-only file do not count"
+        );
+        std::fs::write(dir.join("src/lib.rs"), "pub struct A(u8);\r\n").unwrap();
+        let crlf = of(&dir);
+        std::fs::write(dir.join("src/lib.rs"), "pub struct A(u8);\n").unwrap();
+        assert_eq!(of(&dir), crlf, "CRLF and LF checkouts agree");
+        std::fs::write(dir.join("src/lib.rs"), "pub struct A(u8);").unwrap();
         assert_eq!(of(&dir), before);
         std::fs::write(dir.join("src/sub/b.rs"), "pub struct B(u16);").unwrap();
         assert_ne!(of(&dir), before);

@@ -17,13 +17,16 @@
 //! Kalman filter); the history goes on, so the learned estimate resumes as soon as the speed is
 //! back inside. Where no learned causal estimate is made (the first metre, outside the speed
 //! range) the delay line keeps the Kalman filter's estimate, which is then the causal output:
-//! the fixed-lag output there is also the one made at its position. (It once held the first
-//! learned estimate over the first metre, an error the evaluation's D3 band-pass spreads over
-//! a 400 m record: nominal 10 m lag D3 0.153 -> 0.141 on validation seed 103.)
+//! the fixed-lag output there is also the one made at its position, from the first grid point
+//! on (before it, the first point's). It once held the first learned estimate over the first
+//! metre, an error the evaluation's D3 band-pass spreads over a 400 m record (held-out seeds
+//! 1-5, nominal taps: 10 m lag D3 0.159 -> 0.136 with the fix; docs/cross-level.md section 6).
 //!
 //! Taps fitted at constant speed meet, while the speed changes, windows whose cells were
 //! recorded at other speeds: the history keeps each cell divided by its speed's
-//! [`SPEED_POWER`], and the estimate multiplies it back by the current speed's.
+//! [`SPEED_POWER`] (a speed below the bank's lowest counts as that one: the slowest cells carry
+//! little of the track anyway, and a quotient by a near-zero speed would amplify their noise),
+//! and the estimate multiplies it back by the current speed's.
 //!
 //! A bank with per-condition taps (a contact model, [`super::contact`]) is blended in the
 //! contact condition too: every closed cell updates the contact features, the model turns them
