@@ -75,9 +75,7 @@ fn main() {
 
     // The tap banks are built into the library for offline use. Before the first
     // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
-    let mut layout = state_layout::Fingerprint::of_sources();
-    // The serialized state's encoding also follows the dependencies (serde, postcard).
-    layout.add_text_file(&manifest.join("..").join("Cargo.lock"));
+    let mut layout = state_layout::Fingerprint::of_fmu_crate();
     for name in ["learned.taps", "learned-nominal.taps"] {
         let taps = manifest.join("resources").join(name);
         println!("cargo::rerun-if-changed={}", taps.display());
@@ -87,12 +85,8 @@ fn main() {
         std::fs::write(out_dir.join(name), bytes).expect("writing the tap bank");
     }
     println!("cargo::rustc-env=ESTIMATOR_STATE_LAYOUT={}", layout.hex());
-    // The GUID: the same, with what else reaches the modelDescription.xml.
-    let mut guid = layout;
-    guid.add_text_file(&file);
-    guid.add(env!("CARGO_PKG_VERSION").as_bytes());
-    for dep in ["fmi-abi", "modelDescription"] {
-        guid.add_crate(&manifest.join("..").join(dep));
-    }
-    println!("cargo::rustc-env=ESTIMATOR_GUID={}", guid.guid());
+    println!(
+        "cargo::rustc-env=ESTIMATOR_GUID={}",
+        layout.fmu_guid(&[file])
+    );
 }

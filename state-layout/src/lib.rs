@@ -24,9 +24,10 @@
 //! Not a cryptographic hash: it tells builds apart, it does not authenticate them.
 //!
 //! ```no_run
-//! // build.rs
-//! let layout = state_layout::Fingerprint::of_sources();
+//! // build.rs of an FMU crate
+//! let layout = state_layout::Fingerprint::of_fmu_crate();
 //! println!("cargo::rustc-env=MY_STATE_LAYOUT={}", layout.hex());
+//! println!("cargo::rustc-env=MY_GUID={}", layout.fmu_guid(&[]));
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -87,11 +88,36 @@ impl Fingerprint {
     /// The fingerprint of the calling build script's crate sources (`CARGO_MANIFEST_DIR`),
     /// telling cargo to run the script again when they change.
     pub fn of_sources() -> Fingerprint {
-        let dir = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
-        println!("cargo::rerun-if-changed={}", dir.join("src").display());
         let mut f = Fingerprint::default();
-        f.add_sources(&dir);
+        f.add_crate(&manifest_dir());
         f
+    }
+
+    /// The fingerprint of an FMU crate's serialized state, for its build script: its sources
+    /// and the workspace's Cargo.lock (the encoding follows serde and postcard). Parts the
+    /// crate builds into its library (tap banks) are added by the caller.
+    pub fn of_fmu_crate() -> Fingerprint {
+        let mut f = Fingerprint::of_sources();
+        f.add_text_file(&workspace_dir().join("Cargo.lock"));
+        f
+    }
+
+    /// The FMU's GUID: this fingerprint extended by what else reaches its modelDescription.xml:
+    /// the package version, `resources` (text files that set parameter defaults) and the
+    /// workspace crates that write the XML (`fmi-abi`, `modelDescription`).
+    pub fn fmu_guid(mut self, resources: &[PathBuf]) -> String {
+        self.add(
+            std::env::var("CARGO_PKG_VERSION")
+                .unwrap_or_default()
+                .as_bytes(),
+        );
+        for r in resources {
+            self.add_text_file(r);
+        }
+        for dep in ["fmi-abi", "modelDescription"] {
+            self.add_crate(&workspace_dir().join(dep));
+        }
+        self.guid()
     }
 
     /// 16 lowercase hex digits.
@@ -117,6 +143,22 @@ impl Fingerprint {
             lo & 0xffff_ffff_ffff
         )
     }
+}
+
+/// The build script's crate (`CARGO_MANIFEST_DIR`).
+fn manifest_dir() -> PathBuf {
+    PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"))
+}
+
+/// The workspace: the nearest directory above the crate that holds a Cargo.lock (the crate's
+/// own parent when none does).
+fn workspace_dir() -> PathBuf {
+    let dir = manifest_dir();
+    dir.ancestors()
+        .skip(1)
+        .find(|d| d.join("Cargo.lock").is_file())
+        .unwrap_or_else(|| dir.parent().unwrap_or(&dir))
+        .to_path_buf()
 }
 
 /// `bytes` with every CRLF as LF.

@@ -2,8 +2,8 @@
 //!
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
 //! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo fmt --check, cargo clippy
-//!   and cargo doc with warnings denied, cargo test, packaging, the Python harness (tests/, run with pytest in
-//!   `.venv`, created on demand), and a summary;
+//!   and cargo doc with warnings denied, cargo test, packaging, the Python harness (tests/, run
+//!   with pytest in `.venv`, created on demand), and a summary;
 //! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
 //!   the estimator variants with `alignment-studies` (the studies on top of the orchestrator).
 

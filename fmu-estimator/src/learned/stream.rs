@@ -499,10 +499,11 @@ impl Learned {
         let Some(closed) = self.grid.add(distance, x) else {
             return;
         };
-        let quotient = speed_factors(speed.max(self.selection.speeds[0]));
+        // Inside the bank's range these are also the gain the estimate multiplies back by.
+        let factors = speed_factors(speed.max(self.selection.speeds[0]));
         for cell in &closed.cells {
             self.history
-                .push(&std::array::from_fn(|c| cell[c] / quotient[c]));
+                .push(&std::array::from_fn(|c| cell[c] / factors[c]));
             if let Some(m) = self.moments.as_mut() {
                 m.push(cell, speed);
             }
@@ -534,12 +535,11 @@ impl Learned {
         } else {
             weights(&sel.conditions, self.contact_scale)
         };
-        let gain = speed_factors(speed);
         let blend = |set: &[Vec<Windows>], hist: &History| -> Option<(f64, f64)> {
             let (mut e, mut r) = (0.0, 0.0);
             for (s, a) in &by_speed {
                 for (c, b) in &by_condition {
-                    let (ei, ri) = set[*s][*c].apply(hist, &gain)?;
+                    let (ei, ri) = set[*s][*c].apply(hist, &factors)?;
                     e += a * b * ei;
                     r += a * b * ri;
                 }
