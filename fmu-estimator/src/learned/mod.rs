@@ -7,7 +7,7 @@
 //! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
 //!
 //! How the taps are fitted (`alignment-studies taps`, `studies/src/study/learned/`) and
-//! what they reach is in `docs/cross-level.md` sections 5-6 and `docs/accuracy.md`.
+//! what they reach is in `docs/learned-filter.md` and `docs/accuracy.md`.
 
 pub mod bank;
 pub mod contact;

@@ -18,9 +18,8 @@
 //! back inside. Where no learned causal estimate is made (the first metre, outside the speed
 //! range) the delay line keeps the Kalman filter's estimate, which is then the causal output:
 //! the fixed-lag output there is also the one made at its position, from the first grid point
-//! on (before it, the first point's). It once held the first learned estimate over the first
-//! metre, an error the evaluation's D3 band-pass spreads over a 400 m record (held-out seeds
-//! 1-5, nominal taps: 10 m lag D3 0.159 -> 0.136 with the fix; docs/cross-level.md section 6).
+//! on (before it, the first point's). Why it matters: the evaluation's D3 band-pass spreads an
+//! error in a record's first metres over 100-200 m of it (docs/learned-filter.md).
 //!
 //! Taps fitted at constant speed meet, while the speed changes, windows whose cells were
 //! recorded at other speeds: the history keeps each cell divided by its speed's

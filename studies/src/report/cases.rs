@@ -134,7 +134,7 @@ pub fn as_document(markdown: &str, command: &str, out: &Path) -> String {
          paper did, and with the estimator FMU's default, the learned filter (`estimator` 2, causal \
          output `alignment`; rows \"learned filter\"). Its other outputs and options (fixed lag, \
          roll-rate gyroscope, contact conditions, variable speed) are compared by \
-         `alignment-studies variants` (docs/cross-level.md, section 6).\n\n",
+         `alignment-studies variants` (docs/learned-filter.md).\n\n",
         env!("CARGO_PKG_NAME"),
         env!("CARGO_PKG_VERSION"),
         orchestrator::outdir::rfc3339(std::time::SystemTime::now()),

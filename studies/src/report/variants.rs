@@ -60,7 +60,7 @@ pub fn variants(
         ];
         // On the nominal vehicle only, the causal form and the shortest look-ahead, on a finer
         // grid (their anti-alias filter's delay is a fraction of a metre): what a causal linear
-        // estimator of the three sensors reaches (docs/cross-level.md section 6).
+        // estimator of the three sensors reaches (docs/learned-filter.md).
         let near_causal =
             variants::NEAR_CAUSAL.map(|lag| (Lookahead::FixedLag(lag), variants::FINE_GRID));
         let extra = if scales.len() == 1 {

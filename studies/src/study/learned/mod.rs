@@ -47,8 +47,8 @@
 //! Kalman filter's D1 error comes through.
 //!
 //! # Measured
-//! The figures (`alignment-studies variants`, held-out seeds) are in docs/cross-level.md,
-//! sections 5 and 6, and in the variants report.
+//! The figures (`alignment-studies variants`, held-out seeds) are in docs/learned-filter.md
+//! and in the variants report.
 
 pub(crate) mod contact;
 mod fir;
