@@ -16,6 +16,11 @@ use std::path::PathBuf;
 
 pub use crate::variables::{VARIABLES, vr};
 
+/// How far (relative) the communication step may be from the learned filter's sample step
+/// before the log warns that its estimate is approximate: rounding of a step written in decimal
+/// is far below it, a real other rate (500 Hz against 1 kHz) far above.
+const STEP_TOLERANCE: f64 = 0.01;
+
 /// The estimator's FMI model state. Everything here is part of a saved FMU state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Estimator {
@@ -110,7 +115,7 @@ impl Model for Estimator {
         Ok(Estimator {
             resources: ctx.resources.clone(),
             core: None,
-            min_speed: 0.5,
+            min_speed: crate::variables::MIN_SPEED_DEFAULT,
             design_speed: 0.0,
             holding: false,
             learned: None,
@@ -219,7 +224,7 @@ impl Model for Estimator {
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
         if let Some(l) = self.learned.as_mut()
             && !self.step_warned
-            && (h - l.sample_step()).abs() > 0.01 * l.sample_step()
+            && (h - l.sample_step()).abs() > STEP_TOLERANCE * l.sample_step()
         {
             log.warning(&format!(
                     "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",

@@ -2,13 +2,30 @@
 //! irregularity through Kalman filtering techniques", docs/references.md), as an FMI 2.0
 //! co-simulation FMU.
 //!
-//! - [`params`]: the simplified model's parameters (Table 2) and their sources;
-//! - [`model`]: the simplified model, its derivation and sign conventions, `F_c` and `H`;
-//! - [`discretize`]: the paper's second-order scheme and the exact one;
-//! - [`filter`]: the Kalman filter;
-//! - [`observability`]: the PBH test run at initialization;
-//! - [`calibration`]: Q and R, from the calibration file or the diagonal model;
-//! - [`fmu`]: the FMI variable table and what each FMI phase does.
+//! The default estimator (`estimator = 2`) is the learned filter: the paper's Kalman filter
+//! runs as one of its channels, and a multichannel FIR over the sensors, fitted in the metric's
+//! bands, gives the estimate. One sample's path through the FMU, in call order:
+//!
+//! | step | module |
+//! |---|---|
+//! | the FMI call, the variable table, what each FMI phase does | [`fmu`], [`variables`] |
+//! | the user's settings, read once at initialization | [`config`], [`calibration`] |
+//! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
+//! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
+//! | the learned filter: grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
+//!
+//! The paper's filter, which the learned one builds on and which `estimator = 1` runs alone:
+//!
+//! | concern | module |
+//! |---|---|
+//! | the simplified model's parameters (Table 2) and their sources | [`params`] |
+//! | the simplified model, its derivation and sign conventions, `F_c` and `H` | [`model`] |
+//! | the filter's linear system for an alignment prior, re-evaluated at every speed | [`statespace`], [`prior`] |
+//! | the paper's second-order discretization and the exact one | [`discretize`] |
+//! | the PBH observability test run at initialization | [`observability`] |
+//!
+//! Offline (recordings, the studies, the Python bindings): [`offline`] runs the same steps over a
+//! whole record, and [`smoother`] adds the Rauch-Tung-Striebel smoother.
 //!
 //! The FMU's variables are listed in `documentation/index.html` inside the packaged FMU and in
 //! `docs/estimator-fmu.md`.

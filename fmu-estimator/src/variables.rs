@@ -10,6 +10,10 @@ use fmi_abi::VarSpec;
 /// The `calibration_file` parameter's default: the file shipped in the resources.
 pub const DEFAULT_CALIBRATION_FILE: &str = "calibration.toml";
 
+/// `min_speed`'s default \[m/s\]: below it the creep terms, which divide by the speed, are not
+/// trusted and the estimate is held.
+pub const MIN_SPEED_DEFAULT: f64 = 0.5;
+
 /// Real value references.
 pub mod vr {
     pub const WS_ACC_Y: u32 = 0;
@@ -127,7 +131,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::Q_ACC_FRAME, "q_acc_frame", "m2/s3", 1e-4, "Intensity of the white acceleration noise on the frame (Q, diagonal model)").min(0.0),
     VarSpec::real_parameter(vr::Q_XI, "q_xi", "1", 1e-5, "Intensity of the alignment random walk [m2/s] (Q, diagonal model)").min(0.0),
     VarSpec::real_parameter(vr::P0_XI, "p0_xi", "m", 0.005, "Initial standard deviation of the alignment estimate").min(0.0),
-    VarSpec::real_parameter(vr::MIN_SPEED, "min_speed", "m/s", 0.5, "Below this speed the filter holds its estimate (creep terms divide by the speed)").min(0.0),
+    VarSpec::real_parameter(vr::MIN_SPEED, "min_speed", "m/s", MIN_SPEED_DEFAULT, "Below this speed the filter holds its estimate (creep terms divide by the speed)").min(0.0),
     VarSpec::real_parameter(vr::PRIOR_A, "prior_a", "m.rad", Spectrum::GERMAN_LOW.a, "Amplitude A of the alignment spectrum the 8-state priors assume (docs/references.md section 3; German low disturbance)").min(0.0),
     VarSpec::real_parameter(vr::PRIOR_OMEGA_R, "prior_omega_r", "rad/m", Spectrum::GERMAN_LOW.omega_r, "Lower corner wavenumber of the alignment spectrum (alignment_model 3)").min(0.0),
     VarSpec::real_parameter(vr::PRIOR_OMEGA_C, "prior_omega_c", "rad/m", Spectrum::GERMAN_LOW.omega_c, "Upper corner wavenumber of the alignment spectrum (alignment_models 2 and 3)").min(0.0),

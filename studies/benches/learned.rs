@@ -9,7 +9,9 @@
 //! - the paper's Kalman filter over the same samples (`fmu_estimator::offline`), per sample.
 
 use alignment_studies::study::learned::synthetic::noise_record;
-use alignment_studies::study::learned::{GRID, LearnedSmoother, Lookahead, default_partner};
+use alignment_studies::study::learned::{
+    LearnedSmoother, Lookahead, SMOOTHER_GRID, default_partner,
+};
 use alignment_studies::study::runs::STEP;
 use fmu_estimator::offline;
 use std::time::Instant;
@@ -41,7 +43,7 @@ fn main() {
         let l = LearnedSmoother::train(
             &train,
             lookahead,
-            GRID,
+            SMOOTHER_GRID,
             default_partner(lookahead, 1.0),
             "bench",
         )

@@ -111,6 +111,14 @@ pub struct Header {
 /// A whole tap bank.
 pub type Bank = Header;
 
+/// The longest first line a bank may have: its magic, format, size and hash take under 60
+/// bytes, so anything longer is not a bank (and is not read further).
+const MAX_FIRST_LINE: usize = 200;
+
+/// The longest history a window may read, in grid points (20 km at 0.2 m, against the shipped
+/// 60 m): a bound that stops a corrupt file from asking for gigabytes of history.
+const MAX_PAST: usize = 100_000;
+
 impl Header {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -142,7 +150,7 @@ impl Header {
         let nl = bytes
             .iter()
             .position(|b| *b == b'\n')
-            .filter(|n| *n < 200)
+            .filter(|n| *n < MAX_FIRST_LINE)
             .ok_or_else(|| bad("no first line".into()))?;
         let first = std::str::from_utf8(&bytes[..nl]).map_err(|_| bad("first line".into()))?;
         let f: Vec<&str> = first.split(' ').collect();
@@ -260,7 +268,7 @@ impl Header {
                 return Err(format!("entry {i}: no windows"));
             }
             for w in &e.windows {
-                if w.future != e.lag || w.past > 100_000 {
+                if w.future != e.lag || w.past > MAX_PAST {
                     return Err(format!(
                         "entry {i}: a window of {} behind and {} ahead under a lag of {}",
                         w.past, w.future, e.lag

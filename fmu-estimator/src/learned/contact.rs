@@ -15,7 +15,7 @@
 //! `ws_yaw_rate`, `frame_acc_y`) pass a band-pass (second-order Butterworth high-pass at the
 //! band's long wavelength, then low-pass at its short one: the D1 band, 3-25 m, where the
 //! conditions differ most), then is divided by the speed to the power the kinematics give it
-//! ([`SPEED_POWER`]: `V^2` for the accelerations, `V` for the yaw rate). Running second
+//! ([`CONTACT_SPEED_POWER`]: `V^2` for the accelerations, `V` for the yaw rate). Running second
 //! moments `M_ij` of these are kept per speed of the model: a cell counts towards the two model
 //! speeds around its own, in the linear-interpolation shares, each set exponentially weighted
 //! with a memory of `memory` metres of its own cells (weight `w / min(n, memory / ds)` for a
@@ -49,6 +49,10 @@
 use super::grid::Biquad;
 use serde::{Deserialize, Serialize};
 
+/// The least rms error a speed's model is weighted by (Kalker scale): a model that happened to fit
+/// its training runs perfectly must not take all the weight (the fitted errors are 0.07-0.13).
+pub const MIN_MODEL_ERROR: f64 = 1e-3;
+
 /// The channels the features read ([`super::grid::CHANNELS`] indices).
 pub const CHANNELS: [usize; 3] = [0, 1, 2];
 /// Number of features.
@@ -56,7 +60,7 @@ pub const FEATURES: usize = 5;
 /// The power of the speed each channel is divided by before its moments are taken: a wheelset
 /// following a track wave `y(s)` has `y'' V^2` of lateral acceleration and `psi' V` of yaw rate,
 /// so the quotients keep the cells of one set (speeds up to one bank step apart) on one scale.
-pub const SPEED_POWER: [i32; 3] = [2, 1, 2];
+pub const CONTACT_SPEED_POWER: [i32; 3] = [2, 1, 2];
 /// The smallest speed the quotients divide by \[m/s\] (cells below the model's lowest speed
 /// are left out of the moments anyway).
 const MIN_SPEED: f64 = 1.0;
@@ -139,7 +143,7 @@ impl ContactModel {
             // full memory): its weight grows with its cells until the memory is full.
             let set = &moments.sets[i];
             let full = set.n.min(moments.memory_points) / moments.memory_points;
-            let w = set.recent * full / m.rms_error.max(1e-3).powi(2);
+            let w = set.recent * full / m.rms_error.max(MIN_MODEL_ERROR).powi(2);
             sum += w * e.clamp(self.range[0], self.range[1]);
             weight += w;
         }
@@ -207,7 +211,7 @@ impl Moments {
         let v = speed.max(MIN_SPEED);
         let x: [f64; 3] = std::array::from_fn(|i| {
             let [hp, lp] = &mut self.filters[i];
-            lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(SPEED_POWER[i])
+            lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(CONTACT_SPEED_POWER[i])
         });
         let (Some(lo), Some(hi)) = (self.speeds.first(), self.speeds.last()) else {
             return;
@@ -277,7 +281,7 @@ mod tests {
         let mut a = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
         let mut b = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
         let mut noise = uniform(1);
-        // At 1 m/s the speed quotients (SPEED_POWER) leave the channels as they are.
+        // At 1 m/s the speed quotients (CONTACT_SPEED_POWER) leave the channels as they are.
         for _ in 0..20_000 {
             let (u, w) = (noise(), noise());
             a.push(&[u, 3.0 * u, w, 0.0, 0.0], 1.0);
@@ -330,7 +334,7 @@ mod tests {
         assert_eq!(m.estimate_from(&outside), None);
         let mut noise = uniform(7);
         // Yaw rate 3 (at 10 m/s) and 2 (at 20 m/s) times the wheelset acceleration, each
-        // scaled as the speed scales them (SPEED_POWER): ln(M11/M00) = ln 9, then ln 4.
+        // scaled as the speed scales them (CONTACT_SPEED_POWER): ln(M11/M00) = ln 9, then ln 4.
         let n = 2000;
         for (v, ratio) in [(10.0, 3.0), (20.0, 2.0)] {
             for _ in 0..n {

@@ -25,6 +25,10 @@
 
 use serde::{Deserialize, Serialize};
 
+/// The most cells one sample may close: only a bound on the loop (1 << 20 cells is 210 km at
+/// 0.2 m; the caller refuses a jump in distance long before that).
+pub const MAX_CELLS_PER_SAMPLE: usize = 1 << 20;
+
 /// The channels a tap bank may use, in the order the grid holds them.
 pub const CHANNELS: [&str; 5] = [
     "ws_acc_y",
@@ -145,7 +149,8 @@ impl Grid {
             self.last = mean;
             // Whole cells crossed: at most what the distance allows (a huge jump is refused by
             // the caller; here it only bounds the loop).
-            let n = (((distance - self.next + EDGE) / self.ds).floor() as usize + 1).min(1 << 20);
+            let n = (((distance - self.next + EDGE) / self.ds).floor() as usize + 1)
+                .min(MAX_CELLS_PER_SAMPLE);
             let mut cells = Vec::with_capacity(n);
             for _ in 0..n {
                 let mut cell = mean;

@@ -4,6 +4,7 @@
 //!
 //! - [`grid`]: the causal block mean onto the distance grid, the Kalman channel's high-pass;
 //! - [`bank`]: the tap bank file (format, provenance, checks);
+//! - [`window`]: one window of taps and which one a history gets, shared with the tap fit;
 //! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
 //!
 //! How the taps are fitted (`alignment-studies taps`, `studies/src/study/learned/`) and
@@ -13,6 +14,7 @@ pub mod bank;
 pub mod contact;
 pub mod grid;
 pub mod stream;
+pub mod window;
 
 pub use bank::Bank;
 pub use stream::{Choice, Learned};

@@ -23,7 +23,7 @@
 //!
 //! Taps fitted at constant speed meet, while the speed changes, windows whose cells were
 //! recorded at other speeds: the history keeps each cell divided by its speed's
-//! [`SPEED_POWER`] (a speed below the bank's lowest counts as that one: the slowest cells carry
+//! [`TAP_SPEED_POWER`] (a speed below the bank's lowest counts as that one: the slowest cells carry
 //! little of the track anyway, and a quotient by a near-zero speed would amplify their noise),
 //! and the estimate multiplies it back by the current speed's.
 //!
@@ -37,85 +37,37 @@ use super::bank::{Bank, Entry};
 use super::contact::{ContactModel, Moments};
 use super::grid::{CHANNELS, Grid, KALMAN, ROLL_RATE};
 use super::weights;
+use super::window::{self, Window};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
-/// One window ready to apply: per channel, the history slot it reads and its taps oldest first
-/// (so the dot product runs over the history in memory order).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct Applied {
-    past: usize,
-    len: usize,
-    slots: Vec<usize>,
-    /// `slots.len() * len` taps, channel after channel, oldest first.
-    taps: Vec<f64>,
-    rms_error: f64,
-}
-
 /// The windows of one entry, shortest history first.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-struct Windows(Vec<Applied>);
+struct Windows(Vec<Window>);
 
 impl Windows {
     fn of(e: &Entry) -> Windows {
         let slot = |name: &String| CHANNELS.iter().position(|c| c == name).expect("checked");
         let slots: Vec<usize> = e.channels.iter().map(slot).collect();
-        let mut w: Vec<Applied> = e
+        let mut w: Vec<Window> = e
             .windows
             .iter()
-            .map(|w| {
-                let len = w.past + w.future + 1;
-                let mut taps = Vec::with_capacity(slots.len() * len);
-                for c in 0..slots.len() {
-                    // File order: tap j is j points before the newest; here oldest first.
-                    taps.extend(w.taps[c * len..(c + 1) * len].iter().rev());
-                }
-                Applied {
-                    past: w.past,
-                    len,
-                    slots: slots.clone(),
-                    taps,
-                    rms_error: w.rms_error,
-                }
-            })
+            .map(|w| Window::from_file_order(w.past, w.future, slots.clone(), &w.taps, w.rms_error))
             .collect();
-        w.sort_by_key(|a| a.past);
+        w.sort_by_key(Window::len);
         Windows(w)
     }
 
-    /// The estimate from the longest window `filled` points of history cover, and its rms error;
-    /// `gain` per channel slot brings the history's speed quotients back to the current speed.
+    /// The estimate from the longest window the history covers, and its rms error; `gain` per
+    /// channel slot brings the history's speed quotients back to the current speed.
     fn apply(&self, hist: &History, gain: &[f64; 5]) -> Option<(f64, f64)> {
-        let w = self.0.iter().rev().find(|w| w.len <= hist.filled)?;
-        let mut e = 0.0;
-        for (c, slot) in w.slots.iter().enumerate() {
-            let x = hist.latest(*slot, w.len);
-            let t = &w.taps[c * w.len..(c + 1) * w.len];
-            e += gain[*slot] * dot(t, x);
-        }
-        Some((e, w.rms_error))
+        let w = window::longest_covered(&self.0, hist.filled)?;
+        Some((w.apply(hist, gain), w.rms_error()))
     }
 
     fn longest(&self) -> usize {
-        self.0.iter().map(|w| w.len).max().unwrap_or(0)
+        self.0.iter().map(Window::len).max().unwrap_or(0)
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    // Four partial sums: lets the compiler vectorize, and fixes the summation order.
-    let mut s = [0.0; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for i in 0..4 {
-            s[i] += x[i] * y[i];
-        }
-    }
-    let mut r = (s[0] + s[1]) + (s[2] + s[3]);
-    for (x, y) in ra.iter().zip(rb) {
-        r += x * y;
-    }
-    r
 }
 
 /// The power of the speed each channel ([`CHANNELS`]) is divided by in the history. The taps
@@ -134,9 +86,9 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// 0 / 0 (no quotients) 0.138, 0.5 / 0.5 0.135, 1 / 1 0.133, 1.5 / 1 0.132, 2 / 1 0.138 (its
 /// gyro fixed-lag output 0.168 against 0.153 without quotients), 2 / 1 with the roll rate at 0
 /// worse still (0.203), 1 / 0 0.135.
-pub const SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
+pub const TAP_SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
 
-/// `V^SPEED_POWER` per channel (with one square root: it runs at every closed cell).
+/// `V^TAP_SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
     let v15 = v * v.sqrt();
     [v15, v, v15, v, 1.0]
@@ -186,8 +138,13 @@ impl History {
         self.pos = (self.pos + 1) % self.capacity;
         self.filled = (self.filled + 1).min(self.capacity);
     }
+}
 
-    /// The newest `n` values of channel `c`, oldest first.
+impl window::History for History {
+    fn filled(&self) -> usize {
+        self.filled
+    }
+
     fn latest(&self, c: usize, n: usize) -> &[f64] {
         let end = self.pos + self.capacity;
         &self.data[c][end - n..end]

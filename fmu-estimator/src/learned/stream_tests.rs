@@ -114,7 +114,7 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
         d += 0.05;
         let u = (k as f64 * 0.3).sin();
         // Channel 1 is 0.12 x channel 0: at 10 m/s, over the speed and its square
-        // (contact::SPEED_POWER), 1.2 times: ln(1.44) = 0.365, scale 0.786.
+        // (contact::CONTACT_SPEED_POWER), 1.2 times: ln(1.44) = 0.365, scale 0.786.
         let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
         if let Some(c) = grid.add(d, &x) {
             cells.extend(c.cells);
@@ -306,7 +306,7 @@ fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
     let rescaled: Vec<[f64; 5]> = cells
         .iter()
         .zip(&speeds)
-        .map(|(c, v)| std::array::from_fn(|i| c[i] * (now / v.max(10.0)).powf(SPEED_POWER[i])))
+        .map(|(c, v)| std::array::from_fn(|i| c[i] * (now / v.max(10.0)).powf(TAP_SPEED_POWER[i])))
         .collect();
     let a = (now - 10.0) / 10.0;
     let want = (1.0 - a) * direct(&bank.entries[0], 1, &rescaled)
@@ -330,7 +330,7 @@ fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
 fn the_speed_factors_are_the_documented_powers() {
     for v in [0.3, 5.0, 12.5, 30.0] {
         let f = speed_factors(v);
-        for (c, p) in SPEED_POWER.iter().enumerate() {
+        for (c, p) in TAP_SPEED_POWER.iter().enumerate() {
             assert!((f[c] - v.powf(*p)).abs() <= 1e-14 * v.powf(*p), "{v} {c}");
         }
     }

@@ -25,7 +25,7 @@ pub struct LearnArgs {
     pub lag: Option<f64>,
     /// Grid step along the track \[m\] the sensors are decimated to (finer costs more: the
     /// window is 60 m whatever the step).
-    #[arg(long, default_value_t = crate::study::learned::GRID)]
+    #[arg(long, default_value_t = crate::study::learned::SMOOTHER_GRID)]
     pub grid: f64,
     /// Kalker-coefficient scales of the vehicle to train on, one run each (e.g. 1,0.5 for a
     /// filter robust to the wheel-rail contact; 1: the vehicle as it is).

@@ -30,7 +30,7 @@ pub struct LearnOptions {
 /// (JSON) for `smooth --learned`, written to `out`.
 pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error> {
     use crate::study::learned::{
-        Lookahead, WINDOW, decimation, default_partner, learn, training_runs, validation,
+        Lookahead, SMOOTHER_WINDOW, decimation, default_partner, learn, training_runs, validation,
     };
     use crate::study::runs::{STEP, STOP};
     use crate::study::variants;
@@ -40,10 +40,12 @@ pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error>
     let grid = STEP * speed * decimation(speed, grid).map_err(|e| format!("--grid: {e}"))? as f64;
     let lookahead = match a.lag {
         None => Lookahead::Smoother,
-        Some(m) if (0.0..=WINDOW).contains(&m) => Lookahead::FixedLag((m / grid).round() as usize),
+        Some(m) if (0.0..=SMOOTHER_WINDOW).contains(&m) => {
+            Lookahead::FixedLag((m / grid).round() as usize)
+        }
         Some(m) => {
             return Err(Error::Input(format!(
-                "--lag must be between 0 and {WINDOW} m (the window), not {m}"
+                "--lag must be between 0 and {SMOOTHER_WINDOW} m (the window), not {m}"
             )));
         }
     };
@@ -59,7 +61,7 @@ pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error>
         default_partner(lookahead, sigma),
     )?;
     let ahead = match l.lookahead {
-        Lookahead::Smoother => format!("smoother, {WINDOW} m each way"),
+        Lookahead::Smoother => format!("smoother, {SMOOTHER_WINDOW} m each way"),
         Lookahead::FixedLag(n) => format!("look-ahead {} m", n as f64 * l.grid()),
     };
     let markdown = format!(

@@ -34,7 +34,7 @@ pub fn variants(
         shaping_sigma_xi: shaping,
     };
     use crate::study::learned::{
-        GRID, Lookahead, default_partner, kalker_label, learn, provenance, training_runs,
+        Lookahead, SMOOTHER_GRID, default_partner, kalker_label, learn, provenance, training_runs,
     };
     let compared = variants::variants(&tuned);
     // The learned filters, each with its Kalman partner (the shaping filter's RTS smoother
@@ -55,8 +55,8 @@ pub fn variants(
             kalker_label(scales)
         );
         let forms = [
-            (Lookahead::Smoother, GRID),
-            (Lookahead::FixedLag(variants::LAG), GRID),
+            (Lookahead::Smoother, SMOOTHER_GRID),
+            (Lookahead::FixedLag(variants::LAG), SMOOTHER_GRID),
         ];
         // On the nominal vehicle only, the causal form and the shortest look-ahead, on a finer
         // grid (their anti-alias filter's delay is a fraction of a metre): what a causal linear

@@ -214,8 +214,9 @@ pub fn tune_prior_sigma(
     base: &[(String, String)],
     calibration: Option<&Path>,
 ) -> Result<(f64, f64), String> {
-    const GRID: [f64; 11] = [5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.2, 0.5, 1.0];
-    let scores: Vec<Result<(f64, f64), String>> = GRID
+    const SIGMA_CANDIDATES: [f64; 11] =
+        [5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.2, 0.5, 1.0];
+    let scores: Vec<Result<(f64, f64), String>> = SIGMA_CANDIDATES
         .par_iter()
         .map(|&s| {
             let mut v = variant(

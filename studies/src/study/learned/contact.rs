@@ -7,7 +7,7 @@
 //! sees exactly what the FMU computes. The first [`WARM_UP`] of a run (the moments' memory
 //! filling, and the start transient) is left out of the fit and of the error.
 
-use super::taps::{CONTACT_BAND, CONTACT_MEMORY, GRID, GridRun};
+use super::taps::{BANK_GRID, CONTACT_BAND, CONTACT_MEMORY, GridRun};
 use fmu_estimator::learned::contact::{FEATURES, Moments, SpeedModel};
 use nalgebra::{DMatrix, DVector};
 
@@ -16,8 +16,8 @@ pub const WARM_UP: f64 = CONTACT_MEMORY;
 
 /// The features of every cell of a run at `speed` past the warm-up.
 fn features(run: &GridRun, speed: f64) -> Vec<[f64; FEATURES]> {
-    let mut m = Moments::new(GRID, CONTACT_BAND, CONTACT_MEMORY, &[speed]);
-    let skip = (WARM_UP / GRID).round() as usize;
+    let mut m = Moments::new(BANK_GRID, CONTACT_BAND, CONTACT_MEMORY, &[speed]);
+    let skip = (WARM_UP / BANK_GRID).round() as usize;
     let mut out = vec![];
     for (i, cell) in run.cells.cells.iter().enumerate() {
         m.push(cell, speed);

@@ -15,7 +15,7 @@
 //! 1. Grid: the sensors are low-passed (Butterworth, order 8, zero phase, cut-off at 0.4 of the
 //!    decimated sampling rate, i.e. a 2.5 m wavelength at the default 1 m grid) and every `D`-th
 //!    sample is kept, `D = round(ds / (V h))`, so the samples are `ds` apart along the track.
-//!    The window is [`WINDOW`] each way whatever `ds`, i.e. `P = WINDOW / ds` points.
+//!    The window is [`SMOOTHER_WINDOW`] each way whatever `ds`, i.e. `P = SMOOTHER_WINDOW / ds` points.
 //!    Each channel is scaled to unit variance on the training run (conditioning only).
 //! 2. Estimate at grid point `m`: `e[m] = sum_c sum_{l = -f}^{p} w[c, l] x_c[m - l]`, a window of
 //!    up to `P` points behind (`l > 0`) and ahead (`l < 0`).
@@ -71,10 +71,19 @@ use sci_rs::signal::filter::sosfilt_dyn;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The anti-alias low-pass's cut-off, as a fraction of the decimated sampling rate: 0.4 of it
+/// (0.8 of the decimated Nyquist frequency) leaves the order-8 Butterworth room to fall before
+/// the folding frequency.
+const ANTI_ALIAS_CUTOFF: f64 = 0.4;
+
+/// How much the speed may vary (relative) over a record the smoother is applied to: it is fitted
+/// at one constant speed.
+const SPEED_TOLERANCE: f64 = 0.01;
+
 /// The default grid step along the track \[m\] (20 Hz at 20 m/s).
-pub const GRID: f64 = 1.0;
-/// Half window \[m\]: `P = WINDOW / grid` points each way.
-pub const WINDOW: f64 = 60.0;
+pub const SMOOTHER_GRID: f64 = 1.0;
+/// Half window \[m\]: `P = SMOOTHER_WINDOW / grid` points each way.
+pub const SMOOTHER_WINDOW: f64 = 60.0;
 /// The band the taps are fitted to: D1 and D2, which a 120 m window resolves.
 pub const TARGET: super::metrics::Band = super::metrics::Band {
     name: "3-70 m",
@@ -91,7 +100,7 @@ const SKIP: f64 = 2.0;
 /// How far ahead of the estimated position the learned filter may look.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Lookahead {
-    /// [`WINDOW`] each way, zero-phase anti-alias filter and split: offline.
+    /// [`SMOOTHER_WINDOW`] each way, zero-phase anti-alias filter and split: offline.
     Smoother,
     /// At most this many grid points ahead (0: causal), with a causal anti-alias filter and a causal split
     /// (the estimate for a position is complete once the train is that far past it): on board.
@@ -150,7 +159,7 @@ fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec
     let fs = 1.0 / step;
     let mut sos = butter(
         8,
-        vec![0.4 * fs / decimation as f64],
+        vec![ANTI_ALIAS_CUTOFF * fs / decimation as f64],
         FilterBandType::Lowpass,
         fs,
     )?;
@@ -166,10 +175,10 @@ fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec
 /// of the study's step); refuses a grid finer than one sample or coarser than half the window.
 pub fn decimation(speed: f64, grid: f64) -> Result<usize, String> {
     let sample = speed * STEP;
-    if !(grid.is_finite() && grid >= 0.5 * sample && grid <= 0.5 * WINDOW) {
+    if !(grid.is_finite() && grid >= 0.5 * sample && grid <= 0.5 * SMOOTHER_WINDOW) {
         return Err(format!(
             "the grid step must lie between one sample at {speed} m/s ({sample} m) and half the window ({} m), not {grid} m",
-            0.5 * WINDOW
+            0.5 * SMOOTHER_WINDOW
         ));
     }
     Ok(((grid / sample).round() as usize).max(1))
@@ -209,12 +218,12 @@ impl LearnedSmoother {
     ) -> Result<LearnedSmoother, String> {
         let speed = constant_speed(&rec.samples, None)?;
         let decimation = decimation(speed, grid)?;
-        let half_window = (WINDOW / (speed * STEP * decimation as f64)).round() as usize;
+        let half_window = (SMOOTHER_WINDOW / (speed * STEP * decimation as f64)).round() as usize;
         if let Lookahead::FixedLag(n) = lookahead
             && n > half_window
         {
             return Err(format!(
-                "a look-ahead of {n} grid points is beyond the window ({half_window} points, {WINDOW} m)"
+                "a look-ahead of {n} grid points is beyond the window ({half_window} points, {SMOOTHER_WINDOW} m)"
             ));
         }
         let skip = (SKIP / STEP) as usize;
@@ -391,7 +400,7 @@ fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, Stri
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
             (lo.min(s.speed), hi.max(s.speed))
         });
-    if !(lo > 0.0 && hi.is_finite() && hi <= 1.01 * lo) {
+    if !(lo > 0.0 && hi.is_finite() && hi <= (1.0 + SPEED_TOLERANCE) * lo) {
         return Err(format!(
             "the learned smoother needs a constant speed; the record's speed ranges from {lo} to {hi} m/s"
         ));
@@ -477,7 +486,7 @@ mod tests {
         // estimate's sampling, the causal split) must give the same estimates before the
         // position a change reaches minus the look-ahead: for the study's 20 m on the 1 m grid
         // and for its causal and 3 m forms on the 0.2 m grid.
-        for (lag, grid) in [(20, GRID), (0, 0.2), (15, 0.2)] {
+        for (lag, grid) in [(20, SMOOTHER_GRID), (0, 0.2), (15, 0.2)] {
             let partner = default_partner(Lookahead::FixedLag(lag), 1.0);
             let l = LearnedSmoother::train(
                 &noise_record(60.0, 1),

@@ -22,7 +22,7 @@
 //!    the future (what capped the earlier causal fit near D1 0.63).
 //! 3. Taps: the normal equations of that least squares, with a ridge of `ridge` times their
 //!    mean diagonal (channels scaled to unit variance first), solved by Cholesky for the full
-//!    window ([`WINDOW`] m behind, the lag ahead) and for shorter histories ([`STARTS`], used
+//!    window ([`BANK_WINDOW`] m behind, the lag ahead) and for shorter histories ([`STARTS`], used
 //!    at the start of a run).
 //! 4. Ridge and band weights: chosen together from [`RIDGES`] and [`BAND_WEIGHTS`] by the mean
 //!    plain objective (`sum_b Jrel_b^2`) on the validation seeds (never the calibration seed,
@@ -51,10 +51,17 @@ use nalgebra::{DMatrix, DVector};
 use orchestrator::system::Value;
 use rayon::prelude::*;
 
+/// The shortest training or validation run \[s\]: the standard case's 20 s.
+const MIN_STOP: f64 = 20.0;
+
+/// The vehicle's parameter set named in the bank's provenance when the FMU does not say (the
+/// vehicle FMU's default file is `ml95.toml`).
+const DEFAULT_PARAMETER_SET: &str = "ml95";
+
 /// Grid step along the track \[m\].
-pub const GRID: f64 = 0.2;
+pub const BANK_GRID: f64 = 0.2;
 /// History of the full window \[m\].
-pub const WINDOW: f64 = 60.0;
+pub const BANK_WINDOW: f64 = 60.0;
 /// Shorter histories for the start of a run \[m\].
 pub const STARTS: [f64; 6] = [1.0, 2.0, 5.0, 10.0, 20.0, 40.0];
 /// Cut-off of the Kalman channel's causal high-pass \[m\]: the trade between the bands and the
@@ -187,7 +194,7 @@ fn run(
     roll: bool,
 ) -> Result<Option<GridRun>, Error> {
     // A whole number of seconds: the master runs whole steps.
-    let stop = (distance / speed).clamp(20.0, MAX_STOP).round();
+    let stop = (distance / speed).clamp(MIN_STOP, MAX_STOP).round();
     let mut settings = seeded(seed);
     settings.push(("kalker_scale".into(), Value::Real(kalker)));
     let (rec, table) = match record_table(
@@ -226,7 +233,7 @@ fn on_grid(rec: &Record) -> Result<GridRun, String> {
         .zip(&out.filtered)
         .map(|(s, k)| fmu_estimator::learned::channels(s, k.0))
         .collect();
-    let cells = decimate(&out.distance, &x, GRID, KALMAN_HIGHPASS);
+    let cells = decimate(&out.distance, &x, BANK_GRID, KALMAN_HIGHPASS);
     let target = cells.closed_by.iter().map(|k| rec.alignment[*k]).collect();
     let position = cells.closed_by.iter().map(|k| out.distance[*k]).collect();
     Ok(GridRun {
@@ -253,7 +260,7 @@ struct Fit {
 }
 
 fn points(m: f64) -> usize {
-    (m / GRID).round() as usize
+    (m / BANK_GRID).round() as usize
 }
 
 impl Fit {
@@ -285,7 +292,7 @@ impl Fit {
             .iter()
             .chain([&WIDE, &SHORT])
             .map(|b| {
-                band_power(b, GRID)
+                band_power(b, BANK_GRID)
                     .map(|g| Box::new(move |f: f64| g(f) * g(f)) as Box<dyn Fn(f64) -> f64 + Sync>)
             })
             .collect::<Result<_, _>>()?;
@@ -296,7 +303,7 @@ impl Fit {
                 .iter()
                 .map(|b| b.as_ref() as &dyn Fn(f64) -> f64)
                 .collect();
-            var.add(&[], &r.target[skip..], &|_| 0.0, &extra, GRID);
+            var.add(&[], &r.target[skip..], &|_| 0.0, &extra, BANK_GRID);
         }
         let mut w: Vec<f64> = var.extra.iter().map(|v| 1.0 / v).collect();
         for (w, b) in w.iter_mut().zip(band_weights) {
@@ -313,7 +320,7 @@ impl Fit {
                 .zip(&scale)
                 .map(|(c, s)| col(r, *c).iter().map(|v| v / s).collect())
                 .collect();
-            corr.add(&x, &r.target[skip..], &weight, &[], GRID);
+            corr.add(&x, &r.target[skip..], &weight, &[], BANK_GRID);
         }
         Ok(Fit {
             corr,
@@ -514,7 +521,7 @@ fn fit_speed(
         vec![(None, stable.clone())]
     };
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
-    let past = points(WINDOW);
+    let past = points(BANK_WINDOW);
     let span = past + lags.iter().copied().max().unwrap_or(0);
     let sets: Vec<bool> = if o.roll_rate {
         vec![false, true]
@@ -614,9 +621,13 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
     }
     if o.lags
         .iter()
-        .any(|l| !(l.is_finite() && *l > 0.0 && *l <= WINDOW))
+        .any(|l| !(l.is_finite() && *l > 0.0 && *l <= BANK_WINDOW))
     {
-        return Err(format!("the lags must lie in (0, {WINDOW}] m; got {:?}", o.lags).into());
+        return Err(format!(
+            "the lags must lie in (0, {BANK_WINDOW}] m; got {:?}",
+            o.lags
+        )
+        .into());
     }
     let mut entries = vec![];
     let mut models = vec![];
@@ -648,17 +659,17 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         .collect();
     Ok(Header {
         format: fmu_estimator::learned::bank::FORMAT,
-        grid: GRID,
+        grid: BANK_GRID,
         kalman_highpass: KALMAN_HIGHPASS,
         provenance: Provenance {
-            vehicle: format!("RailVehicle FMU ({}), parameter set {}", fmus.vehicle.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(), fmus.vehicle_params().map(|p| p.name).unwrap_or_else(|_| "ml95".into())),
+            vehicle: format!("RailVehicle FMU ({}), parameter set {}", fmus.vehicle.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(), fmus.vehicle_params().map(|p| p.name).unwrap_or_else(|_| DEFAULT_PARAMETER_SET.into())),
             training_seed: o.training_seed,
             validation_seeds: o.validation_seeds.clone(),
             kalker_scales: o.kalker_scales.clone(),
             training_distance: TRAINING_DISTANCE,
             sample_step: STEP,
             objective: format!(
-                "sum over whole 3-200 m, D1 3-25 m, D2 25-70 m, D3 70-200 m of Jrel^2 times each entry's band_weights (chosen with the ridge from {BAND_WEIGHTS:?} on the validation runs, estimated from their start), plus {SHORT_WEIGHT} x the {} error and {WIDE_WEIGHT} x the 2-1000 m error, both relative to the whole band's truth; regressors and target band-passed alike (4th-order Butterworth per edge, zero phase); Kalker at {} %; window {WINDOW} m; training runs {TRAINING_DISTANCE} m (at most {MAX_STOP} s), first {SKIP} m left out",
+                "sum over whole 3-200 m, D1 3-25 m, D2 25-70 m, D3 70-200 m of Jrel^2 times each entry's band_weights (chosen with the ridge from {BAND_WEIGHTS:?} on the validation runs, estimated from their start), plus {SHORT_WEIGHT} x the {} error and {WIDE_WEIGHT} x the 2-1000 m error, both relative to the whole band's truth; regressors and target band-passed alike (4th-order Butterworth per edge, zero phase); Kalker at {} %; window {BANK_WINDOW} m; training runs {TRAINING_DISTANCE} m (at most {MAX_STOP} s), first {SKIP} m left out",
                 SHORT.name,
                 scales.join(" and "),
             ) + if o.per_condition && o.kalker_scales.len() > 1 {
@@ -690,7 +701,7 @@ mod tests {
                 closed_by: (0..n).collect(),
             },
             target: vec![0.0; n],
-            position: (0..n).map(|m| m as f64 * GRID).collect(),
+            position: (0..n).map(|m| m as f64 * BANK_GRID).collect(),
             truth_distance: vec![],
             truth: vec![],
         }
@@ -718,7 +729,7 @@ mod tests {
             apply_from_start(&run, &channels, &[(short.clone(), 2), (full.clone(), 5)], 0);
         // No window fits before two cells of history; from five the full one, as `apply`.
         assert_eq!(pos.len(), 12 - 2);
-        assert_eq!(pos[0], 2.0 * GRID);
+        assert_eq!(pos[0], 2.0 * BANK_GRID);
         for m in 2..5 {
             assert_eq!(
                 est[m - 2],
@@ -728,6 +739,111 @@ mod tests {
         }
         let (full_est, _) = apply(&run, &channels, &full, 5, 0);
         assert_eq!(&est[3..], &full_est[..]);
+    }
+
+    /// The fit judges its choices on estimates made "as the FMU makes them": this holds only if
+    /// the fit's [`apply_from_start`] and the FMU's run-time filter (`Learned`) give the same
+    /// estimates on the same samples. Both read the shipped nominal bank's 20 m/s entries; the
+    /// samples are a deterministic multi-sine at a constant 20 m/s. The FMU keeps its history in
+    /// speed quotients (divided and multiplied back by `V^p`), so the two agree to rounding.
+    #[test]
+    fn the_fit_and_the_fmu_apply_a_bank_alike() {
+        use fmu_estimator::learned::{Choice, Learned};
+        let bank = fmu_estimator::learned::shipped_named("learned-nominal.taps")
+            .expect("a shipped bank")
+            .expect("the bank parses");
+        let (speed, h) = (20.0, 1e-3);
+        let n = 60_000; // 1200 m: the 10 m lagged window fills after 70 m
+        let distance: Vec<f64> = (1..=n).map(|k| speed * h * k as f64).collect();
+        let samples: Vec<[f64; 5]> = (0..n)
+            .map(|k| {
+                let t = k as f64 * h;
+                let wave = |f: f64, a: f64, p: f64| a * (std::f64::consts::TAU * f * t + p).sin();
+                [
+                    wave(1.3, 0.4, 0.0) + wave(7.1, 0.2, 1.0),
+                    wave(0.7, 0.01, 0.3) + wave(3.3, 0.004, 2.0),
+                    wave(1.9, 0.1, 0.5),
+                    0.0,
+                    wave(0.2, 0.003, 0.1) + wave(2.5, 0.001, 0.7),
+                ]
+            })
+            .collect();
+        let cells = decimate(&distance, &samples, bank.grid, bank.kalman_highpass);
+        let run = GridRun {
+            position: cells.closed_by.iter().map(|k| distance[*k]).collect(),
+            target: vec![0.0; cells.cells.len()],
+            truth_distance: vec![],
+            truth: vec![],
+            cells,
+        };
+        let three = |e: &&Entry| e.speed == speed && !e.channels.iter().any(|c| c == ROLL);
+        for lag_m in [0.0, 10.0] {
+            let entry = bank
+                .entries
+                .iter()
+                .filter(three)
+                .find(|e| (e.lag as f64 * bank.grid - lag_m).abs() < 1e-9)
+                .expect("a 20 m/s entry");
+            let channels: Vec<usize> = entry
+                .channels
+                .iter()
+                .map(|c| CHANNELS.iter().position(|n| n == c).unwrap())
+                .collect();
+            let windows: Vec<(Vec<f64>, usize)> = entry
+                .windows
+                .iter()
+                .map(|w| (w.taps.clone(), w.past))
+                .collect();
+            let (_, fit) = apply_from_start(&run, &channels, &windows, entry.lag);
+            let mut fmu = Learned::new(
+                &bank,
+                Choice {
+                    roll_rate: false,
+                    lag: lag_m,
+                },
+            )
+            .unwrap();
+            // The newest grid estimate after each closed cell (a query behind it does not
+            // extrapolate), for the cell `lag` behind the newest.
+            let mut made = vec![];
+            let mut closed = run.cells.closed_by.iter().peekable();
+            for (k, x) in samples.iter().enumerate() {
+                fmu.step(distance[k], speed, x, 0.0);
+                if closed.next_if(|c| **c == k).is_some() {
+                    let newest = if lag_m == 0.0 {
+                        fmu.causal(f64::NEG_INFINITY)
+                    } else {
+                        fmu.lagged(f64::NEG_INFINITY)
+                    };
+                    made.push(newest.map(|(v, _)| v));
+                }
+            }
+            // Before the shortest window is covered neither makes a windowed estimate: the
+            // FMU's causal output is then none (the caller's Kalman filter), its lagged output
+            // the causal delay line's, for the first `shortest past + lag` closed cells.
+            let fmu_est: Vec<f64> = made.into_iter().flatten().collect();
+            let shortest = entry.windows.iter().map(|w| w.past).min().unwrap();
+            let from_delay = if entry.lag == 0 {
+                0
+            } else {
+                shortest + entry.lag
+            };
+            let fmu_est = &fmu_est[from_delay..];
+            assert!(
+                fmu_est.len() > 5000,
+                "{lag_m} m: {} estimates",
+                fmu_est.len()
+            );
+            assert_eq!(fit.len(), fmu_est.len(), "{lag_m} m: the same positions");
+            let scale = fit.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+            assert!(scale > 1e-4, "the estimates are not trivially zero");
+            for (i, (a, b)) in fit.iter().zip(fmu_est).enumerate() {
+                assert!(
+                    (a - b).abs() <= 1e-9 * scale,
+                    "{lag_m} m lag, estimate {i}: fit {a}, FMU {b}"
+                );
+            }
+        }
     }
 
     #[test]
@@ -740,7 +856,10 @@ mod tests {
         let (pos, est) =
             apply_from_start(&run, &channels, &[(short.clone(), 1), (full.clone(), 4)], 2);
         // Positions 1..=9: one cell of history behind at least, two cells ahead at most.
-        assert_eq!(pos, (1..10).map(|t| t as f64 * GRID).collect::<Vec<_>>());
+        assert_eq!(
+            pos,
+            (1..10).map(|t| t as f64 * BANK_GRID).collect::<Vec<_>>()
+        );
         for t in 1..10 {
             let want = if t < 4 {
                 by_hand(&run, &channels, &short, 4, t + 2)

@@ -1,0 +1,194 @@
+//! One window of taps and how it is applied at run time: which window a history gets, and how
+//! its taps meet the history.
+//!
+//! | concern | rule |
+//! |---|---|
+//! | tap order | the bank file holds tap `j` as the one `j` cells before the newest ([`super::bank`]); a [`Window`] keeps them oldest first, so the dot product runs over a history in memory order |
+//! | which window | the longest whose `past + future + 1` cells the history covers ([`longest_covered`]): at the start of a run the shorter start windows, then the full one |
+//! | the sum | per channel a dot product with four partial sums (fixed summation order, vectorizable), channels added in the entry's order, each times its speed gain |
+//!
+//! The tap fit (`alignment-studies taps`) judges its choices on estimates made as the FMU makes
+//! them, with its own sequential sums (the shipped banks' reported errors are reproduced byte
+//! for byte from them). `studies/src/study/learned/taps.rs` has the test that holds the two
+//! together: the fit's estimates from a run's start equal this module's, through `Learned`, on
+//! the same samples, to rounding.
+
+use serde::{Deserialize, Serialize};
+
+/// A history of grid cells, per channel slot ([`super::grid::CHANNELS`]), newest last.
+pub trait History {
+    /// How many cells it holds (at most its capacity).
+    fn filled(&self) -> usize;
+    /// The newest `n` values of channel `slot`, oldest first (`n <= filled()`).
+    fn latest(&self, slot: usize, n: usize) -> &[f64];
+}
+
+/// One window ready to apply: the channel slots it reads and its taps, channel after channel,
+/// oldest first.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Window {
+    past: usize,
+    len: usize,
+    slots: Vec<usize>,
+    /// `slots.len() * len` taps, channel after channel, oldest first.
+    taps: Vec<f64>,
+    rms_error: f64,
+}
+
+impl Window {
+    /// A window from taps in the bank file's order (per channel, newest first) for `past` cells
+    /// of history and `future` of look-ahead; `rms_error` is its estimate's error on the fit.
+    pub fn from_file_order(
+        past: usize,
+        future: usize,
+        slots: Vec<usize>,
+        file_taps: &[f64],
+        rms_error: f64,
+    ) -> Window {
+        let len = past + future + 1;
+        assert_eq!(
+            file_taps.len(),
+            slots.len() * len,
+            "a window's taps are len per channel"
+        );
+        let mut taps = Vec::with_capacity(file_taps.len());
+        for c in 0..slots.len() {
+            taps.extend(file_taps[c * len..(c + 1) * len].iter().rev());
+        }
+        Window {
+            past,
+            len,
+            slots,
+            taps,
+            rms_error,
+        }
+    }
+
+    /// Cells of history it needs: past, the estimated cell and the look-ahead.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Never true: a window reads at least the estimated cell (for clippy's `len` rule).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    pub fn past(&self) -> usize {
+        self.past
+    }
+
+    pub fn rms_error(&self) -> f64 {
+        self.rms_error
+    }
+
+    /// The estimate from the newest [`Window::len`] cells of `history`; `gain` per channel slot
+    /// brings a history kept in speed quotients back to the current speed (ones for a history
+    /// of raw cells).
+    pub fn apply(&self, history: &impl History, gain: &[f64; 5]) -> f64 {
+        let mut e = 0.0;
+        for (c, slot) in self.slots.iter().enumerate() {
+            let x = history.latest(*slot, self.len);
+            let t = &self.taps[c * self.len..(c + 1) * self.len];
+            e += gain[*slot] * dot(t, x);
+        }
+        e
+    }
+}
+
+/// The longest of `windows` (sorted by ascending length) whose cells a history of `filled`
+/// cells covers; `None` before the shortest is covered.
+pub fn longest_covered(windows: &[Window], filled: usize) -> Option<&Window> {
+    windows.iter().rev().find(|w| w.len <= filled)
+}
+
+/// `sum a_i b_i` with four partial sums: lets the compiler vectorize, and fixes the summation
+/// order (the fit's estimates and the FMU's are the same arithmetic).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = [0.0; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for i in 0..4 {
+            s[i] += x[i] * y[i];
+        }
+    }
+    let mut r = (s[0] + s[1]) + (s[2] + s[3]);
+    for (x, y) in ra.iter().zip(rb) {
+        r += x * y;
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A record's cells as columns, read up to (not including) `end`.
+    struct Prefix<'a> {
+        columns: &'a [Vec<f64>],
+        end: usize,
+    }
+
+    impl History for Prefix<'_> {
+        fn filled(&self) -> usize {
+            self.end
+        }
+
+        fn latest(&self, slot: usize, n: usize) -> &[f64] {
+            &self.columns[slot][self.end - n..self.end]
+        }
+    }
+
+    /// The estimate is the written-out sum over channels and lags (file order: tap `j` meets
+    /// the cell `j` before the newest), with each channel's gain.
+    #[test]
+    fn a_window_is_the_sum_of_taps_times_cells_newest_first_in_the_file() {
+        let cells: Vec<[f64; 5]> = (0..9)
+            .map(|k| {
+                let k = k as f64;
+                [k, 10.0 + k * k, -k, 0.5 * k, 100.0 - k]
+            })
+            .collect();
+        let (past, future) = (3, 2);
+        let len = past + future + 1;
+        let slots = vec![1, 4];
+        let file: Vec<f64> = (0..slots.len() * len)
+            .map(|i| 0.1 * i as f64 - 0.3)
+            .collect();
+        let w = Window::from_file_order(past, future, slots.clone(), &file, 0.0);
+        let gain = [1.0, 2.0, 1.0, 1.0, 0.5];
+        let columns: Vec<Vec<f64>> = (0..5)
+            .map(|s| cells.iter().map(|c| c[s]).collect())
+            .collect();
+        for newest in len - 1..cells.len() {
+            let mut by_hand = 0.0;
+            for (c, s) in slots.iter().enumerate() {
+                let mut sum = 0.0;
+                for j in 0..len {
+                    sum += file[c * len + j] * cells[newest - j][*s];
+                }
+                by_hand += gain[*s] * sum;
+            }
+            let e = w.apply(
+                &Prefix {
+                    columns: &columns,
+                    end: newest + 1,
+                },
+                &gain,
+            );
+            assert!((e - by_hand).abs() < 1e-12, "{newest}: {e} {by_hand}");
+        }
+    }
+
+    #[test]
+    fn the_longest_covered_window_is_chosen() {
+        let w = |past| Window::from_file_order(past, 1, vec![0], &vec![0.0; past + 2], 0.0);
+        let windows = [w(0), w(2), w(5)];
+        assert!(longest_covered(&windows, 1).is_none());
+        assert_eq!(longest_covered(&windows, 2).unwrap().past(), 0);
+        assert_eq!(longest_covered(&windows, 4).unwrap().past(), 2);
+        assert_eq!(longest_covered(&windows, 6).unwrap().past(), 2);
+        assert_eq!(longest_covered(&windows, 7).unwrap().past(), 5);
+    }
+}
