@@ -5,6 +5,7 @@
 //! |---|---|---|
 //! | `estimate` | `fmu_estimator::offline::process_columns` | the estimator FMU's outputs, bit for bit |
 //! | `band_metrics`, `bandpass` | the studies' `metrics::evaluate`, `metrics::bandpass` | `alignment-studies` figures |
+//! | `BANDS` | the studies' `metrics::BANDS` | the band edges every report uses |
 //! | `simulate` | the co-simulation master, one FMU | `orchestrator simulate` of that FMU |
 //!
 //! Why a thin layer: every number comes from the same code the FMU and the CLI run, so the
@@ -27,6 +28,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics::band_metrics, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::bandpass, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add("BANDS", metrics::bands())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -79,3 +79,9 @@ pub fn bandpass<'py>(
         .map_err(bad)?;
     Ok(y.into_pyarray(py))
 }
+
+/// The metric's bands as `{name: (shortest, longest wavelength in m)}`, in the studies' order
+/// (whole, D1, D2, D3): Python reads the edges from here instead of retyping them.
+pub fn bands() -> Vec<(&'static str, (f64, f64))> {
+    BANDS.iter().map(|b| (b.name, (b.short, b.long))).collect()
+}

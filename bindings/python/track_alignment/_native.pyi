@@ -41,6 +41,9 @@ def estimate(
 def parameters() -> dict[str, tuple[str, Setting, str]]:
     """``{name: (FMI type, default, description)}`` of every estimator parameter."""
 
+BANDS: list[tuple[str, tuple[float, float]]]
+"""The metric's bands, (name, (shortest, longest wavelength in m)): whole, D1, D2, D3."""
+
 def band_metrics(
     estimate_distance: ArrayLike,
     estimate: ArrayLike,

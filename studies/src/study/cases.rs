@@ -296,9 +296,11 @@ pub fn markdown(title: &str, results: &[CaseResult]) -> String {
         "### {title}\n\nJ [mm] / Jrel, mean ± standard deviation over seeds {:?}; the paper's figures in brackets.\n\n",
         results.first().map(|r| r.seeds.clone()).unwrap_or_default()
     );
-    s.push_str(
-        "| case | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n|---|---|---|---|---|\n",
-    );
+    s.push_str(&format!(
+        "| case | {} |\n|---|{}\n",
+        BANDS.map(|b| b.label()).join(" | "),
+        "---|".repeat(BANDS.len())
+    ));
     for r in results {
         s.push_str(&format!("| {} |", r.name));
         for (i, (_, b)) in r.bands.iter().enumerate() {

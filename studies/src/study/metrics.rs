@@ -51,6 +51,18 @@ pub const BANDS: [Band; 4] = [
     },
 ];
 
+impl Band {
+    /// "D1 3-25 m": how reports, plots and the tap bank's provenance name the band.
+    pub fn label(&self) -> String {
+        format!("{} {}-{} m", self.name, self.short, self.long)
+    }
+}
+
+/// Every band's [`Band::label`], comma-separated: "whole 3-200 m, D1 3-25 m, ...".
+pub fn band_labels() -> String {
+    BANDS.map(|b| b.label()).join(", ")
+}
+
 pub const ORDER: usize = 4;
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -223,6 +235,16 @@ pub fn evaluate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The shipped tap banks' provenance and the reports name the bands so (EN 13848-5's D1-D3
+    /// and the paper's whole range).
+    #[test]
+    fn band_labels_are_the_en_13848_wavelength_ranges() {
+        assert_eq!(
+            band_labels(),
+            "whole 3-200 m, D1 3-25 m, D2 25-70 m, D3 70-200 m"
+        );
+    }
 
     fn grid(n: usize, ds: f64) -> Vec<f64> {
         (0..n).map(|k| k as f64 * ds).collect()

@@ -181,7 +181,7 @@ pub fn estimate_vs_truth(
         two_lines(
             area,
             path,
-            Some(format!("{} {}-{} m", band.name, band.short, band.long)),
+            Some(band.label()),
             s,
             (&t, "truth"),
             (&e, "estimate"),

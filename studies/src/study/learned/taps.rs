@@ -39,7 +39,7 @@
 
 use super::spectra::{Correlations, band_power};
 use crate::Error;
-use crate::study::metrics::{BANDS, Band, evaluate};
+use crate::study::metrics::{BANDS, Band, band_labels, evaluate};
 use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
@@ -669,7 +669,8 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
             training_distance: TRAINING_DISTANCE,
             sample_step: STEP,
             objective: format!(
-                "sum over whole 3-200 m, D1 3-25 m, D2 25-70 m, D3 70-200 m of Jrel^2 times each entry's band_weights (chosen with the ridge from {BAND_WEIGHTS:?} on the validation runs, estimated from their start), plus {SHORT_WEIGHT} x the {} error and {WIDE_WEIGHT} x the 2-1000 m error, both relative to the whole band's truth; regressors and target band-passed alike (4th-order Butterworth per edge, zero phase); Kalker at {} %; window {BANK_WINDOW} m; training runs {TRAINING_DISTANCE} m (at most {MAX_STOP} s), first {SKIP} m left out",
+                "sum over {} of Jrel^2 times each entry's band_weights (chosen with the ridge from {BAND_WEIGHTS:?} on the validation runs, estimated from their start), plus {SHORT_WEIGHT} x the {} error and {WIDE_WEIGHT} x the 2-1000 m error, both relative to the whole band's truth; regressors and target band-passed alike (4th-order Butterworth per edge, zero phase); Kalker at {} %; window {BANK_WINDOW} m; training runs {TRAINING_DISTANCE} m (at most {MAX_STOP} s), first {SKIP} m left out",
+                band_labels(),
                 SHORT.name,
                 scales.join(" and "),
             ) + if o.per_condition && o.kalker_scales.len() > 1 {
