@@ -75,9 +75,7 @@ class Coverage:
 
 def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.ndarray]]:
     """One recording: its band-passed estimate on the line grid and its per-segment SDs [mm]."""
-    cols, step = read_recording(path)
-    out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
-                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(options.settings or {}))
+    cols, out = estimate_recording(path, options.settings)
     position = cols["distance"] if "distance" in cols else out["distance"]
     if np.any(np.diff(position) < 0):
         raise RecordingError(f"{path}: the position (distance) goes backwards; one pass per recording, one direction")
@@ -89,6 +87,15 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
     bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
     count = np.isfinite(bands["d1"]).astype(np.float64)
     return Coverage(first, bands, count), segment_sds(first, bands, options)
+
+
+def estimate_recording(path: str, settings: Mapping[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+    """The recording's columns and the estimator's outputs over them, at the recording's
+    nominal step (:func:`track_alignment.recordings.nominal_step`): the FMU's, bit for bit."""
+    cols, step = read_recording(path)
+    out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
+                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(settings or {}))
+    return cols, out
 
 
 def banded(aligned: np.ndarray, options: Options) -> dict[str, np.ndarray]:
