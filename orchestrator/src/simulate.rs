@@ -1,7 +1,9 @@
 //! `orchestrator simulate FMU --input signals.csv`: one FMU driven by recorded input signals,
 //! like `fmpy simulate`. The input file is a CSV ([`crate::csv`]: quoted names, a BOM, comments
 //! and `component.`-prefixed names accepted, duplicated names refused) whose first column is
-//! `time` and whose other columns are named after input variables of the FMU.
+//! `time` and whose other columns are named after input variables of the FMU; a Parquet file
+//! (by extension, any codec pyarrow writes) likewise. The recording format's `distance`
+//! column ([`RECORDING_ONLY`]) is ignored with a note when the FMU has no such input.
 //!
 //! | input variable | value at a communication point `t` |
 //! |---|---|
