@@ -26,26 +26,29 @@ from track_alignment import recordings  # noqa: E402
 TIMEOUT = 300
 
 
-def command(module: str, *args, limit_bytes: int | None = None, user: int | None = None, inject: str = "",
+def command(module: str, *args, limit_bytes: int | None = None, unprivileged: bool = False, inject: str = "",
             timeout: float = TIMEOUT) -> subprocess.CompletedProcess:
     """`python -m track_alignment.MODULE ARGS...`; `limit_bytes` caps the size of any file it
-    writes (RLIMIT_FSIZE: a write past it fails as on a full disk); `user` runs it as that uid;
+    writes (RLIMIT_FSIZE: a write past it fails as on a full disk); `unprivileged` runs it, when
+    this is root, without the capability to write where the permissions forbid it (setpriv);
     `inject` is Python run first in the process (a simulated write error where the command also
     unpacks an FMU, which a file size limit would stop first)."""
 
     def limits():
         if limit_bytes is not None:
             resource.setrlimit(resource.RLIMIT_FSIZE, (limit_bytes, limit_bytes))
-        if user is not None:
-            os.setgid(user)
-            os.setuid(user)
 
     run = ["-m", f"track_alignment.{module}"]
     if inject:
         run = ["-c", f"{inject}\nimport runpy, sys\nsys.argv[0] = {module!r}\n"
                      f"runpy.run_module('track_alignment.{module}', run_name='__main__')"]
-    p = subprocess.run([sys.executable, *run, *map(str, args)], capture_output=True, text=True, timeout=timeout,
-                       preexec_fn=limits)
+    prefix = []
+    if unprivileged and os.geteuid() == 0:
+        if shutil.which("setpriv") is None:
+            pytest.skip("root writes into a read-only directory, and setpriv is missing to drop that")
+        prefix = ["setpriv", "--bounding-set=-dac_override,-dac_read_search", "--"]
+    p = subprocess.run([*prefix, sys.executable, *run, *map(str, args)], capture_output=True, text=True,
+                       timeout=timeout, preexec_fn=limits)
     assert "Traceback" not in p.stderr, p.stderr
     return p
 
@@ -188,34 +191,17 @@ def test_fleet_writes_reruns_and_survives_a_write_error(passes, tmp_path):
 
 
 def test_fleet_refuses_a_read_only_directory(passes, tmp_path):
-    out = shared_dir(tmp_path)
+    out = tmp_path / "ro"
+    out.mkdir()
     out.chmod(0o555)
     try:
-        p = command("fleet", *fleet_args(passes, out), user=unprivileged(), timeout=60)
+        p = command("fleet", *fleet_args(passes, out), unprivileged=True, timeout=60)
+        one_error(p, 1, str(out), "not writable")
+        p = command("fleet", *fleet_args(passes, out / "new"), unprivileged=True, timeout=60)
         one_error(p, 1, str(out), "not writable")
         assert list(out.iterdir()) == []
     finally:
         out.chmod(0o755)
-
-
-def unprivileged() -> int | None:
-    """Root writes into any directory: as root, the command runs as `nobody` (uid 65534)."""
-    return 65534 if os.geteuid() == 0 else None
-
-
-def shared_dir(tmp_path: Path) -> Path:
-    """A directory `nobody` can reach (pytest's temporary directories are private to root)."""
-    if os.geteuid() != 0:
-        d = tmp_path / "ro"
-        d.mkdir()
-        return d
-    import tempfile
-
-    base = Path(tempfile.mkdtemp(prefix="ro-"))
-    base.chmod(0o755)
-    d = base / "ro"
-    d.mkdir()
-    return d
 
 
 # --- python -m track_alignment.synthetic ---
@@ -282,11 +268,12 @@ def test_synthetic_output_policy(tmp_path):
 
 
 def test_synthetic_refuses_a_read_only_directory(tmp_path):
-    out = shared_dir(tmp_path)
+    out = tmp_path / "ro"
+    out.mkdir()
     out.chmod(0o555)
     try:
         p = command("synthetic", "--vehicle-fmu", packaged_fmus()["RailVehicle"], "--out", out, "--passes", "1",
-                    "--length", "10", user=unprivileged(), timeout=60)
+                    "--length", "10", unprivileged=True, timeout=60)
         one_error(p, 1, "not writable")
         assert list(out.iterdir()) == []
     finally:
@@ -330,6 +317,16 @@ def test_montecarlo_output_policy(tmp_path):
     os.mkfifo(fifo)
     p = command("montecarlo", *args, "--out", fifo, timeout=60)
     one_error(p, 1, "FIFO")
+    # A read-only directory.
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        p = command("montecarlo", *montecarlo_args(ro / "r.parquet"), unprivileged=True, timeout=60)
+        one_error(p, 1, "not writable")
+        assert list(ro.iterdir()) == []
+    finally:
+        ro.chmod(0o755)
     # A full disk after the sweep: the old file kept, no temporary file.
     full = disk_full("pandas", "pandas.DataFrame", "to_parquet", 1, 1)
     p = command("montecarlo", *montecarlo_args(existing, "--force"), inject=full)
