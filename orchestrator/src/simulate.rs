@@ -197,11 +197,11 @@ pub fn simulate(
                     continue;
                 }
                 let v = found.ok_or_else(|| {
-                        RunError::Config(format!(
-                            "input column '{n}': {} has no variable of that name",
-                            fmu.display()
-                        ))
-                    })?;
+                    RunError::Config(format!(
+                        "input column '{n}': {} has no variable of that name",
+                        fmu.display()
+                    ))
+                })?;
                 if v.causality != model_description::Causality::Input {
                     return Err(RunError::Config(format!(
                         "input column '{n}': '{}' is not an input of {}",
