@@ -283,7 +283,7 @@ def test_synthetic_refuses_a_read_only_directory(tmp_path):
 # --- track-alignment-montecarlo ---
 
 def montecarlo_args(out: Path, *more) -> list:
-    return ["--vehicle-fmu", packaged_fmus()["RailVehicle"], "--seeds", "1", "--stop", "0.5", "--workers", "1",
+    return ["--vehicle-fmu", packaged_fmus()["RailVehicle"], "--seeds", "1", "--stop", "12", "--workers", "1",
             "--out", out, *more]
 
 
@@ -305,7 +305,7 @@ def test_montecarlo_output_policy(tmp_path):
     fmu_copy = tmp_path / "vehicle.csv"
     shutil.copy(packaged_fmus()["RailVehicle"], fmu_copy)
     want = fmu_copy.read_bytes()
-    args = ["--vehicle-fmu", fmu_copy, "--seeds", "1", "--stop", "0.5", "--workers", "1", "--force"]
+    args = ["--vehicle-fmu", fmu_copy, "--seeds", "1", "--stop", "12", "--workers", "1", "--force"]
     p = command("montecarlo", *args, "--out", fmu_copy, timeout=60)
     one_error(p, 1, "is an input")
     assert fmu_copy.read_bytes() == want

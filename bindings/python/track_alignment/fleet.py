@@ -36,6 +36,7 @@ complete or not there.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import warnings
 from dataclasses import dataclass
@@ -373,7 +374,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         if a.scheduler:
             client = Client(a.scheduler)
         else:
-            client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+            # A failed task reaches the user as one error line, not as the workers' logs.
+            client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True,
+                                         dashboard_address=":0", silence_logs=logging.CRITICAL))
         segments = run(files, a.out, options=options, client=client, truth=a.truth, plot=plot)
     except OutputError as e:
         print(f"error: {e}", file=sys.stderr)

@@ -19,6 +19,7 @@ written to a temporary file and renamed.
 from __future__ import annotations
 
 import argparse
+import logging
 import itertools
 import sys
 from dataclasses import dataclass, field
@@ -177,8 +178,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         check_file(out, inputs=[a.vehicle_fmu], force=a.force)
         from dask.distributed import Client, LocalCluster
 
+        # A failed case reaches the user as one error line, not as the workers' logs.
         client = Client(a.scheduler) if a.scheduler else Client(
-            LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+            LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0",
+                         silence_logs=logging.CRITICAL))
         table = sweep(cases, a.vehicle_fmu, estimators, client=client, stop=a.stop)
         check_file(out, inputs=[a.vehicle_fmu], force=a.force)
         try:
