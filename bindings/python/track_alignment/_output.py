@@ -38,7 +38,7 @@ def _same(a: Path, b: Path) -> bool:
 
 def _writable_dir(d: Path, what: str) -> None:
     if not d.is_dir():
-        raise OutputError(f"{what} {d}: no such directory")
+        raise OutputError(f"{what} {d}: not a directory")
     if not os.access(d, os.W_OK | os.X_OK):
         raise OutputError(f"{what} {d}: the directory is not writable")
 
@@ -61,6 +61,14 @@ def _refuse_special(path: Path, inputs: Iterable[str | Path]) -> bool:
         if _same(path, Path(i)):
             raise OutputError(f"{path}: is an input of this command; refused, never replaced")
     return True
+
+
+def _existing_ancestor(path: Path) -> Path:
+    """The nearest ancestor of ``path`` that exists."""
+    for d in path.absolute().parents:
+        if d.exists():
+            return d
+    return Path("/")
 
 
 def check_file(path: str | Path, inputs: Sequence[str | Path] = (), force: bool = False) -> Path:
@@ -102,7 +110,8 @@ class OutputDir:
         self.path = Path(path)
         self.command = command
         self._staged: list[tuple[Path, Path]] = []
-        self._created = False
+        #: The existing ancestor below which this run created directories (None: created none).
+        self._created: Path | None = None
 
     def _listed(self) -> list[str]:
         """The files the directory's manifest says this command wrote ([] without one)."""
@@ -129,7 +138,7 @@ class OutputDir:
                 raise OutputError(f"--out {p}: exists and is not a directory")
             _writable_dir(p, "--out")
         else:
-            _writable_dir(p.parent if str(p.parent) else Path("."), f"--out {p}: its parent")
+            _writable_dir(_existing_ancestor(p), f"--out {p}: its nearest existing parent")
         ours = set(self._listed())
         for name in [*names, MANIFEST]:
             f = p / name
@@ -150,7 +159,7 @@ class OutputDir:
         """``write(tmp)`` into a temporary file for ``name``, renamed into place by :meth:`commit`;
         a write error (a full disk) removes what was staged and raises :class:`OutputError`."""
         if not self._staged and not self.path.exists():
-            self._created = True
+            self._created = _existing_ancestor(self.path)
         tmp = self.path / f".{name}.tmp-{os.getpid()}"
         try:
             self.path.mkdir(parents=True, exist_ok=True)
@@ -170,12 +179,15 @@ class OutputDir:
         for tmp, _ in self._staged:
             tmp.unlink(missing_ok=True)
         self._staged = []
-        if self._created:
-            try:
-                self.path.rmdir()
-            except OSError:
-                pass
-            self._created = False
+        if self._created is not None:
+            d = self.path.absolute()
+            while d != self._created:
+                try:
+                    d.rmdir()
+                except OSError:
+                    break
+                d = d.parent
+            self._created = None
 
     def commit(self, manifest: dict) -> None:
         """The manifest (listing the staged files) and the staged files renamed into place,
