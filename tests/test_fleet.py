@@ -71,7 +71,7 @@ def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fle
     curve = {n: segment_errors(coverages, truth, options, n) for n in (1, 5, 50)}
     rms = {n: {k: float(np.sqrt(np.nanmean(e[k] ** 2))) for k in e} for n, e in curve.items()}
     print("rms relative error of the segment SDs by number of passes:", rms)
-    # Stated tolerance (docs/fleet.md): with 50 passes every segment's D1 SD within 5 % of the
+    # Stated tolerance (docs/python.md, "The fleet pipeline"): with 50 passes every segment's D1 SD within 5 % of the
     # truth's and D2 within 10 % (the learned estimator's D2 amplitude is about 5 % low).
     assert np.nanmax(np.abs(curve[50]["d1"])) < 0.05, curve[50]
     assert np.nanmax(np.abs(curve[50]["d2"])) < 0.10, curve[50]

@@ -125,3 +125,98 @@ def test_a_results_name_that_is_not_a_plain_csv_or_parquet_name_is_refused(name,
                "--results", name, check=None)
     assert p.returncode == 2 and f"--results {name}: expected a plain file name ending in .csv or .parquet" in p.stderr, p.stderr
     assert not (tmp_path / "o").exists()
+
+
+# --- One Parquet dialect (issue 25): every codec pyarrow and pandas write, both directions. ---
+
+CODECS = ["snappy", "zstd", "gzip", "lz4", "brotli", "none"]
+
+
+@pytest.mark.parametrize("codec", CODECS)
+def test_smooth_reads_every_codec_pyarrow_writes(recorded, tmp_path, codec):
+    """pyarrow's default (snappy, also pandas'), the bindings' zstd and the other codecs it
+    offers: `smooth` gives from each what it gives from the CSV, bit for bit."""
+    csv, _, cols = recorded
+    src = tmp_path / f"signals_{codec}.parquet"
+    pq.write_table(pa.table(cols), src, compression=codec)
+    assert pq.ParquetFile(src).metadata.row_group(0).column(0).compression == codec.upper().replace("NONE", "UNCOMPRESSED")
+    oc.studies("smooth", csv, "--out", tmp_path / "want.csv")
+    oc.studies("smooth", src, "--out", tmp_path / "got.csv")
+    assert (tmp_path / "got.csv").read_bytes() == (tmp_path / "want.csv").read_bytes()
+
+
+def test_simulate_reads_pandas_default_parquet(recorded, tmp_path):
+    """pandas' `to_parquet` (snappy, a pandas index column left out) as the estimator's input."""
+    import pandas as pd
+
+    csv, _, cols = recorded
+    src = tmp_path / "pandas.parquet"
+    pd.DataFrame(cols).to_parquet(src, index=False)
+    est = oc.fmus()["AlignmentEstimator"]
+    outs = {}
+    for s in (csv, src):
+        oc.run("simulate", est, "--input", s, "--stop", "2", "--step", "0.001", "--quiet", "--replay",
+               "--out", tmp_path / s.suffix[1:])
+        outs[s.suffix] = oc.read_results(tmp_path / s.suffix[1:])
+    np.testing.assert_array_equal(outs[".csv"]["AlignmentEstimator.alignment"], outs[".parquet"]["AlignmentEstimator.alignment"])
+
+
+@pytest.fixture(scope="module")
+def synthetic_pass(tmp_path_factory):
+    """One pass of the synthetic fleet (track_alignment.synthetic: zstd, with the recording
+    format's `distance` column), 150 m at 15-25 m/s."""
+    synthetic = pytest.importorskip("track_alignment.synthetic", reason="the bindings are built into .venv by `cargo xtask test`")
+    from project import packaged_fmus
+
+    d = tmp_path_factory.mktemp("synthetic")
+    [path] = synthetic.synthesize(d, packaged_fmus()["RailVehicle"], passes=1, length=150.0)
+    return path
+
+
+def test_a_synthetic_recording_through_simulate_equals_the_fleet_path_bit_for_bit(synthetic_pass, tmp_path):
+    """The bindings' recording (zstd, `distance` column) through `orchestrator simulate` (the
+    estimator FMU at its nominal step, 1 ms), results written as Parquet and read back by the
+    bindings' reader; the fleet pipeline's estimate of the same recording is the FMU's bit for
+    bit, because the step it infers is the nominal 1e-3 and not the neighbours' difference."""
+    from track_alignment import fleet, recordings
+
+    assert pq.ParquetFile(synthetic_pass).metadata.row_group(0).column(0).compression == "ZSTD"
+    cols, step = recordings.read_recording(synthetic_pass)
+    assert step == 1e-3, step
+    # The time column as the FMU wrote it: the median neighbour difference is not the step.
+    assert float(np.median(np.diff(cols["time"]))) != 1e-3
+    n = len(cols["time"])
+    p = oc.run("simulate", oc.fmus()["AlignmentEstimator"], "--input", synthetic_pass, "--replay",
+               "--stop", repr(n * 1e-3), "--step", "0.001", "--quiet", "--out", tmp_path / "sim",
+               "--results", "estimate.parquet")
+    assert "input column 'distance' is not an input" in p.stderr and "ignored" in p.stderr, p.stderr
+    fmu, _ = recordings.read_table(tmp_path / "sim" / "estimate.parquet")
+    assert len(fmu["time"]) == n + 1  # row 0: t = 0, before the first sample
+    _, out = fleet.estimate_recording(str(synthetic_pass))
+    for name in ("alignment", "alignment_lagged", "distance"):
+        assert fmu[f"AlignmentEstimator.{name}"][1:].tobytes() == out[name].tobytes(), name
+
+
+def test_a_synthetic_recording_through_smooth(synthetic_pass, tmp_path):
+    """`smooth` reads the bindings' zstd recording with its `distance` column, and the bindings'
+    reader reads its Parquet output."""
+    from track_alignment import recordings
+
+    oc.studies("smooth", synthetic_pass, "--out", tmp_path / "s.parquet")
+    got, provenance = recordings.read_table(tmp_path / "s.parquet")
+    assert provenance["command"] == "alignment-studies smooth"
+    assert {"time", "alignment_filtered", "alignment_smoothed"} <= set(got), list(got)
+    assert np.isfinite(got["alignment_smoothed"]).all()
+    n = len(recordings.read_table(synthetic_pass)[0]["time"])
+    assert n - 1 <= len(got["time"]) <= n
+
+
+def test_an_unknown_column_is_still_refused(recorded, tmp_path):
+    """Only the recording format's `distance` is ignored: a typo is refused, not silently
+    left at the input's start value."""
+    _, _, cols = recorded
+    src = tmp_path / "typo.parquet"
+    pq.write_table(pa.table({**cols, "ws_acc_x": cols["ws_acc_y"]}), src)
+    p = oc.run("simulate", oc.fmus()["AlignmentEstimator"], "--input", src, "--stop", "0.1", "--step", "0.001",
+               "--quiet", "--out", tmp_path / "o", check=None)
+    assert p.returncode == 2 and "input column 'ws_acc_x'" in p.stderr, p.stderr

@@ -1,7 +1,9 @@
 //! `orchestrator simulate FMU --input signals.csv`: one FMU driven by recorded input signals,
 //! like `fmpy simulate`. The input file is a CSV ([`crate::csv`]: quoted names, a BOM, comments
 //! and `component.`-prefixed names accepted, duplicated names refused) whose first column is
-//! `time` and whose other columns are named after input variables of the FMU.
+//! `time` and whose other columns are named after input variables of the FMU; a Parquet file
+//! (by extension, any codec pyarrow writes) likewise. The recording format's `distance`
+//! column ([`RECORDING_ONLY`]) is ignored with a note when the FMU has no such input.
 //!
 //! | input variable | value at a communication point `t` |
 //! |---|---|
@@ -137,6 +139,13 @@ impl Signals {
     }
 }
 
+/// Columns of the recording format (docs/recordings.md) that no estimator input takes: a
+/// recording written by `track_alignment` carries them, and refusing them would make users
+/// strip a documented column by hand. Ignored, with a note, when the FMU has no input of
+/// that name; any other unknown column is still refused (a typo would leave an input at its
+/// start value).
+pub const RECORDING_ONLY: &[&str] = &["distance"];
+
 /// Runs one FMU with `signals` on its inputs. Implemented as a one-component system whose
 /// inputs are set before every step, so it shares the master's recording and error handling.
 /// Progress goes to `progress` when [`RunOptions::progress`] asks for it.
@@ -174,15 +183,25 @@ pub fn simulate(
             let mut inputs = vec![];
             for (c, n) in s.names.iter().enumerate() {
                 // `component.variable` as a results.csv names it: the part after the prefix.
-                let v = md
+                let found = md
                     .variable(n)
-                    .or_else(|| n.rsplit_once('.').and_then(|(_, bare)| md.variable(bare)))
-                    .ok_or_else(|| {
-                        RunError::Config(format!(
-                            "input column '{n}': {} has no variable of that name",
-                            fmu.display()
-                        ))
-                    })?;
+                    .or_else(|| n.rsplit_once('.').and_then(|(_, bare)| md.variable(bare)));
+                let bare = n.rsplit_once('.').map_or(n.as_str(), |(_, b)| b);
+                let is_input =
+                    found.is_some_and(|v| v.causality == model_description::Causality::Input);
+                if !is_input && RECORDING_ONLY.contains(&bare) {
+                    eprintln!(
+                        "note: input column '{n}' is not an input of {}: ignored (a recording's position along the line)",
+                        fmu.display()
+                    );
+                    continue;
+                }
+                let v = found.ok_or_else(|| {
+                    RunError::Config(format!(
+                        "input column '{n}': {} has no variable of that name",
+                        fmu.display()
+                    ))
+                })?;
                 if v.causality != model_description::Causality::Input {
                     return Err(RunError::Config(format!(
                         "input column '{n}': '{}' is not an input of {}",

@@ -1,6 +1,7 @@
 """The fleet pipeline: many passes of many trains over one line -> a map of alignment quality
 per track segment, on ``dask.distributed`` (a ``LocalCluster`` by default, or any scheduler:
-Slurm through dask-jobqueue, Kubernetes through dask-kubernetes; docs/fleet.md).
+Slurm through dask-jobqueue, Kubernetes through dask-kubernetes; docs/python.md, "The fleet
+pipeline").
 
 Steps, each recording one task:
 
@@ -25,11 +26,17 @@ Output (``out_dir``):
 | ``segments.parquet`` | per segment: ``segment``, ``start_m``, ``end_m``, ``passes``, ``d1_sd_mm`` and ``d2_sd_mm`` (of the average over passes), ``d1_pass_sd_mean_mm``, ``d1_pass_sd_spread_mm`` (mean and standard deviation over passes of each pass's own SD), the same for D2; with a truth, ``d1_truth_sd_mm``, ``d2_truth_sd_mm`` |
 | ``passes.parquet`` | per pass and segment: ``pass``, ``file``, ``segment``, ``d1_sd_mm``, ``d2_sd_mm`` |
 | ``map.png`` | segment index against D1 and D2 standard deviation, the passes' spread as error bars |
+| ``manifest.json`` | the command, its settings and the files above: a rerun into the directory replaces only these |
+
+The output directory follows the commands' output policy (:mod:`track_alignment._output`): checked
+before any work, files the command did not write and its inputs never replaced, each file
+complete or not there.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import warnings
 from dataclasses import dataclass
@@ -40,7 +47,11 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from . import _native
+from ._output import OutputDir, OutputError
 from .recordings import RecordingError, read_recording, read_table
+
+COMMAND = "track-alignment-fleet"
+OUTPUTS = ("segments.parquet", "passes.parquet", "map.png")
 
 BANDS = {"d1": (3.0, 25.0), "d2": (25.0, 70.0)}
 
@@ -65,9 +76,7 @@ class Coverage:
 
 def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.ndarray]]:
     """One recording: its band-passed estimate on the line grid and its per-segment SDs [mm]."""
-    cols, step = read_recording(path)
-    out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
-                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(options.settings or {}))
+    cols, out = estimate_recording(path, options.settings)
     position = cols["distance"] if "distance" in cols else out["distance"]
     if np.any(np.diff(position) < 0):
         raise RecordingError(f"{path}: the position (distance) goes backwards; one pass per recording, one direction")
@@ -79,6 +88,15 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
     bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
     count = np.isfinite(bands["d1"]).astype(np.float64)
     return Coverage(first, bands, count), segment_sds(first, bands, options)
+
+
+def estimate_recording(path: str, settings: Mapping[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+    """The recording's columns and the estimator's outputs over them, at the recording's
+    nominal step (:func:`track_alignment.recordings.nominal_step`): the FMU's, bit for bit."""
+    cols, step = read_recording(path)
+    out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
+                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(settings or {}))
+    return cols, out
 
 
 def banded(aligned: np.ndarray, options: Options) -> dict[str, np.ndarray]:
@@ -145,6 +163,9 @@ def truth_bands(path: str | Path, options: Options) -> tuple[int, dict[str, np.n
     """A truth file (``distance``, ``alignment``) on the line grid from index ``first``,
     band-passed as a pass is: ``(first, bands)``."""
     cols, _ = read_table(path)
+    missing = [c for c in ("distance", "alignment") if c not in cols]
+    if missing or len(cols["distance"]) < 2:
+        raise RecordingError(f"{path}: a truth file needs the columns distance and alignment, 2 rows or more")
     ds = options.ds
     first, last = int(np.ceil(cols["distance"][0] / ds)), int(np.floor(cols["distance"][-1] / ds))
     aligned = np.interp(np.arange(first, last + 1) * ds, cols["distance"], cols["alignment"])
@@ -186,11 +207,17 @@ def run(
     plot: bool = True,
 ):
     """The pipeline over ``recordings`` on ``client`` (a ``dask.distributed.Client``; a
-    ``LocalCluster`` with the machine's cores when None). Returns the segments table (pandas)."""
+    ``LocalCluster`` with the machine's cores when None). Returns the segments table (pandas).
+    The recordings, the truth, the settings and ``out_dir`` are checked before any task starts
+    (:class:`RecordingError`, ``ValueError``, :class:`OutputError`)."""
     import dask
 
     options = options or Options()
     files = expand(recordings)
+    check_settings(options.settings or {})
+    out = OutputDir(out_dir, COMMAND)
+    out.check(OUTPUTS if plot else OUTPUTS[:2], inputs=[*files, *([truth] if truth is not None else [])])
+    truth_sd = truth_sds(truth, options) if truth is not None else None
     own = None
     if client is None:
         from dask.distributed import Client, LocalCluster
@@ -206,13 +233,24 @@ def run(
         if own is not None:
             own.close()
             own.cluster.close()
-    return write(files, total, sds, options, Path(out_dir), truth, plot)
+    return write(files, total, sds, options, out, truth_sd, plot)
 
 
-def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot: bool):
+def check_settings(settings: Mapping[str, Any]) -> None:
+    """The estimator's own check of ``settings`` (names and values), on two samples in this
+    process, so that a bad ``--set`` is one line here and not a traceback from every worker."""
+    if not settings:
+        return
+    z = np.zeros(2)
+    try:
+        _native.estimate(z + 20.0, z, z, z, step=1e-3, ws_roll_rate=z, settings=dict(settings))
+    except ValueError as e:
+        raise ValueError(f"--set {', '.join(f'{k}={v}' for k, v in settings.items())}: {e}") from None
+
+
+def write(files, total: Coverage, sds, options: Options, out: OutputDir, truth_sd, plot: bool):
     import pandas as pd
 
-    out.mkdir(parents=True, exist_ok=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = {k: np.where(total.count > 0, x / total.count, np.nan) for k, x in total.bands.items()}
     averaged = segment_sds(total.start, mean, options)
@@ -231,22 +269,23 @@ def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot:
         with np.errstate(invalid="ignore"), warnings.catch_warnings(action="ignore", category=RuntimeWarning):
             rows[f"{k}_pass_sd_mean_mm"] = np.nanmean(per_pass[k], axis=0)
             rows[f"{k}_pass_sd_spread_mm"] = np.nanstd(per_pass[k], axis=0)
-    if truth is not None:
-        t = truth_sds(truth, options)
+    if truth_sd is not None:
         for k in BANDS:
-            rows[f"{k}_truth_sd_mm"] = pad(t[k])
+            rows[f"{k}_truth_sd_mm"] = pad(truth_sd[k])
     segments = pd.DataFrame(rows)
     # Segments past the last one any pass covers are not part of the line.
     covered = np.flatnonzero(segments["passes"].to_numpy() > 0)
     segments = segments.iloc[: covered[-1] + 1 if covered.size else 0]
-    segments.to_parquet(out / "segments.parquet", index=False)
     passes = pd.DataFrame([
         {"pass": i, "file": Path(f).name, "segment": j, "d1_sd_mm": s["d1"][j], "d2_sd_mm": s["d2"][j]}
         for i, (f, s) in enumerate(zip(files, sds)) for j in range(len(s["segment"])) if np.isfinite(s["d1"][j])
     ])
-    passes.to_parquet(out / "passes.parquet", index=False)
+    out.stage("segments.parquet", lambda tmp: segments.to_parquet(tmp, index=False))
+    out.stage("passes.parquet", lambda tmp: passes.to_parquet(tmp, index=False))
     if plot:
-        plot_map(segments, out / "map.png")
+        out.stage("map.png", lambda tmp: plot_map(segments, tmp))
+    out.commit({"recordings": [str(f) for f in files], "segment_m": options.segment, "ds_m": options.ds,
+                "trim_m": options.trim, "settings": {k: str(v) for k, v in (options.settings or {}).items()}})
     return segments
 
 
@@ -271,7 +310,7 @@ def plot_map(segments, path: Path) -> None:
     axes[1].xaxis.set_major_locator(MaxNLocator(integer=True))
     axes[1].set_xlabel(f"segment ({segments['end_m'][0] - segments['start_m'][0]:.0f} m each)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
 
 
@@ -285,40 +324,79 @@ def parse_settings(items: Sequence[str]) -> dict[str, Any]:
     return out
 
 
+def positive_int(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{n}: at least 1 worker")
+    return n
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """``track-alignment-fleet RECORDINGS... --out DIR``: exit 0 done, 2 bad input, 3 failed."""
-    p = argparse.ArgumentParser(prog="track-alignment-fleet", description=__doc__.split("\n\n")[0])
+    """``track-alignment-fleet RECORDINGS... --out DIR``: exit 0 done, 1 the output cannot be
+    written, 2 bad input, 3 the pipeline failed, 130 interrupted."""
+    p = argparse.ArgumentParser(prog=COMMAND, description=__doc__.split("\n\n")[0],
+                                epilog="Exit codes: 0 done, 1 the output cannot be written (checked before any work), "
+                                       "2 bad input, 3 the pipeline failed, 130 interrupted. docs/python.md, "
+                                       "'The fleet pipeline'.")
     p.add_argument("recordings", nargs="+", help="recording files, directories or globs (Parquet or CSV)")
-    p.add_argument("--out", required=True, help="output directory")
-    p.add_argument("--segment", type=float, default=200.0, help="segment length [m] (200)")
-    p.add_argument("--ds", type=float, default=0.25, help="line grid step [m] (0.25)")
+    p.add_argument("--out", required=True,
+                   help="output directory; a rerun replaces only the files its manifest.json lists")
+    p.add_argument("--segment", type=float, default=200.0, help="segment length in m (200)")
+    p.add_argument("--ds", type=float, default=0.25, help="line grid step in m (0.25)")
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: a LocalCluster)")
-    p.add_argument("--workers", type=int, help="LocalCluster workers (default: the machine's cores)")
+    p.add_argument("--workers", type=positive_int, help="LocalCluster workers, 1 or more (default: the machine's cores)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="estimator parameter")
     p.add_argument("--truth", help="a truth file (distance, alignment) to add the true SDs")
-    p.add_argument("--no-plot", action="store_true")
+    p.add_argument("--no-plot", action="store_true", help="no map.png")
     a = p.parse_args(argv)
+    client = None
     try:
         settings = parse_settings(a.set)
         if not (a.segment > 0 and 0 < a.ds < 1.5):
             raise ValueError(f"--segment {a.segment} must be positive and --ds {a.ds} within 0-1.5 m (D1 starts at 3 m)")
+        if a.scheduler and a.workers:
+            raise ValueError("--workers sets up a LocalCluster; a --scheduler has its own workers")
         options = Options(segment=a.segment, ds=a.ds, settings=settings)
+        files = expand(a.recordings)
+        check_settings(settings)
+        plot = not a.no_plot
+        OutputDir(a.out, COMMAND).check(OUTPUTS if plot else OUTPUTS[:2],
+                                       inputs=[*files, *([a.truth] if a.truth else [])])
+        if a.truth:
+            truth_sds(a.truth, options)
+        if plot:
+            import matplotlib  # noqa: F401  (before the computing: the [fleet] extra installs it)
         from dask.distributed import Client, LocalCluster
 
         if a.scheduler:
             client = Client(a.scheduler)
         else:
-            client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
-        try:
-            segments = run(a.recordings, a.out, options=options, client=client, truth=a.truth, plot=not a.no_plot)
-        finally:
-            client.close()
+            # A failed task reaches the user as one error line, not as the workers' logs.
+            client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True,
+                                         dashboard_address=":0", silence_logs=logging.CRITICAL))
+        segments = run(files, a.out, options=options, client=client, truth=a.truth, plot=plot)
+    except OutputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     except (RecordingError, ValueError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except ImportError as e:
+        hint = ", or give --no-plot" if e.name == "matplotlib" else ""
+        print(f"error: {e.name or e} is not installed (pip install 'track-alignment[fleet]'){hint}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("error: interrupted; the output directory is as it was", file=sys.stderr)
+        return 130
     except Exception as e:
         print(f"error: the pipeline failed: {e}", file=sys.stderr)
         return 3
+    finally:
+        if client is not None:
+            client.close()
     print(f"{len(segments)} segments from {int(segments['passes'].max())} passes -> {Path(a.out) / 'segments.parquet'}")
     return 0
 

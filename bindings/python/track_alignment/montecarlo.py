@@ -10,12 +10,16 @@ against the vehicle's ``alignment`` at the vehicle's ``distance`` (ds 0.05 m, tr
 So a case's figures equal the study's for the same seed and conditions.
 
 Output: one row per case, estimator and band: ``seed``, ``vehicle``, ``speed``,
-``kalker_scale``, ``estimator``, ``band``, ``Jrel``, ``J_mm``, ``truth_rms_mm``.
+``kalker_scale``, ``estimator``, ``band``, ``Jrel``, ``J_mm``, ``truth_rms_mm``. ``--out`` follows
+the commands' output policy (:mod:`track_alignment._output`): checked before any case runs, an
+existing file replaced only with ``--force`` (never an input, a symlink, a FIFO or a directory),
+written to a temporary file and renamed.
 """
 
 from __future__ import annotations
 
 import argparse
+import logging
 import itertools
 import sys
 from dataclasses import dataclass, field
@@ -23,6 +27,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from . import _native
+from ._output import OutputError, check_file, write_file
 
 RECORDED = ["forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "distance", "alignment"]
 STEP = 1e-3
@@ -117,9 +122,31 @@ def _named(items: Sequence[str], what: str) -> dict[str, dict[str, str]]:
     return out
 
 
+def _positive_int(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{n}: at least 1 worker")
+    return n
+
+
+def _positive(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (0 < x < float("inf")):
+        raise argparse.ArgumentTypeError(f"{text}: expected a positive number")
+    return x
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """``track-alignment-montecarlo --vehicle-fmu F --seeds 1-100 --out results.parquet``."""
-    p = argparse.ArgumentParser(prog="track-alignment-montecarlo", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="track-alignment-montecarlo", description=__doc__.split("\n\n")[0],
+                                epilog="Exit codes: 0 done, 1 the output cannot be written (checked before any case), "
+                                       "2 bad input, 3 the sweep failed, 130 interrupted. docs/python.md.")
     p.add_argument("--vehicle-fmu", required=True, help="the RailVehicle FMU")
     p.add_argument("--seeds", required=True, help="track seeds: 1-100 or 1,2,5")
     p.add_argument("--speeds", default="20", help="m/s, comma-separated (20)")
@@ -128,36 +155,55 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="a vehicle variant by its parameters (default: the FMU's vehicle)")
     p.add_argument("--estimator", action="append", default=[], metavar="LABEL:NAME=VALUE,...",
                    help="an estimator by its parameters (default: 'default:', the FMU's default)")
-    p.add_argument("--stop", type=float, default=20.0, help="run length [s] (20)")
-    p.add_argument("--out", required=True, help="results table (.parquet or .csv)")
+    p.add_argument("--stop", type=_positive, default=20.0, help="run length in s (20)")
+    p.add_argument("--out", required=True, help="results table (.parquet or .csv); an existing file only with --force")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing --out file (never an input, a symlink, a FIFO or a directory)")
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: a LocalCluster)")
-    p.add_argument("--workers", type=int)
+    p.add_argument("--workers", type=_positive_int, help="LocalCluster workers, 1 or more (default: the machine's cores)")
     a = p.parse_args(argv)
+    client = None
     try:
         seeds = _numbers(a.seeds, int)
-        cases = grid(seeds, _numbers(a.speeds), _numbers(a.kalker_scales), _named(a.vehicle, "vehicle") or None)
+        speeds, scales = _numbers(a.speeds), _numbers(a.kalker_scales)
+        if not seeds or not all(0 < x < float("inf") for x in [*speeds, *scales]):
+            raise ValueError(f"--speeds {a.speeds} and --kalker-scales {a.kalker_scales} must be positive")
+        cases = grid(seeds, speeds, scales, _named(a.vehicle, "vehicle") or None)
         estimators = _named(a.estimator, "estimator") or {"default": {}}
         if not Path(a.vehicle_fmu).is_file():
             raise ValueError(f"{a.vehicle_fmu}: no such FMU")
+        out = Path(a.out)
+        if out.suffix not in (".parquet", ".csv"):
+            raise ValueError(f"--out {out}: expected a name ending in .parquet or .csv")
+        check_file(out, inputs=[a.vehicle_fmu], force=a.force)
         from dask.distributed import Client, LocalCluster
 
+        # A failed case reaches the user as one error line, not as the workers' logs.
         client = Client(a.scheduler) if a.scheduler else Client(
-            LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0"))
+            LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=":0",
+                         silence_logs=logging.CRITICAL))
+        table = sweep(cases, a.vehicle_fmu, estimators, client=client, stop=a.stop)
+        check_file(out, inputs=[a.vehicle_fmu], force=a.force)
         try:
-            table = sweep(cases, a.vehicle_fmu, estimators, client=client, stop=a.stop)
-        finally:
-            client.close()
+            write_file(out, lambda tmp: table.to_csv(tmp, index=False) if out.suffix == ".csv"
+                       else table.to_parquet(tmp, index=False))
+        except OSError as e:
+            raise OutputError(f"{out}: cannot be written ({e.strerror or e})") from e
+    except OutputError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 1
     except ValueError as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("error: interrupted; nothing written", file=sys.stderr)
+        return 130
     except Exception as e:
         print(f"error: the sweep failed: {e}", file=sys.stderr)
         return 3
-    out = Path(a.out)
-    if out.suffix == ".csv":
-        table.to_csv(out, index=False)
-    else:
-        table.to_parquet(out, index=False)
+    finally:
+        if client is not None:
+            client.close()
     summary = table.groupby(["estimator", "band"])["Jrel"].mean().unstack()
     print(f"{len(cases)} cases -> {out}\nmean Jrel:\n{summary.to_string()}")
     return 0
