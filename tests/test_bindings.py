@@ -132,6 +132,12 @@ def test_band_metrics_equal_the_command_lines(tmp_path):
         assert row["Jrel"] == cli[band]["Jrel"], band
 
 
+def test_the_bands_are_en_13848s():
+    # EN 13848-5's D1-D3 wavelength ranges and the paper's whole range, in the metrics' order.
+    assert track_alignment.BANDS == [("whole", (3.0, 200.0)), ("D1", (3.0, 25.0)),
+                                     ("D2", (25.0, 70.0)), ("D3", (70.0, 200.0))]
+
+
 def test_bandpass_is_scipys_zero_phase_butterworth():
     ds = 0.05
     x = np.random.default_rng(4).standard_normal(20_000)

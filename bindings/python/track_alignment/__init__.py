@@ -5,13 +5,16 @@ co-simulation master), called over numpy arrays without copying them:
 
 - :func:`estimate`: the alignment estimator, bit-equal to the AlignmentEstimator FMU;
 - :func:`parameters`: the estimator's parameters, their types and defaults;
-- :func:`band_metrics` and :func:`bandpass`: the EN 13848 band metrics of the studies;
+- :func:`band_metrics` and :func:`bandpass`: the EN 13848 band metrics of the studies, and
+  :data:`BANDS`, their wavelength edges;
 - :func:`simulate`: one FMU (the RailVehicle FMU) run by the master, returned as arrays.
 
 Bad input raises ``ValueError`` with the library's message; a failed run ``RuntimeError``.
 The fleet pipeline on Dask is :mod:`track_alignment.fleet`.
 """
 
-from ._native import __version__, band_metrics, bandpass, estimate, parameters, simulate
+from ._native import BANDS, __version__, band_metrics, bandpass, estimate, parameters, simulate
 
-__all__ = ["__version__", "band_metrics", "bandpass", "estimate", "parameters", "simulate"]
+__all__ = [
+    "BANDS", "__version__", "band_metrics", "bandpass", "estimate", "parameters", "simulate",
+]
