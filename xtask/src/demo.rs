@@ -17,7 +17,7 @@ use std::process::Command;
 pub fn demo(extra: Vec<String>) -> Result<()> {
     progress::announce(
         "cargo build --release: the FMUs, packaged into .fmu archives, then the orchestrator and alignment-studies",
-        "seconds when up to date, minutes from a fresh clone; cargo shows its progress",
+        "seconds when up to date, several minutes from a fresh clone; cargo shows its progress",
         None,
     );
     let packaged = package::build_and_package()?;
@@ -71,7 +71,7 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
     study(
         "all",
         "the paper's cases on held-out track seeds",
-        "about 1.5 min",
+        "about 30 s",
     )?;
     study(
         "variants",
@@ -104,7 +104,7 @@ fn fleet(vehicle: &Path, fleet_dir: &Path) -> Result<()> {
     python::ensure_venv()?;
     logged(
         "maturin develop: the Python bindings (track_alignment) into .venv",
-        "about 2.5 min, compiling the bindings",
+        "about 2.5 min on 2 cores: cargo compiles the bindings",
         &mut python::bindings_command(),
         &fleet_dir.join("bindings.log"),
     )?;
@@ -122,7 +122,7 @@ fn fleet(vehicle: &Path, fleet_dir: &Path) -> Result<()> {
         .arg(fleet_dir.join("passes"));
     logged(
         "track_alignment.synthetic: 20 passes of the vehicle FMU over one 1 km track (Parquet)",
-        "about 30 s",
+        "about 15 s",
         &mut synth,
         &fleet_dir.join("synthetic.log"),
     )?;
@@ -135,7 +135,7 @@ fn fleet(vehicle: &Path, fleet_dir: &Path) -> Result<()> {
         .arg(fleet_dir);
     logged(
         "track-alignment-fleet: the track-quality map on a 2-worker Dask LocalCluster",
-        "about 30 s",
+        "about 10 s",
         &mut pipeline,
         &fleet_dir.join("fleet.log"),
     )

@@ -79,6 +79,7 @@ fn says_what_the_figures_hold_for_and_why_nominal_taps_look_better() {
         "equivalent conicity 0.10",
         "nominal Kalker",
         "straight track",
+        "sensors with their default noise",
         "20 m/s",
         "held-out track seeds 1-5:",
     ] {
