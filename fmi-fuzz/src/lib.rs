@@ -7,7 +7,8 @@
 //!   and replays a seed with its call trace;
 //! - [`cycles`]: instantiate / initialize / step / FMU-state / free cycles, to run under
 //!   valgrind;
-//! - [`api`]: an FMU opened for raw calls; [`log`]: the logger callback (a C shim).
+//! - [`api`]: an FMU opened for raw calls; [`log`]: the logger callback (a C shim);
+//! - [`cli`]: the command line, one module per command (`main.rs` only dispatches).
 //!
 //! Reproduce any failure with `fmi-fuzz --fmu <FMU> --seed <seed> --sequences 1 --trace`.
 
@@ -15,6 +16,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod api;
+pub mod cli;
 pub mod cycles;
 pub mod fuzz;
 pub mod log;

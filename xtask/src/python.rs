@@ -40,18 +40,26 @@ pub fn ensure_venv() -> Result<PathBuf> {
     } else if fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == hash) {
         return Ok(python());
     }
-    println!("installing tests/requirements.txt into .venv");
-    run(Command::new(python())
-        .current_dir(root())
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--disable-pip-version-check",
-            "--quiet",
-            "-r",
-        ])
-        .arg(&requirements))
+    // pip is quiet for minutes on a first install: the heartbeat shows it works.
+    crate::progress::announce(
+        "installing tests/requirements.txt into .venv",
+        "pip, about 1 min on a first install",
+        None,
+    );
+    crate::progress::watched(
+        Command::new(python())
+            .current_dir(root())
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--disable-pip-version-check",
+                "--quiet",
+                "-r",
+            ])
+            .arg(&requirements),
+        None,
+    )
     .context("installing the Python test requirements (is the package index reachable?)")?;
     fs::write(&stamp, format!("{hash}\n"))
         .with_context(|| format!("writing {}", stamp.display()))?;

@@ -247,6 +247,10 @@ pub struct VariantResult {
     pub name: String,
     pub settings: Vec<(String, String)>,
     pub smooth: bool,
+    /// Which FMU output was judged: with the settings, the row's stable key (the demo's
+    /// headline picks its rows by them; the name is prose).
+    #[serde(skip_serializing_if = "Output::is_alignment")]
+    pub output: Output,
     /// (band, mean Jrel, standard deviation, mean J \[mm\]).
     pub bands: Vec<(String, f64, f64, f64)>,
     pub per_seed: Vec<BandMetrics>,
@@ -278,6 +282,7 @@ fn summarize(v: &Variant, per_seed: Vec<BandMetrics>) -> VariantResult {
         name: v.name.clone(),
         settings: v.settings.clone(),
         smooth: v.smooth,
+        output: v.output,
         bands,
         per_seed,
     }
@@ -456,5 +461,36 @@ mod tests {
         for t in [1.0, 21.0, 31.0, 41.0] {
             assert!((profile(t - 1e-9) - profile(t + 1e-9)).abs() < 1e-6, "{t}");
         }
+    }
+
+    #[test]
+    fn the_estimator_fmu_rows_have_unique_stable_keys() {
+        // Settings and output: what the demo's headline picks rows by (its names are prose).
+        let rows: Vec<VariantResult> = learned_variants()
+            .iter()
+            .map(|v| VariantResult {
+                name: v.name.clone(),
+                settings: v.settings.clone(),
+                smooth: v.smooth,
+                output: v.output,
+                bands: vec![],
+                per_seed: vec![],
+            })
+            .collect();
+        let mut keys: Vec<serde_json::Value> = rows
+            .iter()
+            .map(|r| {
+                let v = serde_json::to_value(r).unwrap();
+                let mut settings = r.settings.clone();
+                settings.sort();
+                serde_json::json!([settings, v.get("output")])
+            })
+            .collect();
+        let lagged = keys.iter().filter(|k| k[1] == "Lagged").count();
+        assert_eq!(lagged, 3, "{keys:?}");
+        assert!(keys.iter().all(|k| k[1].is_null() || k[1] == "Lagged"));
+        keys.sort_by_key(|k| k.to_string());
+        keys.dedup();
+        assert_eq!(keys.len(), rows.len());
     }
 }

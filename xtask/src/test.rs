@@ -1,0 +1,243 @@
+//! `cargo xtask test`: the stages of the suite, each timed, run on even when an independent
+//! one failed, and a summary with one line per stage.
+
+use crate::binaries::{self, Binaries, FMU_DIR_ENV};
+use crate::cli::TestOptions;
+use crate::{package, python, workspace};
+use anyhow::{Context, Result, bail};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+enum Outcome {
+    Passed,
+    Failed(String),
+    Skipped(String),
+}
+
+struct Stage {
+    name: &'static str,
+    outcome: Outcome,
+    seconds: f64,
+}
+
+fn timed(name: &'static str, f: impl FnOnce() -> Result<()>) -> Stage {
+    println!("\n==> {name}");
+    let start = Instant::now();
+    let outcome = match f() {
+        Ok(()) => Outcome::Passed,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            Outcome::Failed(
+                format!("{e:#}")
+                    .lines()
+                    .next()
+                    .unwrap_or_default()
+                    .to_string(),
+            )
+        }
+    };
+    Stage {
+        name,
+        outcome,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// A cargo command of the Rust half, run from the workspace root.
+fn cargo(args: &[&str]) -> Command {
+    let mut cmd = workspace::cargo();
+    cmd.args(args);
+    cmd
+}
+
+/// Runs every selected stage (a failure does not stop the independent ones), prints a summary and
+/// returns whether everything passed.
+pub fn test(o: TestOptions) -> Result<bool> {
+    let mut stages = Vec::new();
+    // The FMUs and the orchestrator first: Rust integration tests and the Python harness both
+    // load them (found through XTASK_FMU_DIR and ORCHESTRATOR).
+    let mut fmu_dir: Option<PathBuf> = None;
+    stages.push(timed("package FMUs (release build)", || {
+        let packaged = package::build_and_package()?;
+        fmu_dir = packaged
+            .first()
+            .and_then(|p| p.path.parent())
+            .map(PathBuf::from);
+        Ok(())
+    }));
+    let mut binaries: Option<Binaries> = None;
+    stages.push(timed(
+        "build the orchestrator and alignment-studies (release)",
+        || {
+            binaries = Some(binaries::build()?);
+            Ok(())
+        },
+    ));
+    if o.rust {
+        // Style and lints are part of the suite: a change that breaks them fails CI.
+        stages.push(timed("cargo fmt --all -- --check", || {
+            workspace::run(&mut cargo(&["fmt", "--all", "--", "--check"]))
+        }));
+        stages.push(timed(
+            "cargo clippy --workspace --all-targets -- -D warnings",
+            || {
+                let args = [
+                    "clippy",
+                    "--workspace",
+                    "--all-targets",
+                    "--",
+                    "-D",
+                    "warnings",
+                ];
+                workspace::run(&mut cargo(&args))
+            },
+        ));
+        // The crate docs hold the derivations: a broken link or a malformed doc comment fails.
+        stages.push(timed(
+            "cargo doc --workspace --no-deps (RUSTDOCFLAGS=-D warnings)",
+            || {
+                let mut cmd = cargo(&["doc", "--workspace", "--no-deps"]);
+                workspace::run(cmd.env("RUSTDOCFLAGS", "-D warnings"))
+            },
+        ));
+        stages.push(timed("cargo test --workspace", || {
+            let mut cmd = cargo(&["test", "--workspace"]);
+            if let Some(dir) = &fmu_dir {
+                cmd.env(FMU_DIR_ENV, dir);
+            }
+            if let Some(b) = &binaries {
+                b.env(&mut cmd);
+            }
+            workspace::run(&mut cmd)
+        }));
+    }
+    if o.python {
+        python_stages(&mut stages, fmu_dir.as_deref(), binaries.as_ref(), &o);
+    }
+    println!("\n==> summary");
+    let (lines, all_passed) = summary(&stages);
+    println!("{lines}");
+    Ok(all_passed)
+}
+
+/// The venv, the bindings and pytest; pytest is skipped (and counts as a failure) without
+/// the FMUs or the venv.
+fn python_stages(
+    stages: &mut Vec<Stage>,
+    fmu_dir: Option<&Path>,
+    binaries: Option<&Binaries>,
+    o: &TestOptions,
+) {
+    let mut venv_ok = false;
+    stages.push(timed("python venv (.venv, tests/requirements.txt)", || {
+        python::ensure_venv()?;
+        venv_ok = true;
+        Ok(())
+    }));
+    if venv_ok {
+        stages.push(timed("python bindings (maturin develop)", || {
+            venv_ok = false;
+            python::install_bindings()?;
+            venv_ok = true;
+            Ok(())
+        }));
+    }
+    let pytest = "pytest tests";
+    let skipped = |why: &str| Stage {
+        name: pytest,
+        outcome: Outcome::Skipped(why.into()),
+        seconds: 0.0,
+    };
+    stages.push(match (fmu_dir, venv_ok) {
+        (Some(dir), true) => timed(pytest, || run_pytest(dir, binaries, &o.pytest_args)),
+        (None, _) => skipped("no FMU was packaged"),
+        (_, false) => skipped("no Python environment"),
+    });
+}
+
+/// One line per stage (ok, FAILED or SKIPPED, its time, why), then the verdict; and whether
+/// every stage passed (a skipped stage did not).
+fn summary(stages: &[Stage]) -> (String, bool) {
+    let mut all_passed = true;
+    let mut lines = String::new();
+    for s in stages {
+        let (word, detail) = match &s.outcome {
+            Outcome::Passed => ("ok", String::new()),
+            Outcome::Failed(why) => {
+                all_passed = false;
+                ("FAILED", format!(": {why}"))
+            }
+            Outcome::Skipped(why) => {
+                all_passed = false;
+                ("SKIPPED", format!(": {why}"))
+            }
+        };
+        lines += &format!("  {word:<7} {:<46} {:>7.1} s{detail}\n", s.name, s.seconds);
+    }
+    lines += if all_passed { "all passed" } else { "FAILED" };
+    (lines, all_passed)
+}
+
+fn run_pytest(fmu_dir: &Path, binaries: Option<&Binaries>, extra: &[String]) -> Result<()> {
+    let mut cmd = Command::new(python::python());
+    cmd.current_dir(workspace::root())
+        .env(FMU_DIR_ENV, fmu_dir)
+        .args(["-m", "pytest", "-q"]);
+    if let Some(b) = binaries {
+        b.env(&mut cmd);
+    }
+    // `tests` unless the extra arguments name test files themselves (pytest would run both).
+    if !extra
+        .iter()
+        .any(|a| a == "tests" || a.starts_with("tests/"))
+    {
+        cmd.arg("tests");
+    }
+    cmd.args(extra);
+    let line = workspace::command_line(&cmd);
+    let status = cmd
+        .status()
+        .with_context(|| format!("could not start `{line}`"))?;
+    match status.code() {
+        Some(0) => Ok(()),
+        Some(5) => bail!("pytest collected no tests (exit code 5)"),
+        _ => bail!("`{line}` failed ({status})"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stage(name: &'static str, outcome: Outcome, seconds: f64) -> Stage {
+        Stage {
+            name,
+            outcome,
+            seconds,
+        }
+    }
+
+    #[test]
+    fn summary_lines_and_verdict() {
+        let ok = [stage("cargo fmt", Outcome::Passed, 1.0)];
+        let (text, passed) = summary(&ok);
+        assert!(passed);
+        assert_eq!(
+            text,
+            format!("  ok      {:<46}     1.0 s\nall passed", "cargo fmt")
+        );
+        // A skipped stage is not a pass: CI must not go green without the Python half.
+        let skipped = [
+            stage("cargo fmt", Outcome::Passed, 1.0),
+            stage("pytest tests", Outcome::Skipped("no FMU".into()), 0.0),
+        ];
+        let (text, passed) = summary(&skipped);
+        assert!(!passed);
+        assert!(text.contains("SKIPPED pytest tests"));
+        assert!(text.contains(" s: no FMU\nFAILED"));
+        let failed = [stage("cargo test", Outcome::Failed("exit 101".into()), 2.0)];
+        let (text, passed) = summary(&failed);
+        assert!(!passed && text.starts_with("  FAILED  cargo test") && text.ends_with("FAILED"));
+    }
+}
