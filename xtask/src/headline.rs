@@ -60,9 +60,9 @@ pub fn headline(v: &Value) -> Result<String> {
     };
     let standard = table("standard")?;
     let mut text = format!(
-        "\nAlignment accuracy on our vehicle FMU: an ML95-type metro car with new wheels (coned \
-         treads, equivalent conicity 0.10), nominal Kalker creep coefficients, straight track, \
-         sensors with their default noise (0.01 m/s2, 0.0005 rad/s), 20 m/s for 20 s.\nJrel (rms error / rms truth; lower is \
+        "\nAlignment accuracy on our vehicle FMU: an ML95-type metro car with coned \
+         treads of conicity 0.10 (the paper's), nominal Kalker creep coefficients, straight track, \
+         sensors with white noise only (0.01 m/s2, 0.0005 rad/s), 20 m/s for 20 s.\nJrel (rms error / rms truth; lower is \
          better), mean over the held-out track seeds {}:\n\n",
         seed_list(&seeds)
     );

@@ -75,11 +75,11 @@ fn picks_the_four_rows_by_settings_and_output() {
 fn says_what_the_figures_hold_for_and_why_nominal_taps_look_better() {
     let text = headline(&fixture()).unwrap();
     for fact in [
-        "ML95-type metro car with new wheels",
-        "equivalent conicity 0.10",
+        "ML95-type metro car",
+        "conicity 0.10",
         "nominal Kalker",
         "straight track",
-        "sensors with their default noise",
+        "sensors with white noise only",
         "20 m/s",
         "held-out track seeds 1-5:",
     ] {
