@@ -326,7 +326,7 @@ fn endless_runs_are_refused() {
     for (stop, expected) in [
         (
             "inf",
-            "error: the start time 0 s and the stop time inf s must be finite numbers",
+            "error: invalid value 'inf' for '--stop <STOP>': expected a finite time in s, not negative",
         ),
         (
             "1e300",
@@ -343,6 +343,10 @@ fn endless_runs_are_refused() {
         let err = stderr(&output);
         assert_eq!(output.status.code(), Some(2), "{err}");
         assert!(err.contains(expected), "{err}");
+        assert!(
+            !dir.path().join("out").exists(),
+            "a refused run leaves no --out directory"
+        );
     }
 }
 
