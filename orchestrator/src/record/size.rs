@@ -98,7 +98,8 @@ pub fn free_space(dir: &Path) -> Option<u64> {
 
 /// An error naming the estimate unless a results file of `rows` x `columns` fits the `limit`
 /// and the free space `free` (unknown: not checked): over the free space is an I/O error (exit
-/// 1, the results cannot be written), over the limit bad input (exit 2).
+/// 1, the results cannot be written), over the limit bad input (exit 2, checked first: a typo
+/// in `--stop` is usually over both).
 pub fn check(
     file: &str,
     rows: u64,
@@ -112,18 +113,18 @@ pub fn check(
         "the results file {file} would be about {} ({rows} rows x {columns} columns)",
         human(bytes)
     );
+    if bytes > limit as f64 {
+        return Err(RunError::Config(format!(
+            "{what}, over the {} limit: nothing was run; check --stop and --step, record less (--record, --interval), or allow it with --max-output-size",
+            human(limit as f64)
+        )));
+    }
     if let Some(free) = free
         && bytes > free as f64
     {
         return Err(RunError::Io(format!(
             "{what}, more than the {} free on its disk: nothing was run; shorten the run (--stop), record less (--record, --interval) or write elsewhere (--out)",
             human(free as f64)
-        )));
-    }
-    if bytes > limit as f64 {
-        return Err(RunError::Config(format!(
-            "{what}, over the {} limit: nothing was run; check --stop and --step, record less (--record, --interval), or allow it with --max-output-size",
-            human(limit as f64)
         )));
     }
     Ok(())
