@@ -171,7 +171,8 @@ mod tests {
         std::fs::write(&out, "someone's notes").unwrap();
         let e = write_bytes(&out, &[], MARK, b"mine v1 new").unwrap_err();
         assert!(
-            e.to_string().contains("not written by this command") && e.to_string().contains("--force"),
+            e.to_string().contains("not written by this command")
+                && e.to_string().contains("--force"),
             "{e}"
         );
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "someone's notes");
@@ -185,7 +186,11 @@ mod tests {
         std::fs::write(&out, "other").unwrap();
         write_bytes(&out, &[], forced, b"forced").unwrap();
         assert_eq!(std::fs::read_to_string(&out).unwrap(), "forced");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary left");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "no temporary left"
+        );
     }
 
     #[cfg(unix)]

@@ -24,7 +24,10 @@ fn stderr(o: &Output) -> String {
 
 /// One line of error, no panic.
 fn clean(err: &str) {
-    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{err}");
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -33,14 +36,26 @@ fn negative_and_non_finite_times_are_refused_by_option_before_anything_is_create
     let out = dir.path().join("out");
     let fmu = common::fmu("Feedthrough");
     for (args, words) in [
-        (&["--stop", "-1", "--step", "0.1"][..], &["'-1'", "--stop", "not negative"][..]),
-        (&["--stop", "1", "--step", "0"], &["'0'", "--step", "above zero"]),
+        (
+            &["--stop", "-1", "--step", "0.1"][..],
+            &["'-1'", "--stop", "not negative"][..],
+        ),
+        (
+            &["--stop", "1", "--step", "0"],
+            &["'0'", "--step", "above zero"],
+        ),
         (&["--stop", "1", "--step", "nan"], &["'nan'", "--step"]),
         (&["--stop", "inf", "--step", "0.1"], &["'inf'", "--stop"]),
         (&["--stop", "1", "--step", "-0.1"], &["'-0.1'", "--step"]),
-        (&["--stop", "1", "--step", "0.1", "--interval", "-1"], &["--interval"]),
+        (
+            &["--stop", "1", "--step", "0.1", "--interval", "-1"],
+            &["--interval"],
+        ),
         // Accepted by the parser, refused by the grid: still before the directory is made.
-        (&["--start", "2", "--stop", "1", "--step", "0.1"], &["before the start time"]),
+        (
+            &["--start", "2", "--stop", "1", "--step", "0.1"],
+            &["before the start time"],
+        ),
         (&["--stop", "1", "--step", "0.3"], &["whole number"]),
     ] {
         let mut a: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"simulate", &fmu];
@@ -66,25 +81,65 @@ fn a_run_over_the_size_limit_is_refused_with_its_size_and_leaves_nothing() {
     let out = dir.path().join("out");
     let fmu = common::fmu("Feedthrough");
     // The typo: --stop 1e12 at 1 ms.
-    let o = orchestrator(&[&"simulate", &fmu, &"--stop", &"1e12", &"--step", &"0.001", &"--quiet", &"--out", &out]);
+    let o = orchestrator(&[
+        &"simulate",
+        &fmu,
+        &"--stop",
+        &"1e12",
+        &"--step",
+        &"0.001",
+        &"--quiet",
+        &"--out",
+        &out,
+    ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("the results file results.csv would be about") && err.contains("PB") && err.contains("--max-output-size"),
+        err.contains("the results file results.csv would be about")
+            && err.contains("PB")
+            && err.contains("--max-output-size"),
         "{err}"
     );
     clean(&err);
     assert!(!out.exists(), "the refused run left {}", out.display());
     // A small limit refuses a small run; --no-record is not affected by it.
-    let small = [&"simulate" as &dyn AsRef<std::ffi::OsStr>, &fmu, &"--stop", &"1", &"--step", &"0.001", &"--quiet", &"--max-output-size", &"1k", &"--out", &out];
+    let small = [
+        &"simulate" as &dyn AsRef<std::ffi::OsStr>,
+        &fmu,
+        &"--stop",
+        &"1",
+        &"--step",
+        &"0.001",
+        &"--quiet",
+        &"--max-output-size",
+        &"1k",
+        &"--out",
+        &out,
+    ];
     let o = orchestrator(&small);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("over the 1.0 kB limit"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("over the 1.0 kB limit"),
+        "{}",
+        stderr(&o)
+    );
     let mut unrecorded = small.to_vec();
     unrecorded.push(&"--no-record");
     let o = orchestrator(&unrecorded);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let o = orchestrator(&[&"simulate", &fmu, &"--stop", &"1", &"--step", &"0.001", &"--quiet", &"--max-output-size", &"1M", &"--out", &out]);
+    let o = orchestrator(&[
+        &"simulate",
+        &fmu,
+        &"--stop",
+        &"1",
+        &"--step",
+        &"0.001",
+        &"--quiet",
+        &"--max-output-size",
+        &"1M",
+        &"--out",
+        &out,
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(out.join("results.csv").exists());
 }
@@ -97,12 +152,24 @@ fn a_size_over_the_free_space_is_refused_as_an_io_error() {
     };
     let out = dir.path().join("out");
     let o = orchestrator(&[
-        &"simulate", &common::fmu("Feedthrough"), &"--stop", &"1e9", &"--step", &"0.001",
-        &"--quiet", &"--max-output-size", &"1000P", &"--out", &out,
+        &"simulate",
+        &common::fmu("Feedthrough"),
+        &"--stop",
+        &"1e9",
+        &"--step",
+        &"0.001",
+        &"--quiet",
+        &"--max-output-size",
+        &"1000P",
+        &"--out",
+        &out,
     ]);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("free on its disk") && err.contains("nothing was run"), "{err}");
+    assert!(
+        err.contains("free on its disk") && err.contains("nothing was run"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
@@ -114,8 +181,16 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
     let veh = format!("vehicle={}", common::fmu("RailVehicle").display());
     let est = format!("estimator={}", common::fmu("AlignmentEstimator").display());
     let export = |out: &Path, more: &[&str]| {
-        let mut a: Vec<&dyn AsRef<std::ffi::OsStr>> =
-            vec![&"export-ssp", &out, &"--system", &ssd, &"--fmu", &veh, &"--fmu", &est];
+        let mut a: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
+            &"export-ssp",
+            &out,
+            &"--system",
+            &ssd,
+            &"--fmu",
+            &veh,
+            &"--fmu",
+            &est,
+        ];
         for m in more {
             a.push(m);
         }
@@ -125,7 +200,17 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
     let sys = d.join("sys.ssd");
     std::fs::copy(&ssd, &sys).unwrap();
     let before = std::fs::read(&sys).unwrap();
-    let o = orchestrator(&[&"export-ssp", &sys, &"--system", &sys, &"--fmu", &veh, &"--fmu", &est, &"--force"]);
+    let o = orchestrator(&[
+        &"export-ssp",
+        &sys,
+        &"--system",
+        &sys,
+        &"--fmu",
+        &veh,
+        &"--fmu",
+        &est,
+        &"--force",
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("is the input"), "{}", stderr(&o));
     assert_eq!(std::fs::read(&sys).unwrap(), before);
@@ -134,7 +219,17 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
     std::fs::copy(common::fmu("RailVehicle"), &fmu_copy).unwrap();
     let fmu_bytes = std::fs::read(&fmu_copy).unwrap();
     let veh_copy = format!("vehicle={}", fmu_copy.display());
-    let o = orchestrator(&[&"export-ssp", &fmu_copy, &"--system", &ssd, &"--fmu", &veh_copy, &"--fmu", &est, &"--force"]);
+    let o = orchestrator(&[
+        &"export-ssp",
+        &fmu_copy,
+        &"--system",
+        &ssd,
+        &"--fmu",
+        &veh_copy,
+        &"--fmu",
+        &est,
+        &"--force",
+    ]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("is the input"), "{}", stderr(&o));
     assert_eq!(std::fs::read(&fmu_copy).unwrap(), fmu_bytes);
@@ -150,7 +245,13 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
     assert!(std::fs::read(&notes).unwrap().starts_with(b"PK"));
     // A FIFO: refused at once (never opened, so nothing blocks), even forced.
     let fifo = d.join("fifo.ssp");
-    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
     let o = export(&fifo, &["--force"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("FIFO"), "{}", stderr(&o));
@@ -184,7 +285,10 @@ fn no_help_text_shows_a_rustdoc_escape() {
     }
     let sim = orchestrator(&[&"simulate", &"--help"]);
     let sim = String::from_utf8_lossy(&sim.stdout);
-    assert!(sim.contains("for `simulate`: the input's last time"), "{sim}");
+    assert!(
+        sim.contains("for `simulate`: the input's last time"),
+        "{sim}"
+    );
 }
 
 #[test]

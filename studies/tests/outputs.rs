@@ -19,7 +19,10 @@ fn stderr(o: &Output) -> String {
 
 fn clean(o: &Output) {
     let err = stderr(o);
-    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{err}");
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "{err}"
+    );
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
 }
 
@@ -56,13 +59,20 @@ fn smooth_never_replaces_its_input_even_forced_or_by_another_name() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path(), 500, 20.0);
     let before = std::fs::read(&rec).unwrap();
-    for out in [rec.clone(), dir.path().join(".").join(rec.file_name().unwrap())] {
+    for out in [
+        rec.clone(),
+        dir.path().join(".").join(rec.file_name().unwrap()),
+    ] {
         for more in [&[][..], &["--force"]] {
             let o = smooth(&rec, &out, more);
             assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
             assert!(stderr(&o).contains("is the input"), "{}", stderr(&o));
             clean(&o);
-            assert_eq!(std::fs::read(&rec).unwrap(), before, "the recording is intact");
+            assert_eq!(
+                std::fs::read(&rec).unwrap(),
+                before,
+                "the recording is intact"
+            );
         }
     }
 }
@@ -77,7 +87,10 @@ fn smooth_replaces_its_own_output_but_not_another_file_without_force() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("--force"), "{}", stderr(&o));
     clean(&o);
-    assert_eq!(std::fs::read_to_string(&other).unwrap(), "someone's notes\n");
+    assert_eq!(
+        std::fs::read_to_string(&other).unwrap(),
+        "someone's notes\n"
+    );
     // Its own output is replaced on a second run; --force replaces another file.
     let out = dir.path().join("smoothed.csv");
     assert!(smooth(&rec, &out, &[]).status.success());
@@ -99,7 +112,13 @@ fn smooth_refuses_a_fifo_and_a_read_only_directory_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path(), 500, 20.0);
     let fifo = dir.path().join("fifo.csv");
-    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
     let o = smooth(&rec, &fifo, &["--force"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("FIFO"), "{}", stderr(&o));
@@ -138,7 +157,11 @@ fn a_full_disk_leaves_the_previous_output_whole_and_no_temporary() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("left as it was"), "{}", stderr(&o));
     clean(&o);
-    assert_eq!(std::fs::read(&out).unwrap(), before, "the previous output is whole");
+    assert_eq!(
+        std::fs::read(&out).unwrap(),
+        before,
+        "the previous output is whole"
+    );
     let names: Vec<String> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
@@ -156,7 +179,14 @@ fn smooth_reads_every_row_of_csv_and_parquet() {
     assert!(stderr(&o).starts_with("5000 samples"), "{}", stderr(&o));
     assert_eq!(data_rows(&out), 5000);
     let first = std::fs::read_to_string(&out).unwrap();
-    let first = first.lines().nth(1).unwrap().split(',').next().unwrap().to_string();
+    let first = first
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .to_string();
     assert_eq!(first, "0.0", "the first row's time is kept");
     // The same recording as Parquet, and a Parquet output.
     let cols = orchestrator::csv::Csv::read(&rec).unwrap();
@@ -186,7 +216,11 @@ fn smooth_refuses_a_recording_with_no_sample_at_a_working_speed() {
     let out = dir.path().join("smoothed.csv");
     let o = smooth(&rec, &out, &[]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(stderr(&o).contains("min_speed") && stderr(&o).contains("nothing written"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("min_speed") && stderr(&o).contains("nothing written"),
+        "{}",
+        stderr(&o)
+    );
     clean(&o);
     assert!(!out.exists());
 }
@@ -199,7 +233,12 @@ fn file_writers_check_out_before_any_work() {
     let d = dir.path();
     let other = d.join("notes.txt");
     std::fs::write(&other, "mine\n").unwrap();
-    let fmus = ["--vehicle", "absent-vehicle.fmu", "--estimator", "absent-estimator.fmu"];
+    let fmus = [
+        "--vehicle",
+        "absent-vehicle.fmu",
+        "--estimator",
+        "absent-estimator.fmu",
+    ];
     let runs: [&[&str]; 4] = [
         &["learn", "--out"],
         &["taps", "--out"],
@@ -207,9 +246,19 @@ fn file_writers_check_out_before_any_work() {
         &["standard", "--quiet", "--out", "unused", "--doc"],
     ];
     for args in runs {
-        let o = studies().current_dir(d).args(args).arg(&other).args(fmus).output().unwrap();
+        let o = studies()
+            .current_dir(d)
+            .args(args)
+            .arg(&other)
+            .args(fmus)
+            .output()
+            .unwrap();
         assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
-        assert!(stderr(&o).contains("not written by this command"), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("not written by this command"),
+            "{}",
+            stderr(&o)
+        );
         clean(&o);
         assert_eq!(std::fs::read_to_string(&other).unwrap(), "mine\n");
     }
@@ -226,7 +275,13 @@ fn file_writers_check_out_before_any_work() {
     ] {
         let own = d.join(format!("{cmd}.out"));
         std::fs::write(&own, mark).unwrap();
-        let o = studies().current_dir(d).args([cmd, "--out"]).arg(&own).args(fmus).output().unwrap();
+        let o = studies()
+            .current_dir(d)
+            .args([cmd, "--out"])
+            .arg(&own)
+            .args(fmus)
+            .output()
+            .unwrap();
         assert_eq!(o.status.code(), Some(2), "{cmd}: {}", stderr(&o));
         assert!(stderr(&o).contains("absent-"), "{cmd}: {}", stderr(&o));
         assert_eq!(std::fs::read_to_string(&own).unwrap(), mark);
@@ -236,15 +291,26 @@ fn file_writers_check_out_before_any_work() {
 #[test]
 fn no_help_text_shows_a_rustdoc_escape() {
     let subs = [
-        "run", "calibrate", "standard", "robustness", "resonance", "all", "variants", "learn",
-        "taps", "smooth",
+        "run",
+        "calibrate",
+        "standard",
+        "robustness",
+        "resonance",
+        "all",
+        "variants",
+        "learn",
+        "taps",
+        "smooth",
     ];
     for sub in std::iter::once(None).chain(subs.map(Some)) {
         let o = studies().args(sub).arg("--help").output().unwrap();
         assert!(o.status.success());
         let help = String::from_utf8_lossy(&o.stdout);
         for line in help.lines() {
-            assert!(!line.contains('\\'), "alignment-studies {sub:?} --help: {line}");
+            assert!(
+                !line.contains('\\'),
+                "alignment-studies {sub:?} --help: {line}"
+            );
         }
     }
 }

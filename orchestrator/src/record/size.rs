@@ -63,9 +63,7 @@ pub fn parse(s: &str) -> Result<u64, String> {
         _ => (t, 1.0),
     };
     match num.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 && v * scale < u64::MAX as f64 => {
-            Ok((v * scale) as u64)
-        }
+        Ok(v) if v.is_finite() && v > 0.0 && v * scale < u64::MAX as f64 => Ok((v * scale) as u64),
         _ => Err(format!(
             "{s:?}: expected a positive size such as 500M, 50G or 2T"
         )),
@@ -149,15 +147,33 @@ mod tests {
     #[test]
     fn the_typo_run_is_refused_with_its_size_and_the_standard_case_passes() {
         // `--stop 1e12` at 1 ms, the standard case's 31 columns.
-        let e = check("results.csv", 1_000_000_000_000_001, 31, false, DEFAULT_LIMIT, None)
-            .unwrap_err();
+        let e = check(
+            "results.csv",
+            1_000_000_000_000_001,
+            31,
+            false,
+            DEFAULT_LIMIT,
+            None,
+        )
+        .unwrap_err();
         assert_eq!(e.exit_code(), 2);
         let e = e.to_string();
-        assert!(e.contains("620.0 PB") && e.contains("--max-output-size"), "{e}");
+        assert!(
+            e.contains("620.0 PB") && e.contains("--max-output-size"),
+            "{e}"
+        );
         check("results.csv", 20_001, 31, false, DEFAULT_LIMIT, None).unwrap();
         // Allowed by a larger limit, refused by the free space.
         check("r.parquet", 1_000_000_000, 31, true, u64::MAX, None).unwrap();
-        let e = check("r.parquet", 1_000_000_000, 31, true, u64::MAX, Some(1 << 30)).unwrap_err();
+        let e = check(
+            "r.parquet",
+            1_000_000_000,
+            31,
+            true,
+            u64::MAX,
+            Some(1 << 30),
+        )
+        .unwrap_err();
         assert_eq!(e.exit_code(), 1);
         let e = e.to_string();
         assert!(e.contains("248.0 GB") && e.contains("free"), "{e}");

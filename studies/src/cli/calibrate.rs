@@ -53,7 +53,10 @@ pub fn execute(a: &CalibrateArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             ));
         }
     };
-    let inputs = [a.fmus.fmus.vehicle.as_path(), a.fmus.fmus.estimator.as_path()];
+    let inputs = [
+        a.fmus.fmus.vehicle.as_path(),
+        a.fmus.fmus.estimator.as_path(),
+    ];
     let guard = super::guard(&out, &inputs, a.force, Some(MARK))?;
     super::check_dir(&a.plots)?;
     let mut report =

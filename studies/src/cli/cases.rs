@@ -6,7 +6,8 @@ use crate::Error;
 pub use crate::report::cases::Group;
 
 /// How every document `--doc` writes begins ([`crate::report::cases::as_document`]).
-const DOC_MARK: &[u8] = b"<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc";
+const DOC_MARK: &[u8] =
+    b"<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc";
 
 /// Runs the groups' cases with a progress bar; `log` gets the lines worth seeing at once.
 pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Report, Error> {
@@ -14,7 +15,10 @@ pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Re
         .doc
         .as_deref()
         .map(|d| {
-            let inputs = [a.fmus.fmus.vehicle.as_path(), a.fmus.fmus.estimator.as_path()];
+            let inputs = [
+                a.fmus.fmus.vehicle.as_path(),
+                a.fmus.fmus.estimator.as_path(),
+            ];
             super::guard(d, &inputs, a.force, Some(DOC_MARK))
         })
         .transpose()?;

@@ -66,5 +66,6 @@ pub fn execute(a: &LearnArgs) -> Result<Report, Error> {
 
 /// A length in m: a finite number above zero.
 fn positive_m(s: &str) -> Result<f64, String> {
-    orchestrator::cli::positive(s).map_err(|_| "expected a finite number of metres above zero".into())
+    orchestrator::cli::positive(s)
+        .map_err(|_| "expected a finite number of metres above zero".into())
 }

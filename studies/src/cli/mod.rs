@@ -14,11 +14,11 @@ pub mod variants;
 use crate::Error;
 use crate::report::Evaluation;
 pub use crate::report::{Guard, Report};
-use orchestrator::outfile::Replace;
-use std::path::Path;
 use crate::study::runs::Fmus;
 use clap::Args;
+use orchestrator::outfile::Replace;
 use orchestrator::system::Endpoint;
+use std::path::Path;
 use std::path::PathBuf;
 
 /// The track seed the shipped estimator is identified and calibrated on.
