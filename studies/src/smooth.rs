@@ -141,8 +141,10 @@ fn learned_columns(
     ))
 }
 
-/// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end);
-/// with `learned`, also the learned smoother saved in that file.
+/// Filters and smooths `input`, writing `output` by the output policy ([`outfile`]: checked
+/// before the recording is read, written through a temporary file renamed into place); with
+/// `learned`, also the learned smoother saved in that file. A refused or failed write is
+/// [`crate::Error::Io`] (exit 1), bad input [`crate::Error::Input`] (exit 2).
 pub fn smooth_file(
     input: &Path,
     output: &Path,
@@ -150,12 +152,13 @@ pub fn smooth_file(
     calibration: Option<&Path>,
     learned: Option<&Path>,
     replace: Replace,
-) -> Result<Processed, String> {
+) -> Result<Processed, crate::Error> {
     let mut inputs = vec![input];
     inputs.extend(calibration);
     inputs.extend(learned);
     // Refused before any work: an input, a symlink, FIFO or device, someone else's file.
-    outfile::check(output, &inputs, replace).map_err(|e| e.to_string())?;
+    let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
+    outfile::check(output, &inputs, replace).map_err(refused)?;
     let (time, h, samples) = read_samples(input)?;
     let provenance = serde_json::json!({
         "command": "alignment-studies smooth",
@@ -178,11 +181,11 @@ pub fn smooth_file(
         .iter()
         .any(|s| s.speed.is_finite() && s.speed >= config.min_speed)
     {
-        return Err(format!(
+        return Err(crate::Error::Input(format!(
             "{}: no row at a speed of at least {} m/s (min_speed), where the estimator works: the estimate would be all zeros; nothing written",
             input.display(),
             config.min_speed
-        ));
+        )));
     }
     let out = offline::process(&config, h, &samples, true)?;
     let learned = learned
@@ -204,7 +207,7 @@ pub fn smooth_file(
         let text = to_csv(&time, &out, learned.as_ref());
         outfile::write_bytes(output, &inputs, replace, text.as_bytes())
     };
-    written.map_err(|e| e.to_string())?;
+    written.map_err(refused)?;
     Ok(out)
 }
 
