@@ -11,7 +11,7 @@
 //! | the write itself | into a temporary file in the same directory, renamed into place: a failed write (a full disk) leaves the old file as it was and no temporary behind |
 //!
 //! The check runs before the command's work ([`check`]) and again just before the rename
-//! ([`write`]), so hours of fitting are never lost to an `--out` that could not be used.
+//! ([`write()`]), so hours of fitting are never lost to an `--out` that could not be used.
 
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
@@ -123,7 +123,7 @@ pub fn write(
     })
 }
 
-/// [`write`] with the contents in memory.
+/// [`write()`] with the contents in memory.
 pub fn write_bytes(
     out: &Path,
     inputs: &[&Path],
