@@ -274,6 +274,7 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
 fn no_help_text_shows_a_rustdoc_escape() {
     let top = orchestrator(&[&"--help"]);
     let text = String::from_utf8_lossy(&top.stdout).into_owned();
+    assert!(!text.contains('\\'), "{text}");
     for sub in ["run", "simulate", "info", "export-ssp"] {
         assert!(text.contains(sub), "{sub} missing from\n{text}");
         let o = orchestrator(&[&sub, &"--help"]);
