@@ -25,13 +25,18 @@ def test_learned_smoother_from_the_command_line_beats_the_paper_in_d1(tmp_path):
     run = oc.read_results(run_dir)
     out = oc.read_results(smoothed)
     assert out.columns[-2:] == ["alignment_learned", "alignment_hybrid"]
-    # Row k of smoothed.csv is row k + 1 of results.csv (the initial row is dropped).
-    distance, truth = run["vehicle.distance"][1:], run["vehicle.alignment"][1:]
+    # A row per row of results.csv, the first one too; each estimate is at its own distance.
+    assert len(out["time"]) == len(run["time"])
+    distance, truth = run["vehicle.distance"], run["vehicle.alignment"]
     ds = 0.05
-    grid = np.arange(distance[0], distance[-1], ds)
+    grid = np.arange(out["distance"][1], distance[-1], ds)
+
+    # Row 0 (the vehicle at rest before its first step, speed 0) has no learned estimate.
+    assert np.isnan(out["alignment_learned"][0]) and np.all(np.isfinite(out["alignment_learned"][1:]))
 
     def jrel(column: str, band: str) -> float:
-        est = np.interp(grid, distance, out[column])
+        moving = np.isfinite(out[column])
+        est = np.interp(grid, out["distance"][moving], out[column][moving])
         return ev.accuracy(est, np.interp(grid, distance, truth), ds, ev.BANDS[band]).Jrel
 
     # The paper's D1 Jrel is 0.48; the Kalman smoother (the paper's model, this command's

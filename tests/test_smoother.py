@@ -68,14 +68,16 @@ def test_smooth_command_equals_a_numpy_filter_and_smoother(tmp_path):
         args += ["--set", f"{k}={v}"]
     cli.studies(*args)
     result = cli.read_results(out)
-    # Row 0 of the CSV is the start (initial values): the filter steps from row 1 on.
-    z = np.column_stack([sig["ws_acc_y"], sig["ws_yaw_rate"], sig["frame_acc_y"]])[1:]
+    # Every row is a sample, the first one too (docs/recordings.md): the filter steps on each.
+    z = np.column_stack([sig["ws_acc_y"], sig["ws_yaw_rate"], sig["frame_acc_y"]])
+    assert len(result["time"]) == len(t)
     filtered, smoothed = numpy_filter_and_smoother(z)
     scale = np.sqrt(np.mean(np.square(run.motion.xi)))
     assert np.max(np.abs(result["alignment_filtered"] - filtered)) < 1e-6 * scale
     assert np.max(np.abs(result["alignment_smoothed"] - smoothed)) < 1e-6 * scale
-    assert np.allclose(result["distance"], SPEED * t[1:], rtol=1e-12)
+    # Row k's distance is the distance after its step, k + 1 steps, as the FMU counts it.
+    assert np.allclose(result["distance"], SPEED * (t + STEP), rtol=1e-12)
     # And the smoother is the better estimate of the truth on this run (whole band).
-    truth = run.motion.xi[1:]
+    truth = run.motion.xi
     err = lambda e: np.sqrt(np.mean(np.square(e - truth)))  # noqa: E731
     assert err(smoothed) < err(filtered)

@@ -4,6 +4,7 @@
 //! - [`ssp`]: SSP 1.0 system descriptions (.ssd / .ssp) read and written;
 //! - [`resolve`]: checks a system against its FMUs (connections, types, parameters, algebraic loops);
 //! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi stepping;
+//! - [`outdir`], [`outfile`]: what a command may write and replace (one policy for all);
 //! - [`record`]: the results writer;
 //! - [`parquet`]: Parquet tables of numbers (recordings and results), with units and provenance;
 //! - [`simulate`]: one FMU with input signals from a CSV file;
@@ -25,6 +26,7 @@ pub mod info;
 pub mod input;
 pub mod master;
 pub mod outdir;
+pub mod outfile;
 pub mod parquet;
 pub mod record;
 pub mod resolve;

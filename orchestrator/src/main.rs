@@ -2,8 +2,10 @@
 //! The `orchestrator` command line. See `orchestrator --help` and `docs/orchestrator.md`; each
 //! command is a module of [`orchestrator::cli`].
 //!
-//! Exit codes: 0 success; 1 an I/O failure (results cannot be written); 2 bad input (a file,
-//! the system description, a connection, a parameter, the command line); 3 an FMU failed during
+//! Exit codes: 0 success; 1 an I/O failure (results cannot be written, or the output is refused
+//! by the output policy, [`orchestrator::outdir`] and [`orchestrator::outfile`]); 2 bad input (a
+//! file, the system description, a connection, a parameter, the command line, a run over
+//! `--max-output-size`); 3 an FMU failed during
 //! the run (results recorded until then are kept); 130 `run` or `simulate` interrupted by
 //! Ctrl-C (SIGINT), SIGTERM or SIGHUP: the run stops at the next step boundary and keeps the
 //! results recorded until then (a second signal quits at once, leaving `results.csv.partial`).

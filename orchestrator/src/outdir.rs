@@ -6,6 +6,7 @@
 //! | two runs into one directory | the first takes an exclusive lock on `DIR/.orchestrator.lock` (an OS file lock: released when the process ends, even by a crash); the second stops with a message naming the directory |
 //! | stale outputs | the files the previous run's `manifest.json` lists (plain names inside `DIR`, regular files only) are removed before the new run writes, so no `metrics.json` of another run sits beside a new `results.csv` |
 //! | special files | an output path that is a symlink, FIFO, device or directory is refused, never replaced |
+//! | a refused or failed run | a directory the run created and wrote no results into is removed again (no empty `--out` left) |
 //! | traceability | `DIR/manifest.json`: program and version, command line, every `--set`, each FMU's path, GUID and SHA-256, the time (UTC) and the files written |
 
 use serde::{Deserialize, Serialize};
@@ -28,6 +29,9 @@ pub struct OutputDir {
     _lock: File,
     /// What [`OutputDir::hold`] wrote: its files are the run's outputs.
     manifest: Option<Manifest>,
+    /// The directory did not exist before: a run that wrote nothing removes it again, so a
+    /// refused run leaves no empty `--out` behind.
+    created: bool,
 }
 
 impl Drop for OutputDir {
@@ -43,6 +47,10 @@ impl Drop for OutputDir {
             let _ = std::fs::remove_file(self.dir.join(MANIFEST));
         }
         let _ = std::fs::remove_file(self.dir.join(LOCK));
+        if self.created && !wrote {
+            // Fails, as it should, if anything else is in it.
+            let _ = std::fs::remove_dir(&self.dir);
+        }
     }
 }
 
@@ -86,6 +94,7 @@ impl OutputDir {
                 ),
             ));
         }
+        let created = !dir.exists();
         std::fs::create_dir_all(dir).map_err(|e| named("create the directory", e))?;
         let lock_path = dir.join(LOCK);
         refuse_special(&lock_path)?;
@@ -113,6 +122,7 @@ impl OutputDir {
             dir: dir.to_path_buf(),
             _lock: lock,
             manifest: None,
+            created,
         };
         out.remove_stale()?;
         Ok(out)

@@ -5,9 +5,9 @@
 //!
 //! Input: a table with a `time` column at a constant step and the columns `speed` (or
 //! `forward_speed`), `ws_acc_y`, `ws_yaw_rate` and `frame_acc_y`, each optionally prefixed by a
-//! component name (`vehicle.ws_acc_y`). Row `k` holds the samples at the end of the step that
-//! ends at `time[k]`; a first row at the start time with the initial values (as `results.csv`
-//! has) is used only for its time. Output columns: `time`, `distance`, `alignment_filtered`,
+//! component name (`vehicle.ws_acc_y`). Every row is a sample, the first one too (the recording
+//! format, docs/recordings.md: a row per sample; a run's `results.csv` starts with the sensors'
+//! initial values, also a sample); the output has a row per input row. Output columns: `time`, `distance`, `alignment_filtered`,
 //! `alignment_filtered_std`, `alignment_smoothed`, `alignment_smoothed_std` (metres); with a
 //! learned smoother (`--learned FILE`, from `alignment-studies learn`) also `alignment_learned`
 //! and `alignment_hybrid`, computed on its 1 m grid and interpolated linearly to every row.
@@ -15,7 +15,12 @@
 use crate::study::learned::LearnedSmoother;
 use crate::study::metrics::resample;
 use fmu_estimator::offline::{self, Processed, Sample};
+use orchestrator::outfile::{self, Replace};
 use orchestrator::record::push_f64;
+
+/// How every CSV this command writes begins: an existing file that starts so was written by
+/// it, and is replaced without `--force` ([`orchestrator::outfile`]).
+pub const CSV_MARK: &[u8] = b"time,distance,alignment_filtered,alignment_filtered_std,";
 use std::path::Path;
 
 /// Reads the samples and the step from a CSV file.
@@ -26,8 +31,11 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
             .map_err(|e| format!("{}: {e}", path.display()))
     };
     let time = find(&["time"])?;
-    if time.len() < 3 {
-        return Err(format!("{}: fewer than 3 rows", path.display()));
+    if time.len() < 2 {
+        return Err(format!(
+            "{}: fewer than 2 rows (the step is read from the time column)",
+            path.display()
+        ));
     }
     let h = time[1] - time[0];
     if !(h > 0.0) {
@@ -50,9 +58,8 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String>
     let acc = find(&["ws_acc_y"])?;
     let yaw = find(&["ws_yaw_rate"])?;
     let frame = find(&["frame_acc_y"])?;
-    // A first row at the start time holds initial values, not the end of a step.
-    let samples = Sample::from_columns(&speed[1..], &acc[1..], &yaw[1..], &frame[1..]);
-    Ok((time[1..].to_vec(), h, samples))
+    let samples = Sample::from_columns(speed, acc, yaw, frame);
+    Ok((time.to_vec(), h, samples))
 }
 
 /// The output CSV text, numbers written as in `results.csv` ([`orchestrator::record`]); `learned`, if
@@ -122,29 +129,45 @@ fn learned_columns(
     // runaway file.
     let text = fmi_abi::resource::read_text(file, "learned smoother file", 1 << 30)?;
     let l = LearnedSmoother::from_json(&text, file)?;
+    // A standing start (a run's results.csv begins with the vehicle's outputs before its first
+    // step, at speed 0) gets no learned estimate (NaN): the taps hold the dynamics at the one
+    // speed they were fitted at. A stop later in the record is refused by the speed check.
+    let first = samples
+        .iter()
+        .position(|s| s.speed > 0.0)
+        .unwrap_or(samples.len());
+    let (samples, moving) = (&samples[first..], &distance[first..]);
     let kalman = l.kalman(samples, h)?;
     let (learned, hybrid) = l
         .apply(samples, h, &kalman)
         .map_err(|e| format!("{}: {e}", file.display()))?;
     // From its grid (every `decimation`-th sample) to every sample, linearly in distance.
-    let grid: Vec<f64> = distance.iter().step_by(l.decimation).copied().collect();
+    let grid: Vec<f64> = moving.iter().step_by(l.decimation).copied().collect();
+    let standing = vec![f64::NAN; first];
     Ok((
-        resample(&grid, &learned, distance),
-        resample(&grid, &hybrid, distance),
+        [standing.clone(), resample(&grid, &learned, moving)].concat(),
+        [standing, resample(&grid, &hybrid, moving)].concat(),
     ))
 }
 
-/// Filters and smooths `input`, writing `output` (through a temporary file renamed at the end);
-/// with `learned`, also the learned smoother saved in that file.
+/// Filters and smooths `input`, writing `output` by the output policy ([`outfile`]: checked
+/// before the recording is read, written through a temporary file renamed into place); with
+/// `learned`, also the learned smoother saved in that file. A refused or failed write is
+/// [`crate::Error::Io`] (exit 1), bad input [`crate::Error::Input`] (exit 2).
 pub fn smooth_file(
     input: &Path,
     output: &Path,
     overrides: &[(String, String)],
     calibration: Option<&Path>,
     learned: Option<&Path>,
-) -> Result<Processed, String> {
-    // Refused before any work: a symlink, FIFO or device given as --out is never replaced.
-    orchestrator::outdir::refuse_special(output).map_err(|e| e.to_string())?;
+    replace: Replace,
+) -> Result<Processed, crate::Error> {
+    let mut inputs = vec![input];
+    inputs.extend(calibration);
+    inputs.extend(learned);
+    // Refused before any work: an input, a symlink, FIFO or device, someone else's file.
+    let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
+    outfile::check(output, &inputs, replace).map_err(refused)?;
     let (time, h, samples) = read_samples(input)?;
     let provenance = serde_json::json!({
         "command": "alignment-studies smooth",
@@ -161,36 +184,39 @@ pub fn smooth_file(
             eprintln!("warning: {m}");
         }
     }
+    // Below min_speed the estimate is held at its start: a recording with no sample above it
+    // (a standing train, a speed column in km/h divided wrongly) would give all zeros.
+    if !samples
+        .iter()
+        .any(|s| s.speed.is_finite() && s.speed >= config.min_speed)
+    {
+        return Err(crate::Error::Input(format!(
+            "{}: no row at a speed of at least {} m/s (min_speed), where the estimator works: the estimate would be all zeros; nothing written",
+            input.display(),
+            config.min_speed
+        )));
+    }
     let out = offline::process(&config, h, &samples, true)?;
     let learned = learned
         .map(|f| learned_columns(f, &samples, h, &out.distance))
         .transpose()?;
-    // Per process: two commands writing the same output never share a temporary file.
-    let parquet = orchestrator::parquet::is_parquet(output);
-    let ext = if parquet { "parquet" } else { "csv" };
-    let tmp = output.with_extension(format!("{ext}.{}.partial", std::process::id()));
-    if parquet {
+    // Through a temporary file in the output's directory, renamed into place.
+    let written = if orchestrator::parquet::is_parquet(output) {
         let (names, columns) = output_columns(&time, &out, learned.as_ref());
         let units: Vec<String> = names
             .iter()
             .map(|n| if n == "time" { "s" } else { "m" }.to_string())
             .collect();
         let cols: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
-        orchestrator::parquet::write(&tmp, &names, &units, &cols, &provenance.to_string())
-            .inspect_err(|_| {
-                let _ = std::fs::remove_file(&tmp);
-            })?;
+        outfile::write(output, &inputs, replace, |tmp| {
+            orchestrator::parquet::write(tmp, &names, &units, &cols, &provenance.to_string())
+                .map_err(std::io::Error::other)
+        })
     } else {
-        std::fs::write(&tmp, to_csv(&time, &out, learned.as_ref()))
-            .map_err(|e| format!("cannot write {}: {e}", tmp.display()))?;
-    }
-    std::fs::rename(&tmp, output).map_err(|e| {
-        format!(
-            "cannot rename {} to {}: {e}",
-            tmp.display(),
-            output.display()
-        )
-    })?;
+        let text = to_csv(&time, &out, learned.as_ref());
+        outfile::write_bytes(output, &inputs, replace, text.as_bytes())
+    };
+    written.map_err(refused)?;
     Ok(out)
 }
 
@@ -207,15 +233,17 @@ mod tests {
     }
 
     #[test]
-    fn reads_prefixed_columns_and_drops_the_initial_row() {
+    fn reads_prefixed_columns_and_every_row() {
         let p = write(
             "ok",
             "time,vehicle.forward_speed,vehicle.ws_acc_y,vehicle.ws_yaw_rate,vehicle.frame_acc_y\n0,0,0,0,0\n0.001,20,0.1,0.2,0.3\n0.002,20,0.4,0.5,0.6\n",
         );
         let (t, h, s) = read_samples(&p).unwrap();
-        assert_eq!(t, vec![0.001, 0.002]);
+        assert_eq!(t, vec![0.0, 0.001, 0.002], "the first row is a sample too");
+        assert_eq!(s.len(), 3);
         assert!((h - 0.001).abs() < 1e-15);
-        assert_eq!(s[1].ws_yaw_rate, 0.5);
+        assert_eq!(s[0].speed, 0.0);
+        assert_eq!(s[2].ws_yaw_rate, 0.5);
     }
 
     #[test]

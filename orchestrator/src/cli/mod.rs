@@ -19,17 +19,21 @@ use fmi_abi::types::fmi2Status;
 use fmi_import::LogConfig;
 use std::path::{Path, PathBuf};
 
-/// The options every run shares (`run`, `simulate`).
+/// The options every run shares (`run`, `simulate`). Times and sizes are checked as they are
+/// parsed (a negative number is taken as a value, then refused by name), so a bad one stops
+/// the command before anything is read or created.
 #[derive(Args, Clone, Debug)]
 pub struct Common {
-    /// Stop time \[s\] (default: the system's, else the first FMU's default experiment).
-    #[arg(long)]
+    /// Stop time in s (default for `run`: the system's, else the first FMU's default
+    /// experiment; for `simulate`: the input's last time, else the FMU's default experiment).
+    #[arg(long, allow_negative_numbers = true, value_parser = time)]
     pub stop: Option<f64>,
-    /// Communication step \[s\] (default: the system's, else the first FMU's default step).
-    #[arg(long)]
+    /// Communication step in s (default: the system's for `run`, else the (first) FMU's default
+    /// experiment).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub step: Option<f64>,
-    /// Start time \[s\].
-    #[arg(long, default_value_t = 0.0)]
+    /// Start time in s.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = time)]
     pub start: f64,
     /// Output directory for the results (and manifest.json).
     #[arg(long, default_value = "out")]
@@ -41,12 +45,17 @@ pub struct Common {
     /// Record only these variables (component.variable, repeatable or comma-separated); default: every output.
     #[arg(long, value_delimiter = ',')]
     pub record: Vec<String>,
-    /// Recording interval \[s\], a whole number of steps (default: every step).
-    #[arg(long)]
+    /// Recording interval in s, a whole number of steps (default: every step).
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub interval: Option<f64>,
     /// Do not write results.
     #[arg(long)]
     pub no_record: bool,
+    /// The largest results file a run may write, estimated before it starts (rows x columns x
+    /// 20 bytes for CSV, 8 for Parquet), e.g. 50G; a larger run is refused, as is one the free
+    /// disk space cannot hold.
+    #[arg(long, value_name = "SIZE", default_value = "10G", value_parser = crate::record::size::parse)]
+    pub max_output_size: u64,
     /// Lowest FMU log status shown.
     #[arg(long, value_enum, default_value_t = LogLevel::Warning)]
     pub log_level: LogLevel,
@@ -56,6 +65,24 @@ pub struct Common {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// A time in s: a finite number, not negative.
+pub fn time(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(_) => Err("expected a finite time in s, not negative".into()),
+        Err(_) => Err("expected a number of seconds".into()),
+    }
+}
+
+/// A duration in s: a finite number above zero.
+pub fn positive(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Ok(_) => Err("expected a finite number of seconds above zero".into()),
+        Err(_) => Err("expected a number of seconds".into()),
+    }
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -125,6 +152,7 @@ impl Common {
             interval: self.interval,
             progress: !self.quiet,
             log: self.log_config(),
+            max_output: self.max_output_size,
             ..RunOptions::new(self.start, stop, step)
         })
     }
@@ -146,6 +174,8 @@ impl Common {
         fmus: &[(&str, &Path)],
         settings: &[String],
     ) -> Result<Option<OutputDir>, RunError> {
+        // Before the directory is made: a run refused for its times leaves nothing behind.
+        crate::master::check_grid(opts)?;
         if self.no_record {
             return Ok(None);
         }

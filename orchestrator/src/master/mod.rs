@@ -32,6 +32,12 @@ pub use algorithm::Algorithm;
 pub use error::RunError;
 pub use table::Table;
 
+/// Checks the options' times and step (finite, a positive step, stop not before start, a
+/// whole number of steps), as a run does first: a command calls it before it creates anything.
+pub fn check_grid(opts: &RunOptions) -> Result<(), RunError> {
+    grid::Grid::new(opts).map(|_| ())
+}
+
 use crate::resolve::{Plan, resolve};
 use crate::system::{Endpoint, System, Value};
 use fmi_import::{Fmu, LogConfig};
@@ -103,6 +109,9 @@ pub struct RunOptions {
     /// `run_with_inputs` have none to report to).
     pub progress: bool,
     pub log: LogConfig,
+    /// The largest results file (bytes, estimated before the run) written without refusal
+    /// ([`crate::record::size`]).
+    pub max_output: u64,
 }
 
 impl RunOptions {
@@ -122,6 +131,7 @@ impl RunOptions {
             collect: false,
             progress: false,
             log: LogConfig::default(),
+            max_output: crate::record::size::DEFAULT_LIMIT,
         }
     }
 }

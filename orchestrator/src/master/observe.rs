@@ -187,6 +187,15 @@ impl Results {
         let rec = Recording::new(system, mds, opts.record.as_deref())?;
         let recorder = match &opts.out_dir {
             Some(dir) => {
+                let rows = grid.steps / grid.every + 1;
+                crate::record::size::check(
+                    opts.results.name(),
+                    rows,
+                    rec.columns.len() + 1,
+                    opts.results.is_parquet(),
+                    opts.max_output,
+                    crate::record::size::free_space(dir),
+                )?;
                 let mut r = Recorder::create(dir, &opts.results, &rec.columns, &rec.units)
                     .map_err(|e| {
                         RunError::Io(format!(

@@ -11,6 +11,7 @@
 
 pub mod csv;
 pub mod parquet;
+pub mod size;
 
 pub use csv::{CsvRecorder, push_f64};
 pub use parquet::ParquetRecorder;

@@ -25,7 +25,15 @@ pub struct CalibrateArgs {
     /// Directory for the figure of the identification (model_adjustment.svg).
     #[arg(long, default_value = "out/study")]
     pub plots: PathBuf,
+    /// Replace an existing file at --out that this command did not write (never an input, a
+    /// symlink, a FIFO or a directory).
+    #[arg(long)]
+    pub force: bool,
 }
+
+/// How every calibration file begins ([`crate::study::calibrate::to_toml`]).
+const MARK: &[u8] =
+    b"# Calibration of the AlignmentEstimator FMU, written by `alignment-studies calibrate`.";
 
 /// Checks the settings and the file to write (the shipped calibration only without `--set`),
 /// then identifies, calibrates and tunes ([`crate::report::calibration`]); `log` gets each
@@ -45,5 +53,14 @@ pub fn execute(a: &CalibrateArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             ));
         }
     };
-    crate::report::calibration::calibration(&a.fmus.fmus()?, a.seed, out, &a.plots, log)
+    let inputs = [
+        a.fmus.fmus.vehicle.as_path(),
+        a.fmus.fmus.estimator.as_path(),
+    ];
+    let guard = super::guard(&out, &inputs, a.force, Some(MARK))?;
+    super::check_dir(&a.plots)?;
+    let mut report =
+        crate::report::calibration::calibration(&a.fmus.fmus()?, a.seed, out, &a.plots, log)?;
+    report.guarded.push(guard);
+    Ok(report)
 }

@@ -5,8 +5,24 @@ use super::{Report, StudyArgs, progress_bar};
 use crate::Error;
 pub use crate::report::cases::Group;
 
+/// How every document `--doc` writes begins ([`crate::report::cases::as_document`]).
+const DOC_MARK: &[u8] =
+    b"<!-- Generated: do not edit. Regenerate with `alignment-studies all --doc";
+
 /// Runs the groups' cases with a progress bar; `log` gets the lines worth seeing at once.
 pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Report, Error> {
+    let doc = a
+        .doc
+        .as_deref()
+        .map(|d| {
+            let inputs = [
+                a.fmus.fmus.vehicle.as_path(),
+                a.fmus.fmus.estimator.as_path(),
+            ];
+            super::guard(d, &inputs, a.force, Some(DOC_MARK))
+        })
+        .transpose()?;
+    super::check_dir(&a.out)?;
     let mut report = crate::report::cases::cases(
         &a.fmus.fmus()?,
         &a.evaluation(),
@@ -20,5 +36,6 @@ pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Re
         let text = crate::report::cases::as_document(&report.markdown, &command.join(" "), &a.out);
         report.file(doc.clone(), text);
     }
+    report.guarded.extend(doc);
     Ok(report)
 }

@@ -13,10 +13,12 @@ pub mod variants;
 
 use crate::Error;
 use crate::report::Evaluation;
-pub use crate::report::Report;
+pub use crate::report::{Guard, Report};
 use crate::study::runs::Fmus;
 use clap::Args;
+use orchestrator::outfile::Replace;
 use orchestrator::system::Endpoint;
+use std::path::Path;
 use std::path::PathBuf;
 
 /// The track seed the shipped estimator is identified and calibrated on.
@@ -82,6 +84,10 @@ pub struct StudyArgs {
     /// project's docs/results.md is `alignment-studies all --doc docs/results.md`.
     #[arg(long, value_name = "FILE")]
     pub doc: Option<PathBuf>,
+    /// Replace an existing --doc FILE that this command did not write (never an input, a
+    /// symlink, a FIFO or a directory).
+    #[arg(long)]
+    pub force: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -94,6 +100,36 @@ impl StudyArgs {
             seeds: self.seeds.clone(),
             calibration_seed: self.calibration_seed,
         }
+    }
+}
+
+/// The file `path` checked by the single-file rule ([`orchestrator::outfile`]) before any
+/// work: not one of `inputs`, not a special file, and absent, or starting with `mark` (written
+/// by this command before), or `force`d.
+pub fn guard(
+    path: &Path,
+    inputs: &[&Path],
+    force: bool,
+    mark: Option<&'static [u8]>,
+) -> Result<Guard, Error> {
+    let g = Guard {
+        path: path.to_path_buf(),
+        inputs: inputs.iter().map(|p| p.to_path_buf()).collect(),
+        replace: Replace { force, mark },
+    };
+    g.check()?;
+    Ok(g)
+}
+
+/// A study's output directory checked before any work: it may exist, but not as a file, a
+/// symlink, a FIFO or a device.
+pub fn check_dir(dir: &Path) -> Result<(), Error> {
+    match std::fs::symlink_metadata(dir) {
+        Ok(m) if !m.is_dir() => Err(Error::Io(format!(
+            "--out {}: exists and is not a directory; give a directory",
+            dir.display()
+        ))),
+        _ => Ok(()),
     }
 }
 

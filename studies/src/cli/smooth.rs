@@ -10,8 +10,9 @@ use std::path::PathBuf;
 pub struct SmoothArgs {
     /// The recorded signals: CSV, or Parquet by the .parquet extension.
     pub input: PathBuf,
-    /// The table to write (time, distance, alignment_filtered\[_std\], alignment_smoothed\[_std\]):
-    /// Parquet if it ends in .parquet, else CSV.
+    /// The table to write (time, distance, alignment_filtered and alignment_smoothed, each
+    /// with its _std): Parquet if it ends in .parquet, else CSV. An existing file is replaced
+    /// only if it is an earlier smooth CSV output, or with --force; never the input.
     #[arg(long, default_value = "out/smoothed.csv")]
     pub out: PathBuf,
     /// Set an estimator parameter: name=value (repeatable), e.g. alignment_model=3.
@@ -24,6 +25,10 @@ pub struct SmoothArgs {
     /// alignment_hybrid.
     #[arg(long)]
     pub learned: Option<PathBuf>,
+    /// Replace an existing file at --out that this command did not write (never the input, a
+    /// symlink, a FIFO or a directory).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Filters and smooths the record into `out` ([`crate::smooth::smooth_file`]); the report's
@@ -37,14 +42,21 @@ pub fn execute(a: &SmoothArgs) -> Result<Report, Error> {
                 .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    crate::report::create_parent(&a.out)?;
+    let mut inputs = vec![a.input.as_path()];
+    inputs.extend(a.calibration.as_deref());
+    inputs.extend(a.learned.as_deref());
+    // Checked before the recording is read, and again at the rename.
+    let mark = (!orchestrator::parquet::is_parquet(&a.out)).then_some(crate::smooth::CSV_MARK);
+    let guard = super::guard(&a.out, &inputs, a.force, mark)?;
     let processed = crate::smooth::smooth_file(
         &a.input,
         &a.out,
         &overrides,
         a.calibration.as_deref(),
         a.learned.as_deref(),
+        guard.replace,
     )?;
+
     Ok(Report {
         note: format!(
             "{} samples filtered and smoothed ({} updates skipped); wrote {}",

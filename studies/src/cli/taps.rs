@@ -12,7 +12,7 @@ use std::path::PathBuf;
 pub struct TapsArgs {
     #[command(flatten)]
     pub fmus: StandardFmus,
-    /// Speeds of the bank [m/s].
+    /// Speeds of the bank in m/s.
     #[arg(
         long,
         value_delimiter = ',',
@@ -26,7 +26,7 @@ pub struct TapsArgs {
     /// One set of taps fitted on every condition's runs at once, no contact model.
     #[arg(long)]
     pub pooled: bool,
-    /// Lags of the fixed-lag entries \[m\].
+    /// Lags of the fixed-lag entries in m.
     #[arg(long, value_delimiter = ',', default_value = "10")]
     pub lags: Vec<f64>,
     /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).
@@ -38,14 +38,23 @@ pub struct TapsArgs {
     /// Track seeds the ridge is chosen on (neither the training seed nor an evaluation seed).
     #[arg(long, value_delimiter = ',', default_value = "102,103,104,105,106")]
     pub validation_seeds: Vec<u32>,
-    /// The file to write.
+    /// The file to write (a tap bank written before, such as the shipped one, is replaced).
     #[arg(long, default_value = "fmu-estimator/resources/learned.taps")]
     pub out: PathBuf,
+    /// Replace an existing file at --out that this command did not write (never an input, a
+    /// symlink, a FIFO or a directory).
+    #[arg(long)]
+    pub force: bool,
 }
+
+/// How every tap bank begins (`fmu-estimator/src/learned/bank.rs`).
+const MARK: &[u8] = b"learned-taps ";
 
 /// The fit's options from the command line (the command line goes into the bank's provenance
 /// when they are not the shipped bank's), then the fit ([`crate::report::learned::taps`]).
 pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
+    let inputs = [a.fmus.vehicle.as_path(), a.fmus.estimator.as_path()];
+    let guard = super::guard(&a.out, &inputs, a.force, Some(MARK))?;
     let mut o = Options::shipped();
     o.speeds = a.speeds.clone();
     o.kalker_scales = a.kalker_scales.clone();
@@ -74,5 +83,7 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
     ) {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
-    crate::report::learned::taps(&a.fmus.fmus(), &o, &a.out, log)
+    let mut report = crate::report::learned::taps(&a.fmus.fmus(), &o, &a.out, log)?;
+    report.guarded.push(guard);
+    Ok(report)
 }

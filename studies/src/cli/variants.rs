@@ -18,5 +18,6 @@ pub fn execute(a: &StudyArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             "--set {s}: variants runs the estimator offline with its shipped calibration and the ML95 vehicle; --set is for calibrate, standard, robustness, resonance and all"
         )));
     }
+    super::check_dir(&a.out)?;
     crate::report::variants::variants(&a.fmus.fmus.fmus(), &a.evaluation(), &a.out, log)
 }

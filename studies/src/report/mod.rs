@@ -11,6 +11,7 @@ pub mod standard;
 pub mod variants;
 
 use crate::Error;
+use orchestrator::outfile::{self, Replace};
 use std::path::{Path, PathBuf};
 
 /// What a study produces. Nothing is written until [`Report::write`], except the figures,
@@ -25,6 +26,28 @@ pub struct Report {
     pub figures: Vec<PathBuf>,
     /// The closing lines for stderr: time taken, where the report is, why something is missing.
     pub note: String,
+    /// The files given by name on the command line (`--out FILE`, `--doc FILE`), written by
+    /// the single-file rule ([`outfile`]): never an input, replaced only when marked as this
+    /// command's or with `--force`. The other files are a study's own names in its output
+    /// directory, replaced by name (never through a symlink, FIFO or directory).
+    pub guarded: Vec<Guard>,
+}
+
+/// A file the command line named, with what may be replaced there.
+#[derive(Debug, Clone)]
+pub struct Guard {
+    pub path: PathBuf,
+    /// The command's inputs: never replaced.
+    pub inputs: Vec<PathBuf>,
+    pub replace: Replace<'static>,
+}
+
+impl Guard {
+    /// The check the command runs before any work ([`outfile::check`]).
+    pub fn check(&self) -> Result<(), Error> {
+        let inputs: Vec<&Path> = self.inputs.iter().map(PathBuf::as_path).collect();
+        outfile::check(&self.path, &inputs, self.replace).map_err(|e| Error::Io(e.to_string()))
+    }
 }
 
 impl Report {
@@ -33,11 +56,22 @@ impl Report {
         self.files.push((path, contents.into()));
     }
 
-    /// Writes the files (creating their directories), prints the Markdown, then the note.
+    /// Writes the files (creating their directories, each through a temporary file renamed
+    /// into place), prints the Markdown, then the note.
     pub fn write(&self) -> Result<(), Error> {
         for (path, contents) in &self.files {
-            create_parent(path)?;
-            std::fs::write(path, contents).map_err(|e| Error::write(path, e))?;
+            let (inputs, replace) = match self.guarded.iter().find(|g| &g.path == path) {
+                Some(g) => (g.inputs.iter().map(PathBuf::as_path).collect(), g.replace),
+                None => (
+                    vec![],
+                    Replace {
+                        force: true,
+                        mark: None,
+                    },
+                ),
+            };
+            outfile::write_bytes(path, &inputs, replace, contents)
+                .map_err(|e| Error::Io(e.to_string()))?;
         }
         if !self.markdown.is_empty() {
             println!("{}", self.markdown.trim_end());
