@@ -44,6 +44,27 @@ from .recordings import RecordingError, read_recording, read_table
 
 BANDS = {"d1": (3.0, 25.0), "d2": (25.0, 70.0)}
 
+#: The estimate's variance in each band as a fraction of the truth's, for the average of ``n``
+#: passes: ``GAIN2 + SHARED + INDEPENDENT / n``. ``GAIN2`` is the square of the in-band gain
+#: (the regression slope of the estimate on the truth: the learned filter shrinks its estimate,
+#: as a minimum-error filter does where the signal-to-noise ratio is finite), ``SHARED`` the
+#: error every pass over a track shares, ``INDEPENDENT`` the one averaging removes. Measured on
+#: the calibration and validation track seeds 101-106 (``tests/fleet_gain.py``, 20 passes each;
+#: docs/python.md); the segment SDs are divided by its square root.
+SD_MODEL = {"d1": (0.939, 0.0125, 0.0216), "d2": (0.952, 0.0022, 0.0016)}
+
+
+def sd_factor(band: str, passes) -> np.ndarray:
+    """SD(estimate) / SD(truth) expected in ``band`` for an average of ``passes`` passes."""
+    gain2, shared, independent = SD_MODEL[band]
+    return np.sqrt(gain2 + shared + independent / np.maximum(np.asarray(passes, dtype=np.float64), 1.0))
+
+
+def corrected(sds: Mapping[str, np.ndarray], passes) -> dict[str, np.ndarray]:
+    """Segment SDs of an average of ``passes`` passes (per segment, or one number) divided by
+    :func:`sd_factor`: unbiased estimates of the track's SDs."""
+    return {k: (x / sd_factor(k, passes) if k in SD_MODEL else x) for k, x in sds.items()}
+
 
 @dataclass
 class Options:
@@ -78,7 +99,7 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
         raise RecordingError(f"{path}: covers {position[-1] - position[0]:.0f} m, too short for the D2 band")
     bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
     count = np.isfinite(bands["d1"]).astype(np.float64)
-    return Coverage(first, bands, count), segment_sds(first, bands, options)
+    return Coverage(first, bands, count), corrected(segment_sds(first, bands, options), 1)
 
 
 def banded(aligned: np.ndarray, options: Options) -> dict[str, np.ndarray]:
@@ -225,8 +246,9 @@ def write(files, total: Coverage, sds, options: Options, out: Path, truth, plot:
             "end_m": (np.arange(n_segments) + 1) * options.segment}
     per_pass = {k: np.vstack([pad(s[k]) for s in sds]) for k in BANDS}
     rows["passes"] = np.isfinite(per_pass["d1"]).sum(axis=0)
+    averaged = corrected({k: pad(averaged[k]) for k in BANDS}, rows["passes"])
     for k in BANDS:
-        rows[f"{k}_sd_mm"] = pad(averaged[k])
+        rows[f"{k}_sd_mm"] = averaged[k]
         # Segments no pass covers: numpy's 'mean of empty slice' warnings, NaN as wanted.
         with np.errstate(invalid="ignore"), warnings.catch_warnings(action="ignore", category=RuntimeWarning):
             rows[f"{k}_pass_sd_mean_mm"] = np.nanmean(per_pass[k], axis=0)
