@@ -758,7 +758,7 @@ mod tests {
     #[test]
     fn a_run_continued_in_pieces_equals_one_run() {
         let speed = |k: usize| {
-            if (k / 700) % 3 == 0 {
+            if (k / 700).is_multiple_of(3) {
                 0.0
             } else {
                 5.0 + 0.01 * (k % 700) as f64
