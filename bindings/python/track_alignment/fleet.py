@@ -11,7 +11,8 @@ Steps, each recording one task:
 3. band-pass it in EN 13848 D1 (3-25 m) and D2 (25-70 m) with the metrics' zero-phase
    Butterworth filter and drop ``trim`` metres at both ends of the pass;
 4. per segment (``segment`` metres, 200 by default): the pass's standard deviation in each
-   band, where the pass covers at least half the segment.
+   band, where the pass covers at least half the segment, divided by the SD ratio the
+   estimate's in-band gain and error give (:data:`SD_MODEL`; the average's likewise).
 
 The passes' band-passed estimates are summed in a fixed binary tree of tasks (so the result
 does not depend on the number of workers or the order tasks finish), and averaged: averaging
