@@ -31,7 +31,7 @@ Checks, for the default estimator and for the paper's time-varying Kalman filter
 Length: `SOAK_HOURS` (default 1, the CI run). The 24-hour run, whose figures are in
 docs/reliability.md:
 
-    SOAK_HOURS=24 XTASK_FMU_DIR=target/fmu .venv/bin/python -m pytest tests/test_soak.py -s
+    SOAK_HOURS=24 XTASK_FMU_DIR=target/fmu .venv/bin/python -m pytest tests/test_soak.py -s -k "test_soak["
 """
 
 from __future__ import annotations
