@@ -1,7 +1,8 @@
 """The fleet pipeline (track_alignment.fleet) on a synthetic fleet of the vehicle FMU: 50 passes
 over one track (seed 1, 1 km) at speeds of 15-25 m/s, with new and worn contact (Kalker 100 and
-75 %). Oracles: the track's true alignment processed the same way; the same result from 1 and 2
-Dask workers; pyarrow reading the recordings back."""
+75 %), and 10 passes over each of four more held-out tracks (seeds 2-5). Oracles: the tracks'
+true alignment processed the same way; the same result from 1 and 2 Dask workers; pyarrow
+reading the recordings back."""
 
 from __future__ import annotations
 
@@ -18,6 +19,12 @@ fleet = pytest.importorskip("track_alignment.fleet", reason="the bindings are bu
 from track_alignment import recordings, synthetic  # noqa: E402
 
 PASSES = 50
+#: The stated tolerance (docs/python.md): every segment's D1 and D2 SD, of the average of the
+#: passes, within this fraction of the truth's.
+TOLERANCE = 0.05
+#: Held-out track seeds besides 1, with fewer passes each (the error of the average is mostly
+#: the one every pass shares: 10 passes show it).
+MORE_SEEDS, MORE_PASSES = (2, 3, 4, 5), 10
 
 
 @pytest.fixture(scope="module")
@@ -45,6 +52,10 @@ def test_one_and_two_workers_give_identical_segment_tables(fleet_dir, tmp_path):
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "one" / "segments.parquet"), one, check_exact=True)
     assert len(pd.read_parquet(tmp_path / "one" / "passes.parquet")) == PASSES * 5
     assert (tmp_path / "one" / "map.png").stat().st_size > 10_000
+    # The table's SDs are the corrected ones (fleet.SD_MODEL): within the stated tolerance of
+    # the truth's.
+    for k in fleet.BANDS:
+        assert np.all(np.abs(one[f"{k}_sd_mm"] / one[f"{k}_truth_sd_mm"] - 1) < TOLERANCE), one
 
 
 def first_passes(coverages, n: int):
@@ -55,10 +66,11 @@ def first_passes(coverages, n: int):
 
 
 def segment_errors(coverages, sds_truth, options, n: int) -> dict[str, np.ndarray]:
-    """Relative error per segment of the SD of the first `n` passes' average."""
+    """Relative error per segment of the SD of the first `n` passes' average, with the
+    pipeline's correction for the estimate's in-band gain (fleet.SD_MODEL)."""
     total = first_passes(coverages, n)
     mean = {k: np.where(total.count > 0, x / np.maximum(total.count, 1), np.nan) for k, x in total.bands.items()}
-    sds = fleet.segment_sds(total.start, mean, options)
+    sds = fleet.corrected(fleet.segment_sds(total.start, mean, options), n)
     m = min(len(sds["d1"]), len(sds_truth["d1"]))
     return {k: sds[k][:m] / sds_truth[k][:m] - 1.0 for k in fleet.BANDS}
 
@@ -71,10 +83,9 @@ def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fle
     curve = {n: segment_errors(coverages, truth, options, n) for n in (1, 5, 50)}
     rms = {n: {k: float(np.sqrt(np.nanmean(e[k] ** 2))) for k in e} for n, e in curve.items()}
     print("rms relative error of the segment SDs by number of passes:", rms)
-    # Stated tolerance (docs/python.md, "The fleet pipeline"): with 50 passes every segment's D1 SD within 5 % of the
-    # truth's and D2 within 10 % (the learned estimator's D2 amplitude is about 5 % low).
-    assert np.nanmax(np.abs(curve[50]["d1"])) < 0.05, curve[50]
-    assert np.nanmax(np.abs(curve[50]["d2"])) < 0.10, curve[50]
+    # Stated tolerance (docs/python.md), for the average of the 50 passes.
+    for k in fleet.BANDS:
+        assert np.nanmax(np.abs(curve[50][k])) < TOLERANCE, (k, curve[50][k])
     # The pipeline's average is the passes' mean, against numpy's on the stacked passes.
     total = first_passes(coverages, len(coverages))
     stacked = np.full((len(coverages), len(total.count)), np.nan)
@@ -89,6 +100,36 @@ def test_segment_sds_agree_with_the_truth_and_the_average_is_the_passes_mean(fle
     # 5 or 50 passes moves the segment SDs' error by a fraction of a percent.
     signal = {n: d1_signal_error(coverages, fleet_dir / "truth.parquet", options, n) for n in (1, 5, 50)}
     print("rms D1 error of the passes' average against the truth [mm]:", signal)
+
+
+@pytest.fixture(scope="module")
+def more_fleets(tmp_path_factory):
+    out = {}
+    for seed in MORE_SEEDS:
+        out[seed] = tmp_path_factory.mktemp(f"fleet{seed}")
+        synthetic.synthesize(out[seed], packaged_fmus()["RailVehicle"], passes=MORE_PASSES, track_seed=seed,
+                             length=1000.0, seed=seed)
+    return out
+
+
+def test_segment_sds_agree_with_the_truth_on_more_track_seeds(more_fleets):
+    """The accuracy claim on four more held-out track seeds (their own speeds), 10 passes each:
+    every segment's corrected D1 and D2 SD within the tolerance, and not all on one side."""
+    options = fleet.Options()
+    errors = {k: [] for k in fleet.BANDS}
+    for seed, d in more_fleets.items():
+        coverages = [fleet.estimate_pass(f, options)[0] for f in fleet.expand([d])]
+        truth = fleet.truth_sds(d / "truth.parquet", options)
+        e = segment_errors(coverages, truth, options, MORE_PASSES)
+        for k in fleet.BANDS:
+            errors[k].extend(e[k][np.isfinite(e[k])])
+    print("segment SD errors, seeds", MORE_SEEDS, {k: np.round(np.array(v) * 100, 2).tolist() for k, v in errors.items()})
+    for k, v in errors.items():
+        v = np.array(v)
+        assert len(v) == 5 * len(MORE_SEEDS)
+        assert np.max(np.abs(v)) < TOLERANCE, (k, v)
+        # Unbiased: the old SDs were low in 36 of 40 segment values.
+        assert 0.2 < np.mean(v < 0) < 0.8, (k, v)
 
 
 def d1_signal_error(coverages, truth_file, options, n: int) -> float:

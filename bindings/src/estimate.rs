@@ -2,17 +2,30 @@
 
 use crate::convert::{bad, slice};
 use fmi_abi::variables::Start;
-use fmu_estimator::offline::{self, Columns, Processed};
+use fmu_estimator::offline::{self, Columns, CovarianceCheck, Processed, Resume};
 use fmu_estimator::variables::VARIABLES;
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLike1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
+/// Where a call of `estimate` stopped (returned as `state`): the filters and the distance,
+/// with the settings, calibration and step they were made with. Passed as `resume`, the next
+/// call continues as if its samples had followed in the same call: a recording longer than
+/// memory, or a day-long soak, goes through in pieces.
+#[pyclass(module = "track_alignment._native", frozen)]
+pub struct EstimatorState {
+    resume: Resume,
+    /// The settings as `(name, text)`, sorted: a dictionary in another order is the same.
+    settings: Vec<(String, String)>,
+    calibration: Option<PathBuf>,
+    step: f64,
+}
+
 /// Estimates the lateral alignment from recorded sensor signals, exactly as the estimator FMU
 /// does when stepped every `step` seconds with these samples (bit-equal outputs).
 #[pyfunction]
-#[pyo3(signature = (speed, ws_acc_y, ws_yaw_rate, frame_acc_y, *, step, ws_roll_rate=None, settings=None, calibration=None, smooth=false))]
+#[pyo3(signature = (speed, ws_acc_y, ws_yaw_rate, frame_acc_y, *, step, ws_roll_rate=None, settings=None, calibration=None, smooth=false, check_covariance=false, resume=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate<'py>(
     py: Python<'py>,
@@ -25,8 +38,27 @@ pub fn estimate<'py>(
     settings: Option<&Bound<'py, PyDict>>,
     calibration: Option<PathBuf>,
     smooth: bool,
+    check_covariance: bool,
+    resume: Option<PyRef<'py, EstimatorState>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let overrides = crate::convert::settings(settings)?;
+    let mut sorted = overrides.clone();
+    sorted.sort();
+    let start = match &resume {
+        None => None,
+        Some(_) if smooth => {
+            return Err(bad(
+                "smooth=True cannot resume a state: the smoother needs the run from its first sample",
+            ));
+        }
+        Some(r) if r.settings != sorted || r.calibration != calibration || r.step != step => {
+            return Err(bad(format!(
+                "resume: the state was made with settings {:?}, calibration {:?} and step {} s; this call has {:?}, {:?} and {} s",
+                r.settings, r.calibration, r.step, sorted, calibration, step
+            )));
+        }
+        Some(r) => Some(r.resume.clone()),
+    };
     let (v, a, y, f) = (
         slice(&speed),
         slice(&ws_acc_y),
@@ -41,29 +73,75 @@ pub fn estimate<'py>(
         frame_acc_y: &f,
         ws_roll_rate: roll.as_deref(),
     };
-    let (out, lag) = py
-        .detach(|| run(&overrides, calibration.as_deref(), step, &columns, smooth))
+    let how = How {
+        smooth,
+        check: check_covariance,
+        start,
+    };
+    let (mut out, lag, end) = py
+        .detach(|| run(&overrides, calibration.as_deref(), step, &columns, how))
         .map_err(bad)?;
-    outputs(py, out, lag)
+    let covariance = out.covariance.take();
+    let d = outputs(py, out, lag)?;
+    if let Some(c) = covariance {
+        d.set_item("covariance", covariance_dict(py, &c)?)?;
+    }
+    if let Some(resume) = end {
+        let state = EstimatorState {
+            resume,
+            settings: sorted,
+            calibration,
+            step,
+        };
+        d.set_item("state", Py::new(py, state)?)?;
+    }
+    Ok(d)
+}
+
+/// How `estimate` runs: with the smoother, checking the covariance, from a saved state.
+struct How {
+    smooth: bool,
+    check: bool,
+    start: Option<Resume>,
+}
+
+/// The covariance check as a dictionary of its fields.
+fn covariance_dict<'py>(py: Python<'py>, c: &CovarianceCheck) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("steps", c.steps)?;
+    d.set_item("not_positive_definite", c.not_positive_definite)?;
+    d.set_item("eigen_steps", c.eigen_steps)?;
+    d.set_item("min_eigenvalue", c.min_eigenvalue)?;
+    d.set_item("min_relative", c.min_relative)?;
+    d.set_item("max_asymmetry", c.max_asymmetry)?;
+    Ok(d)
 }
 
 /// The FMU's configuration and learned filter for `overrides`, run over `columns`; also the
-/// learned filter's lag (for `distance_lagged`).
+/// learned filter's lag (for `distance_lagged`) and, without the smoother, where the run
+/// stopped.
 fn run(
     overrides: &[(String, String)],
     calibration: Option<&std::path::Path>,
     step: f64,
     columns: &Columns,
-    smooth: bool,
-) -> Result<(Processed, f64), String> {
+    how: How,
+) -> Result<(Processed, f64, Option<Resume>), String> {
     let values = offline::settings(overrides)?;
     let (config, _notes) = offline::config(&values, calibration)?;
     let learned = offline::learned(&values)?;
     let lag = learned.as_ref().map_or(0.0, |l| l.lag());
-    Ok((
-        offline::process_columns(&config, learned, step, columns, smooth)?,
-        lag,
-    ))
+    if how.smooth {
+        let out = if how.check {
+            offline::process_columns_checked(&config, learned, step, columns, true)?
+        } else {
+            offline::process_columns(&config, learned, step, columns, true)?
+        };
+        return Ok((out, lag, None));
+    }
+    let start = how.start.unwrap_or_else(|| Resume::new(&config, learned));
+    let (out, end) = offline::process_columns_from(&config, start, step, columns, how.check)?;
+    Ok((out, lag, Some(end)))
 }
 
 /// The FMU's output names, as numpy arrays.

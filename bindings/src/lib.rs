@@ -25,6 +25,7 @@ use pyo3::prelude::*;
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate::estimate, m)?)?;
     m.add_function(wrap_pyfunction!(estimate::parameters, m)?)?;
+    m.add_class::<estimate::EstimatorState>()?;
     m.add_function(wrap_pyfunction!(metrics::band_metrics, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::bandpass, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;

@@ -62,6 +62,22 @@ impl Core {
         })
     }
 
+    /// The filter covariance P: whether its Cholesky factorization succeeds (P positive
+    /// definite), its smallest and largest eigenvalue when `eigenvalues` (a 7 x 7
+    /// eigen-decomposition, some microseconds), and its largest asymmetry `max |P - P^T|`:
+    /// what a soak test checks. Not part of the FMU's step.
+    pub fn covariance_check(&self, eigenvalues: bool) -> (bool, Option<(f64, f64)>, f64) {
+        each!(self, e => {
+            let p = &e.filter.p;
+            let definite = p.cholesky().is_some();
+            let eig = eigenvalues.then(|| {
+                let v = p.symmetric_eigenvalues();
+                (v.min(), v.max())
+            });
+            (definite, eig, (p - p.transpose()).amax())
+        })
+    }
+
     pub fn skipped(&self) -> i32 {
         each!(self, e => e.skipped)
     }

@@ -527,4 +527,57 @@ mod tests {
         assert_eq!(e.skipped, 1);
         assert!(e.filter.x.iter().all(|x| x.is_finite()));
     }
+
+    /// Measurement (run by hand, `--release --ignored --nocapture`): the time of one
+    /// predict + update of the paper's filter at 20 m/s: the filter's own (guarded, with the
+    /// NIS), and written out here without the NIS, guarded, the cheap form alone and Joseph's
+    /// form alone, in one run.
+    #[test]
+    #[ignore]
+    fn measure_the_update_forms() {
+        use crate::filter::joseph;
+        let (space, p0) = paper();
+        let d = space.discrete(20.0, 1e-3, Scheme::Taylor2);
+        let n = 2_000_000;
+        let cheap = |p: &SMatrix<f64, 7, 7>, k: &SMatrix<f64, 7, 4>, ph_t: &SMatrix<f64, 7, 4>| {
+            let c = p - k * ph_t.transpose();
+            (c + c.transpose()) * 0.5
+        };
+        for round in 0..3 {
+            for form in ["filter", "guarded", "cheap", "joseph"] {
+                let mut kf = Kalman::new(SVector::<f64, 7>::zeros(), p0);
+                let t = std::time::Instant::now();
+                for k in 0..n {
+                    kf.predict(&d.f, &d.q);
+                    let z = sensors(k as f64 * 1e-3);
+                    if form == "filter" {
+                        kf.update(&d.hm, &r(), &z).unwrap();
+                        continue;
+                    }
+                    let ph_t = kf.p * d.hm.transpose();
+                    let s = d.hm * ph_t + r();
+                    let chol = s.cholesky().unwrap();
+                    let k = chol.solve(&ph_t.transpose()).transpose();
+                    kf.x += k * (z - d.hm * kf.x);
+                    kf.p = match form {
+                        "cheap" => cheap(&kf.p, &k, &ph_t),
+                        "guarded" => {
+                            let c = cheap(&kf.p, &k, &ph_t);
+                            if c.cholesky().is_some() {
+                                c
+                            } else {
+                                joseph(&kf.p, &k, &d.hm, &r())
+                            }
+                        }
+                        _ => joseph(&kf.p, &k, &d.hm, &r()),
+                    };
+                }
+                let ns = t.elapsed().as_secs_f64() / n as f64 * 1e9;
+                println!(
+                    "round {round} {form}: {ns:.0} ns per predict + update (x {:e})",
+                    kf.x[6]
+                );
+            }
+        }
+    }
 }

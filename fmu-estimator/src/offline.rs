@@ -79,6 +79,66 @@ pub struct Processed {
     pub learned: Option<Vec<Estimate>>,
     /// The FMU's `contact_scale` output per sample (with the learned filter).
     pub contact_scale: Option<Vec<f64>>,
+    /// The filter covariance checked after every step (when asked for: an eigen-decomposition
+    /// per step, [`process_columns_checked`]).
+    pub covariance: Option<CovarianceCheck>,
+}
+
+/// The filter covariance `P` over a run, after every filter step (samples below `min_speed`
+/// do not step the filter). P is symmetric positive semi-definite if `max_asymmetry` is 0,
+/// `not_positive_definite` is 0 (or the eigenvalues there are 0 up to rounding) and
+/// `min_relative` is above about `-1e-15` (the eigenvalues' own rounding).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CovarianceCheck {
+    /// Filter steps checked.
+    pub steps: usize,
+    /// Steps after which P's Cholesky factorization failed (P not positive definite).
+    pub not_positive_definite: usize,
+    /// Steps whose eigenvalues were computed: every [`EIGEN_EVERY`]-th, and every one whose
+    /// factorization failed.
+    pub eigen_steps: usize,
+    /// The smallest eigenvalue of P over the eigen steps.
+    pub min_eigenvalue: f64,
+    /// The smallest ratio of P's smallest to its largest eigenvalue over the eigen steps.
+    pub min_relative: f64,
+    /// The largest `|P - P^T|` entry over all steps.
+    pub max_asymmetry: f64,
+}
+
+/// How often [`CovarianceCheck`] computes P's eigenvalues (an eigen-decomposition costs about
+/// ten filter steps; the Cholesky test at every step about a fifth of one).
+pub const EIGEN_EVERY: usize = 1000;
+
+impl CovarianceCheck {
+    fn new() -> CovarianceCheck {
+        CovarianceCheck {
+            steps: 0,
+            not_positive_definite: 0,
+            eigen_steps: 0,
+            min_eigenvalue: f64::INFINITY,
+            min_relative: f64::INFINITY,
+            max_asymmetry: 0.0,
+        }
+    }
+
+    fn add(&mut self, core: &Core) {
+        // NaN propagates (f64::min would drop it): a NaN covariance must fail the check.
+        let worst = |a: f64, b: f64| if b.is_nan() || b < a { b } else { a };
+        let (definite, _, asymmetry) = core.covariance_check(false);
+        let eig = if !definite || self.steps.is_multiple_of(EIGEN_EVERY) {
+            core.covariance_check(true).1
+        } else {
+            None
+        };
+        self.steps += 1;
+        self.not_positive_definite += usize::from(!definite);
+        if let Some((min, max)) = eig {
+            self.eigen_steps += 1;
+            self.min_eigenvalue = worst(self.min_eigenvalue, min);
+            self.min_relative = worst(self.min_relative, min / max);
+        }
+        self.max_asymmetry = -worst(-self.max_asymmetry, -asymmetry);
+    }
 }
 
 /// A recording's signal columns, read where they are: the Python bindings hand numpy's memory
@@ -217,7 +277,15 @@ pub fn process_learned(
     samples: &[Sample],
     smooth: bool,
 ) -> Result<Processed, String> {
-    run(config, learned, h, samples.len(), |k| samples[k], smooth)
+    run(
+        config,
+        learned,
+        h,
+        samples.len(),
+        |k| samples[k],
+        smooth,
+        false,
+    )
 }
 
 /// [`process_learned`] over columns read in place; unequal lengths are refused.
@@ -229,10 +297,24 @@ pub fn process_columns(
     smooth: bool,
 ) -> Result<Processed, String> {
     let n = columns.check()?;
-    run(config, learned, h, n, |k| columns.sample(k), smooth)
+    run(config, learned, h, n, |k| columns.sample(k), smooth, false)
 }
 
-/// The FMU's stepping over `n` samples, the `k`-th given by `sample(k)`.
+/// [`process_columns`] that also checks the filter covariance after every step
+/// ([`Processed::covariance`]); the estimates are the same.
+pub fn process_columns_checked(
+    config: &Config,
+    learned: Option<Learned>,
+    h: f64,
+    columns: &Columns,
+    smooth: bool,
+) -> Result<Processed, String> {
+    let n = columns.check()?;
+    run(config, learned, h, n, |k| columns.sample(k), smooth, true)
+}
+
+/// The FMU's stepping over `n` samples, the `k`-th given by `sample(k)`; with `check`, the
+/// covariance is checked after every filter step.
 fn run(
     config: &Config,
     learned: Option<Learned>,
@@ -240,23 +322,75 @@ fn run(
     n: usize,
     sample: impl Fn(usize) -> Sample,
     smooth: bool,
+    check: bool,
 ) -> Result<Processed, String> {
-    let mut learned = learned;
+    let start = Resume::new(config, learned);
+    Ok(run_from(config, start, h, n, sample, smooth, check)?.0)
+}
+
+/// Where a run stopped: the filter, the learned filter and the distance travelled. A run
+/// continued from it ([`process_columns_from`]) gives the outputs one run over all the samples
+/// would: a recording longer than memory, or a day-long soak, goes through in pieces.
+#[derive(Debug, Clone)]
+pub struct Resume {
+    pub core: Core,
+    pub learned: Option<Learned>,
+    pub distance: f64,
+}
+
+impl Resume {
+    /// The start of a run: the FMU at initialization.
+    pub fn new(config: &Config, learned: Option<Learned>) -> Resume {
+        Resume {
+            core: config.core(),
+            learned,
+            distance: 0.0,
+        }
+    }
+}
+
+/// [`process_columns_checked`] (with `check`) continuing from `start`, without the smoother
+/// (it needs every step from the first); also where the run stopped.
+pub fn process_columns_from(
+    config: &Config,
+    start: Resume,
+    h: f64,
+    columns: &Columns,
+    check: bool,
+) -> Result<(Processed, Resume), String> {
+    let n = columns.check()?;
+    run_from(config, start, h, n, |k| columns.sample(k), false, check)
+}
+
+/// [`run`] from `start`; also where it stopped.
+fn run_from(
+    config: &Config,
+    start: Resume,
+    h: f64,
+    n: usize,
+    sample: impl Fn(usize) -> Sample,
+    smooth: bool,
+    check: bool,
+) -> Result<(Processed, Resume), String> {
+    let Resume {
+        mut core,
+        mut learned,
+        mut distance,
+    } = start;
     let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
     let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
     if !(h > 0.0 && h.is_finite()) {
         return Err(format!("step {h} s must be a positive number"));
     }
-    let mut core: Core = config.core();
     if smooth {
         core.record_history();
     }
     let mut out = Processed::default();
-    let mut distance = 0.0;
     // For each sample, the index of the last filter step at or before it (None before the first).
     let mut step_of: Vec<Option<usize>> = Vec::with_capacity(n);
     let mut steps = 0usize;
     let initial = core.alignment();
+    let mut checked_p = check.then(CovarianceCheck::new);
     for k in 0..n {
         let s = &sample(k);
         crate::plausible::speed(s.speed).map_err(|e| format!("sample {}: {e}", k + 1))?;
@@ -284,6 +418,9 @@ fn run(
             if core.step(speed, h, &z)?.is_err() {
                 out.skipped += 1;
             }
+            if let Some(c) = checked_p.as_mut() {
+                c.add(&core);
+            }
             steps += 1;
             if let Some(l) = learned.as_mut() {
                 let (kalman, kalman_std) = core.alignment();
@@ -305,6 +442,7 @@ fn run(
     }
     out.learned = estimates;
     out.contact_scale = contact;
+    out.covariance = checked_p;
     if smooth {
         let smoothed = core.smoothed_alignment();
         out.smoothed = Some(
@@ -314,7 +452,12 @@ fn run(
                 .collect(),
         );
     }
-    Ok(out)
+    let end = Resume {
+        core,
+        learned,
+        distance,
+    };
+    Ok((out, end))
 }
 
 #[cfg(test)]
@@ -564,5 +707,125 @@ mod tests {
         }
         // The last sample has seen everything in both.
         assert_eq!(smoothed.last(), out.filtered.last());
+    }
+
+    /// Measurement (run by hand): the covariance over a long run at varying speed with stops,
+    /// per estimator and gain. `MEASURE_SECONDS` sets the simulated length.
+    #[test]
+    #[ignore]
+    fn measure_covariance_over_a_long_run() {
+        let seconds: f64 = std::env::var("MEASURE_SECONDS").map_or(600.0, |s| s.parse().unwrap());
+        let n = (seconds * 1000.0) as usize;
+        // 0 -> 40 m/s and back in 200 s cycles, with 20 s stops.
+        let speed = |k: usize| {
+            let t = (k as f64 * 1e-3) % 220.0;
+            if t < 20.0 {
+                0.0
+            } else {
+                40.0 * (std::f64::consts::PI * (t - 20.0) / 200.0).sin()
+            }
+        };
+        let rows = samples(n, speed);
+        for (estimator, gain) in [("1", "1"), ("1", "2"), ("2", "0"), ("2", "1")] {
+            let overrides = vec![
+                ("gain".to_string(), gain.to_string()),
+                ("estimator".to_string(), estimator.to_string()),
+            ];
+            let values = settings(&overrides).unwrap();
+            let (config, _) = config(&values, None).unwrap();
+            let columns = Columns {
+                speed: &rows.iter().map(|s| s.speed).collect::<Vec<_>>(),
+                ws_acc_y: &rows.iter().map(|s| s.ws_acc_y).collect::<Vec<_>>(),
+                ws_yaw_rate: &rows.iter().map(|s| s.ws_yaw_rate).collect::<Vec<_>>(),
+                frame_acc_y: &rows.iter().map(|s| s.frame_acc_y).collect::<Vec<_>>(),
+                ws_roll_rate: None,
+            };
+            let t = std::time::Instant::now();
+            let out =
+                process_columns_checked(&config, learned(&values).unwrap(), 1e-3, &columns, false)
+                    .unwrap();
+            println!(
+                "estimator {estimator} gain {gain}: {:?} in {:.1} s",
+                out.covariance.unwrap(),
+                t.elapsed().as_secs_f64()
+            );
+        }
+    }
+
+    /// A run continued in pieces gives the outputs of one run over all the samples, bit for
+    /// bit, for the learned filter (default) and the paper's time-varying filter, under a speed
+    /// that stops and changes every step; the covariance check covers every step of both.
+    #[test]
+    fn a_run_continued_in_pieces_equals_one_run() {
+        let speed = |k: usize| {
+            if (k / 700).is_multiple_of(3) {
+                0.0
+            } else {
+                5.0 + 0.01 * (k % 700) as f64
+            }
+        };
+        let rows = samples(6000, speed);
+        let col = |f: fn(&Sample) -> f64| rows.iter().map(f).collect::<Vec<_>>();
+        let (v, a, y, f) = (
+            col(|s| s.speed),
+            col(|s| s.ws_acc_y),
+            col(|s| s.ws_yaw_rate),
+            col(|s| s.frame_acc_y),
+        );
+        let columns = |r: std::ops::Range<usize>| Columns {
+            speed: &v[r.clone()],
+            ws_acc_y: &a[r.clone()],
+            ws_yaw_rate: &y[r.clone()],
+            frame_acc_y: &f[r],
+            ws_roll_rate: None,
+        };
+        for overrides in [vec![], vec![("estimator", "1")]] {
+            let overrides: Vec<(String, String)> = overrides
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect();
+            let values = settings(&overrides).unwrap();
+            let (config, _) = config(&values, None).unwrap();
+            let whole = process_columns_checked(
+                &config,
+                learned(&values).unwrap(),
+                1e-3,
+                &columns(0..6000),
+                false,
+            )
+            .unwrap();
+            let mut state = Resume::new(&config, learned(&values).unwrap());
+            let mut pieces = Processed::default();
+            let mut steps = 0;
+            for r in [0..1000, 1000..1001, 1001..4500, 4500..6000] {
+                let (out, end) =
+                    process_columns_from(&config, state, 1e-3, &columns(r), true).unwrap();
+                state = end;
+                pieces.distance.extend(out.distance);
+                pieces.filtered.extend(out.filtered);
+                pieces.learned = match (pieces.learned.take(), out.learned) {
+                    (Some(mut a), Some(b)) => {
+                        a.extend(b);
+                        Some(a)
+                    }
+                    (None, b) => b,
+                    (a, None) => a,
+                };
+                pieces.skipped += out.skipped;
+                steps += out.covariance.unwrap().steps;
+            }
+            assert_eq!(pieces.distance, whole.distance, "{overrides:?}");
+            assert_eq!(pieces.filtered, whole.filtered, "{overrides:?}");
+            assert_eq!(pieces.learned, whole.learned, "{overrides:?}");
+            let check = whole.covariance.unwrap();
+            assert_eq!(steps, check.steps);
+            // The samples that move (2100 of 6000 stand below min_speed).
+            assert_eq!(check.steps, 3900);
+            assert!(
+                check.min_eigenvalue > 0.0 && check.max_asymmetry == 0.0,
+                "{check:?}"
+            );
+            assert_eq!((check.not_positive_definite, check.eigen_steps), (0, 4));
+        }
     }
 }

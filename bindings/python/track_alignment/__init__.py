@@ -3,7 +3,8 @@
 The functions are the toolkit's Rust code (the estimator FMU's, the studies' metrics and the
 co-simulation master), called over numpy arrays without copying them:
 
-- :func:`estimate`: the alignment estimator, bit-equal to the AlignmentEstimator FMU;
+- :func:`estimate`: the alignment estimator, bit-equal to the AlignmentEstimator FMU (its
+  ``state``, an :class:`EstimatorState`, continues a run in a later call);
 - :func:`parameters`: the estimator's parameters, their types and defaults;
 - :func:`band_metrics` and :func:`bandpass`: the EN 13848 band metrics of the studies, and
   :data:`BANDS`, their wavelength edges;
@@ -13,8 +14,18 @@ Bad input raises ``ValueError`` with the library's message; a failed run ``Runti
 The fleet pipeline on Dask is :mod:`track_alignment.fleet`.
 """
 
-from ._native import BANDS, __version__, band_metrics, bandpass, estimate, parameters, simulate
+from ._native import (
+    BANDS,
+    EstimatorState,
+    __version__,
+    band_metrics,
+    bandpass,
+    estimate,
+    parameters,
+    simulate,
+)
 
 __all__ = [
-    "BANDS", "__version__", "band_metrics", "bandpass", "estimate", "parameters", "simulate",
+    "BANDS", "EstimatorState", "__version__", "band_metrics", "bandpass", "estimate", "parameters",
+    "simulate",
 ]

@@ -22,6 +22,8 @@ def estimate(
     settings: Mapping[str, Setting] | None = None,
     calibration: str | PathLike[str] | None = None,
     smooth: bool = False,
+    check_covariance: bool = False,
+    resume: EstimatorState | None = None,
 ) -> dict[str, Any]:
     """The estimator FMU stepped every ``step`` seconds over these samples (sample ``k`` holds
     the speed [m/s] and sensors [m/s2, rad/s] at the end of step ``k``).
@@ -36,7 +38,16 @@ def estimate(
     ``alignment_lagged``, ``alignment_lagged_std``, ``distance_lagged``, ``alignment_kalman``,
     ``contact_scale``, ``distance`` [m]; ``active_estimator`` (int32); with ``smooth``,
     ``alignment_smoothed`` and ``alignment_smoothed_std``; and ``skipped_updates`` (int).
+
+    Without ``smooth``, also ``state``: where the run stopped. Passed as ``resume`` to a call
+    with the same settings, calibration and step, the run continues as if the samples had come
+    in one call (bit-equal outputs). ``check_covariance`` adds ``covariance``: the Kalman
+    filter's P after every filter step, ``{steps, min_eigenvalue, min_relative, max_asymmetry}``
+    (an eigen-decomposition per step: for soak tests).
     """
+
+class EstimatorState:
+    """Where a call of :func:`estimate` stopped (opaque; pass it as ``resume``)."""
 
 def parameters() -> dict[str, tuple[str, Setting, str]]:
     """``{name: (FMI type, default, description)}`` of every estimator parameter."""

@@ -12,7 +12,8 @@ Steps, each recording one task:
 3. band-pass it in EN 13848 D1 (3-25 m) and D2 (25-70 m) with the metrics' zero-phase
    Butterworth filter and drop ``trim`` metres at both ends of the pass;
 4. per segment (``segment`` metres, 200 by default): the pass's standard deviation in each
-   band, where the pass covers at least half the segment.
+   band, where the pass covers at least half the segment, divided by the SD ratio the
+   estimate's in-band gain and error give (:data:`SD_MODEL`; the average's likewise).
 
 The passes' band-passed estimates are summed in a fixed binary tree of tasks (so the result
 does not depend on the number of workers or the order tasks finish), and averaged: averaging
@@ -55,6 +56,27 @@ OUTPUTS = ("segments.parquet", "passes.parquet", "map.png")
 
 BANDS = {"d1": (3.0, 25.0), "d2": (25.0, 70.0)}
 
+#: The estimate's variance in each band as a fraction of the truth's, for the average of ``n``
+#: passes: ``GAIN2 + SHARED + INDEPENDENT / n``. ``GAIN2`` is the square of the in-band gain
+#: (the regression slope of the estimate on the truth: the learned filter shrinks its estimate,
+#: as a minimum-error filter does where the signal-to-noise ratio is finite), ``SHARED`` the
+#: error every pass over a track shares, ``INDEPENDENT`` the one averaging removes. Measured on
+#: the calibration and validation track seeds 101-106 (``tests/fleet_gain.py``, 20 passes each;
+#: docs/python.md); the segment SDs are divided by its square root.
+SD_MODEL = {"d1": (0.939, 0.0125, 0.0216), "d2": (0.952, 0.0022, 0.0016)}
+
+
+def sd_factor(band: str, passes) -> np.ndarray:
+    """SD(estimate) / SD(truth) expected in ``band`` for an average of ``passes`` passes."""
+    gain2, shared, independent = SD_MODEL[band]
+    return np.sqrt(gain2 + shared + independent / np.maximum(np.asarray(passes, dtype=np.float64), 1.0))
+
+
+def corrected(sds: Mapping[str, np.ndarray], passes) -> dict[str, np.ndarray]:
+    """Segment SDs of an average of ``passes`` passes (per segment, or one number) divided by
+    :func:`sd_factor`: unbiased estimates of the track's SDs."""
+    return {k: (x / sd_factor(k, passes) if k in SD_MODEL else x) for k, x in sds.items()}
+
 
 @dataclass
 class Options:
@@ -87,7 +109,7 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
         raise RecordingError(f"{path}: covers {position[-1] - position[0]:.0f} m, too short for the D2 band")
     bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
     count = np.isfinite(bands["d1"]).astype(np.float64)
-    return Coverage(first, bands, count), segment_sds(first, bands, options)
+    return Coverage(first, bands, count), corrected(segment_sds(first, bands, options), 1)
 
 
 def estimate_recording(path: str, settings: Mapping[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
@@ -263,8 +285,9 @@ def write(files, total: Coverage, sds, options: Options, out: OutputDir, truth_s
             "end_m": (np.arange(n_segments) + 1) * options.segment}
     per_pass = {k: np.vstack([pad(s[k]) for s in sds]) for k in BANDS}
     rows["passes"] = np.isfinite(per_pass["d1"]).sum(axis=0)
+    averaged = corrected({k: pad(averaged[k]) for k in BANDS}, rows["passes"])
     for k in BANDS:
-        rows[f"{k}_sd_mm"] = pad(averaged[k])
+        rows[f"{k}_sd_mm"] = averaged[k]
         # Segments no pass covers: numpy's 'mean of empty slice' warnings, NaN as wanted.
         with np.errstate(invalid="ignore"), warnings.catch_warnings(action="ignore", category=RuntimeWarning):
             rows[f"{k}_pass_sd_mean_mm"] = np.nanmean(per_pass[k], axis=0)
