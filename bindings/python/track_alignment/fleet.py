@@ -54,7 +54,9 @@ from .recordings import RecordingError, read_recording, read_table
 COMMAND = "track-alignment-fleet"
 OUTPUTS = ("segments.parquet", "passes.parquet", "map.png")
 
-BANDS = {"d1": (3.0, 25.0), "d2": (25.0, 70.0)}
+# The EN 13848 bands the map reports, with the edges the studies' metrics use (one definition,
+# in Rust: track_alignment.BANDS); keys in lower case, as the output columns are named.
+BANDS = {name.lower(): edges for name, edges in _native.BANDS if name in ("D1", "D2")}
 
 #: The estimate's variance in each band as a fraction of the truth's, for the average of ``n``
 #: passes: ``GAIN2 + SHARED + INDEPENDENT / n``. ``GAIN2`` is the square of the in-band gain
@@ -319,7 +321,8 @@ def plot_map(segments, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    for ax, k, label in zip(axes, BANDS, ("D1 3-25 m", "D2 25-70 m")):
+    for ax, (k, (short, long)) in zip(axes, BANDS.items()):
+        label = f"{k.upper()} {short:g}-{long:g} m"
         ax.errorbar(segments["segment"], segments[f"{k}_pass_sd_mean_mm"], yerr=segments[f"{k}_pass_sd_spread_mm"],
                     fmt="o", color="0.6", capsize=3, label="single passes: mean and spread")
         ax.plot(segments["segment"], segments[f"{k}_sd_mm"], "s-", color="C0", label="average of the passes")
