@@ -103,8 +103,9 @@ fn fleet(vehicle: &Path, fleet_dir: &Path) -> Result<()> {
     // The demo's own directory under target/, made anew: the Python commands refuse to replace
     // files no manifest of theirs lists, and a demo of an older version left such files here.
     if fleet_dir.is_dir() {
-        std::fs::remove_dir_all(fleet_dir)
-            .with_context(|| format!("cannot remove the previous demo's {}", fleet_dir.display()))?;
+        std::fs::remove_dir_all(fleet_dir).with_context(|| {
+            format!("cannot remove the previous demo's {}", fleet_dir.display())
+        })?;
     }
     create_dir(fleet_dir)?;
     python::ensure_venv()?;
