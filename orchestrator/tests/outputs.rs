@@ -245,13 +245,7 @@ fn export_ssp_never_replaces_its_input_or_another_file() {
     assert!(std::fs::read(&notes).unwrap().starts_with(b"PK"));
     // A FIFO: refused at once (never opened, so nothing blocks), even forced.
     let fifo = d.join("fifo.ssp");
-    assert!(
-        Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap()
-            .success()
-    );
+    common::mkfifo(&fifo);
     let o = export(&fifo, &["--force"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("FIFO"), "{}", stderr(&o));

@@ -6,6 +6,8 @@
 //! escape. Linux only (FIFOs, permissions, the shell's ulimit).
 #![cfg(target_os = "linux")]
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -100,11 +102,8 @@ fn smooth_replaces_its_own_output_but_not_another_file_without_force() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(data_rows(&other), 500);
     // No temporary file is left anywhere.
-    let names: Vec<String> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
+    let hidden = common::hidden_files(dir.path());
+    assert!(hidden.is_empty(), "{hidden:?}");
 }
 
 #[test]
@@ -112,13 +111,7 @@ fn smooth_refuses_a_fifo_and_a_read_only_directory_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let rec = recording(dir.path(), 500, 20.0);
     let fifo = dir.path().join("fifo.csv");
-    assert!(
-        Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap()
-            .success()
-    );
+    common::mkfifo(&fifo);
     let o = smooth(&rec, &fifo, &["--force"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("FIFO"), "{}", stderr(&o));
@@ -162,11 +155,8 @@ fn a_full_disk_leaves_the_previous_output_whole_and_no_temporary() {
         before,
         "the previous output is whole"
     );
-    let names: Vec<String> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    assert!(names.iter().all(|n| !n.starts_with('.')), "{names:?}");
+    let hidden = common::hidden_files(dir.path());
+    assert!(hidden.is_empty(), "{hidden:?}");
 }
 
 #[test]

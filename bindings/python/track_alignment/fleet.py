@@ -48,6 +48,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from . import _native
+from ._args import whole
 from ._output import OutputDir, OutputError
 from .recordings import RecordingError, read_recording, read_table
 
@@ -350,16 +351,6 @@ def parse_settings(items: Sequence[str]) -> dict[str, Any]:
     return out
 
 
-def positive_int(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"{n}: at least 1 worker")
-    return n
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """``track-alignment-fleet RECORDINGS... --out DIR``: exit 0 done, 1 the output cannot be
     written, 2 bad input, 3 the pipeline failed, 130 interrupted."""
@@ -373,7 +364,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--segment", type=float, default=200.0, help="segment length in m (200)")
     p.add_argument("--ds", type=float, default=0.25, help="line grid step in m (0.25)")
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: a LocalCluster)")
-    p.add_argument("--workers", type=positive_int, help="LocalCluster workers, 1 or more (default: the machine's cores)")
+    p.add_argument("--workers", type=whole(1), help="LocalCluster workers, 1 or more (default: the machine's cores)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="estimator parameter")
     p.add_argument("--truth", help="a truth file (distance, alignment) to add the true SDs")
     p.add_argument("--no-plot", action="store_true", help="no map.png")

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from . import _native
+from ._args import positive, whole
 from ._output import OutputError, check_file, write_file
 
 RECORDED = ["forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "distance", "alignment"]
@@ -122,26 +123,6 @@ def _named(items: Sequence[str], what: str) -> dict[str, dict[str, str]]:
     return out
 
 
-def _positive_int(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"{n}: at least 1 worker")
-    return n
-
-
-def _positive(text: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (0 < x < float("inf")):
-        raise argparse.ArgumentTypeError(f"{text}: expected a positive number")
-    return x
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """``track-alignment-montecarlo --vehicle-fmu F --seeds 1-100 --out results.parquet``."""
     p = argparse.ArgumentParser(prog="track-alignment-montecarlo", description=__doc__.split("\n\n")[0],
@@ -155,12 +136,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="a vehicle variant by its parameters (default: the FMU's vehicle)")
     p.add_argument("--estimator", action="append", default=[], metavar="LABEL:NAME=VALUE,...",
                    help="an estimator by its parameters (default: 'default:', the FMU's default)")
-    p.add_argument("--stop", type=_positive, default=20.0, help="run length in s (20)")
+    p.add_argument("--stop", type=positive, default=20.0, help="run length in s (20)")
     p.add_argument("--out", required=True, help="results table (.parquet or .csv); an existing file only with --force")
     p.add_argument("--force", action="store_true",
                    help="replace an existing --out file (never an input, a symlink, a FIFO or a directory)")
     p.add_argument("--scheduler", help="address of a running dask scheduler (default: a LocalCluster)")
-    p.add_argument("--workers", type=_positive_int, help="LocalCluster workers, 1 or more (default: the machine's cores)")
+    p.add_argument("--workers", type=whole(1), help="LocalCluster workers, 1 or more (default: the machine's cores)")
     a = p.parse_args(argv)
     client = None
     try:

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _native
+from ._args import positive, whole
 from ._output import OutputDir
 from .recordings import write_parquet
 
@@ -103,28 +104,6 @@ def noise_seed(seed: int, i: int) -> int:
     return 1000 + SEED_STRIDE * seed + i
 
 
-def _int(low: int, high: int):
-    def parse(text: str) -> int:
-        try:
-            n = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if not low <= n <= high:
-            raise argparse.ArgumentTypeError(f"{n}: expected {low}-{high}")
-        return n
-    return parse
-
-
-def _positive(text: str) -> float:
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not (x > 0 and np.isfinite(x)):
-        raise argparse.ArgumentTypeError(f"{text}: expected a positive number")
-    return x
-
-
 def main(argv=None) -> int:
     """``python -m track_alignment.synthetic --vehicle-fmu F --out DIR [--passes N] [--seed S]``."""
     import sys
@@ -136,11 +115,11 @@ def main(argv=None) -> int:
                                        "run), 2 bad input, 3 a vehicle run failed, 130 interrupted. docs/python.md.")
     p.add_argument("--vehicle-fmu", required=True, help="the RailVehicle FMU")
     p.add_argument("--out", required=True, help="output directory; a rerun replaces only the files its manifest.json lists")
-    p.add_argument("--passes", type=_int(1, SEED_STRIDE), default=50, help="number of passes (50)")
-    p.add_argument("--track-seed", type=_int(0, 2**31 - 1), default=1, help="the track's seed, the same for every pass (1)")
-    p.add_argument("--seed", type=_int(0, MAX_SEED), default=0,
+    p.add_argument("--passes", type=whole(1, SEED_STRIDE), default=50, help="number of passes (50)")
+    p.add_argument("--track-seed", type=whole(0, 2**31 - 1), default=1, help="the track's seed, the same for every pass (1)")
+    p.add_argument("--seed", type=whole(0, MAX_SEED), default=0,
                    help=f"seed of the passes' speeds and sensor noise: pass i has noise seed 1000 + {SEED_STRIDE} seed + i (0)")
-    p.add_argument("--length", type=_positive, default=1000.0, help="length of the line in m (1000)")
+    p.add_argument("--length", type=positive, default=1000.0, help="length of the line in m (1000)")
     a = p.parse_args(argv)
     try:
         paths = synthesize(a.out, a.vehicle_fmu, passes=a.passes, track_seed=a.track_seed, length=a.length, seed=a.seed)

@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+#[allow(dead_code)] // a test crate may include this module for its other helpers only
 pub fn fmu(name: &str) -> PathBuf {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     let dir = DIR.get_or_init(|| {
@@ -34,4 +35,22 @@ pub fn fmu(name: &str) -> PathBuf {
         dir
     });
     dir.join(format!("{name}.fmu"))
+}
+
+/// Makes a FIFO at `path`: an output the hostile-input tests must see refused, never opened.
+#[allow(dead_code)] // not every test crate that includes this module writes outputs
+pub fn mkfifo(path: &Path) {
+    let made = std::process::Command::new("mkfifo").arg(path).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", path.display());
+}
+
+/// The hidden files in `dir`: what a write through a temporary file leaves if it does not
+/// clean up (the temporary files are named `.NAME...`).
+#[allow(dead_code)]
+pub fn hidden_files(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect()
 }

@@ -4,4 +4,5 @@
 #[path = "../../../orchestrator/tests/common/mod.rs"]
 mod shared;
 
-pub use shared::fmu;
+#[allow(unused_imports)] // each test crate uses its own part
+pub use shared::{fmu, hidden_files, mkfifo};
