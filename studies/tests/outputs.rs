@@ -279,6 +279,67 @@ fn file_writers_check_out_before_any_work() {
 }
 
 #[test]
+fn study_directories_keep_files_no_study_wrote() {
+    // Someone's report.md (or figure) where a study would write its own: refused before any
+    // work (the absent FMUs would fail with exit 2 after it), unless --force; a name listed in
+    // the directory's record (a study wrote it) passes the check.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fmus = [
+        "--vehicle",
+        "absent-vehicle.fmu",
+        "--estimator",
+        "absent-estimator.fmu",
+    ];
+    let runs: [(&[&str], &str); 4] = [
+        (&["standard", "--quiet", "--out", "study"], "report.md"),
+        (
+            &["robustness", "--quiet", "--out", "study"],
+            "robustness.svg",
+        ),
+        (&["variants", "--out", "study"], "variants.json"),
+        (
+            &["calibrate", "--out", "cal.toml", "--plots", "study"],
+            "model_adjustment.svg",
+        ),
+    ];
+    std::fs::create_dir(d.join("study")).unwrap();
+    for (args, name) in runs {
+        let mine = d.join("study").join(name);
+        std::fs::write(&mine, "mine\n").unwrap();
+        let run = |more: &[&str]| {
+            studies()
+                .current_dir(d)
+                .args(args)
+                .args(fmus)
+                .args(more)
+                .output()
+                .unwrap()
+        };
+        let o = run(&[]);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("no study wrote it"), "{}", stderr(&o));
+        clean(&o);
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), "mine\n");
+        // Forced, the check passes and the absent FMUs stop the work.
+        let o = run(&["--force"]);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        std::fs::remove_file(&mine).unwrap();
+    }
+    // Listed in the record: the check passes without --force.
+    std::fs::write(d.join("study/report.md"), "a study's\n").unwrap();
+    std::fs::write(d.join("study/.alignment-studies-written"), "report.md\n").unwrap();
+    let o = studies()
+        .current_dir(d)
+        .args(["standard", "--quiet", "--out", "study"])
+        .args(fmus)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("absent-"), "{}", stderr(&o));
+}
+
+#[test]
 fn no_help_text_shows_a_rustdoc_escape() {
     let subs = [
         "run",

@@ -3,6 +3,7 @@
 
 use super::{CALIBRATION_SEED, Report, StudyFmus};
 use crate::Error;
+use crate::report::written::StudyDir;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -25,8 +26,8 @@ pub struct CalibrateArgs {
     /// Directory for the figure of the identification (model_adjustment.svg).
     #[arg(long, default_value = "out/study")]
     pub plots: PathBuf,
-    /// Replace an existing file at --out that this command did not write (never an input, a
-    /// symlink, a FIFO or a directory).
+    /// Replace an existing file at --out, or a figure's name in --plots, that this command did
+    /// not write (never an input, a symlink, a FIFO or a directory).
     #[arg(long)]
     pub force: bool,
 }
@@ -58,9 +59,14 @@ pub fn execute(a: &CalibrateArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
         a.fmus.fmus.estimator.as_path(),
     ];
     let guard = super::guard(&out, &inputs, a.force, Some(MARK))?;
-    super::check_dir(&a.plots)?;
+    let plots = StudyDir::check(
+        &a.plots,
+        &[crate::report::calibration::FIGURE.to_string()],
+        a.force,
+    )?;
     let mut report =
         crate::report::calibration::calibration(&a.fmus.fmus()?, a.seed, out, &a.plots, log)?;
     report.guarded.push(guard);
+    report.study_dir = Some(plots);
     Ok(report)
 }

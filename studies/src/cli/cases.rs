@@ -4,6 +4,7 @@
 use super::{Report, StudyArgs, progress_bar};
 use crate::Error;
 pub use crate::report::cases::Group;
+use crate::report::written::StudyDir;
 
 /// How every document `--doc` writes begins ([`crate::report::cases::as_document`]).
 const DOC_MARK: &[u8] =
@@ -22,7 +23,8 @@ pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Re
             super::guard(d, &inputs, a.force, Some(DOC_MARK))
         })
         .transpose()?;
-    super::check_dir(&a.out)?;
+    let names = crate::report::cases::outputs(groups, a.seeds.first().copied().unwrap_or(0));
+    let dir = StudyDir::check(&a.out, &names, a.force)?;
     let mut report = crate::report::cases::cases(
         &a.fmus.fmus()?,
         &a.evaluation(),
@@ -37,5 +39,6 @@ pub fn execute(a: &StudyArgs, groups: &[Group], log: &dyn Fn(&str)) -> Result<Re
         report.file(doc.clone(), text);
     }
     report.guarded.extend(doc);
+    report.study_dir = Some(dir);
     Ok(report)
 }

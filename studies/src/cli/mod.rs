@@ -84,8 +84,8 @@ pub struct StudyArgs {
     /// project's docs/results.md is `alignment-studies all --doc docs/results.md`.
     #[arg(long, value_name = "FILE")]
     pub doc: Option<PathBuf>,
-    /// Replace an existing --doc FILE that this command did not write (never an input, a
-    /// symlink, a FIFO or a directory).
+    /// Replace an existing --doc FILE, or a file of the report's names in --out, that no study
+    /// wrote (never an input, a symlink, a FIFO or a directory).
     #[arg(long)]
     pub force: bool,
     /// No progress bar.
@@ -119,18 +119,6 @@ pub fn guard(
     };
     g.check()?;
     Ok(g)
-}
-
-/// A study's output directory checked before any work: it may exist, but not as a file, a
-/// symlink, a FIFO or a device.
-pub fn check_dir(dir: &Path) -> Result<(), Error> {
-    match std::fs::symlink_metadata(dir) {
-        Ok(m) if !m.is_dir() => Err(Error::Io(format!(
-            "--out {}: exists and is not a directory; give a directory",
-            dir.display()
-        ))),
-        _ => Ok(()),
-    }
 }
 
 /// A progress bar drawn on stderr from a study's [`Progress`](crate::report::cases::Progress)

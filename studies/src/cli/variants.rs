@@ -3,6 +3,7 @@
 
 use super::{Report, StudyArgs};
 use crate::Error;
+use crate::report::written::StudyDir;
 
 /// Refuses `--set` (the comparison runs the estimator offline with its shipped calibration and
 /// the ML95 vehicle), then runs it; `log` gets the choices made on the calibration seed.
@@ -18,6 +19,10 @@ pub fn execute(a: &StudyArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             "--set {s}: variants runs the estimator offline with its shipped calibration and the ML95 vehicle; --set is for calibrate, standard, robustness, resonance and all"
         )));
     }
-    super::check_dir(&a.out)?;
-    crate::report::variants::variants(&a.fmus.fmus.fmus(), &a.evaluation(), &a.out, log)
+    let names = crate::report::variants::OUTPUTS.map(String::from);
+    let dir = StudyDir::check(&a.out, &names, a.force)?;
+    let mut report =
+        crate::report::variants::variants(&a.fmus.fmus.fmus(), &a.evaluation(), &a.out, log)?;
+    report.study_dir = Some(dir);
+    Ok(report)
 }

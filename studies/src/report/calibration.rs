@@ -8,6 +8,9 @@ use crate::study::runs::{self, Fmus};
 use crate::study::{calibrate, identify, plot};
 use std::path::{Path, PathBuf};
 
+/// The identification's figure, in the `--plots` directory.
+pub const FIGURE: &str = "model_adjustment.svg";
+
 /// Identifies `kx, cx, ky, cy`, calibrates Q and R, tunes the virtual measurement and the
 /// 8-state prior, all on track `seed`, and returns the calibration file for `out` with the
 /// figure `plots/model_adjustment.svg`. `log` gets each stage's figures as it ends.
@@ -30,7 +33,7 @@ pub fn calibration(
         id.cost, id.cost_table_2
     ));
     create_dir(plots)?;
-    let figure = plots.join("model_adjustment.svg");
+    let figure = plots.join(FIGURE);
     plot::model_adjustment(&figure, &id).map_err(Error::Io)?;
     log(&format!("wrote {}", figure.display()));
     let cal = calibrate::calibrate(fmus, &id.params, seed, runs::STOP, runs::STEP)?;

@@ -39,6 +39,25 @@ impl Group {
     }
 }
 
+/// The names [`cases`] writes into its directory for `groups`, the first held-out seed being
+/// `first_seed`: what the output policy checks before the work ([`super::written`]).
+pub fn outputs(groups: &[Group], first_seed: u32) -> Vec<String> {
+    let mut names = vec!["report.md".to_string()];
+    for g in groups {
+        let title = g.title().to_lowercase();
+        names.push(format!("{}.json", title.replace(' ', "_")));
+        match g {
+            Group::Standard => names.extend([
+                format!("standard_seed{first_seed}.csv"),
+                "standard_alignment.svg".into(),
+                "standard_spectra.svg".into(),
+            ]),
+            Group::Robustness | Group::Resonance => names.push(format!("{title}.svg")),
+        }
+    }
+    names
+}
+
 /// Runs the groups' cases on the evaluation's seeds and builds the report for the directory
 /// `out` (`report.md`, one JSON per group, the figures). `log` gets the lines worth seeing at
 /// once; `progress` is told the number of runs, then called after each.

@@ -9,6 +9,7 @@ pub mod cases;
 pub mod learned;
 pub mod standard;
 pub mod variants;
+pub mod written;
 
 use crate::Error;
 use orchestrator::outfile::{self, Replace};
@@ -29,8 +30,11 @@ pub struct Report {
     /// The files given by name on the command line (`--out FILE`, `--doc FILE`), written by
     /// the single-file rule ([`outfile`]): never an input, replaced only when marked as this
     /// command's or with `--force`. The other files are a study's own names in its output
-    /// directory, replaced by name (never through a symlink, FIFO or directory).
+    /// directory ([`Report::study_dir`]).
     pub guarded: Vec<Guard>,
+    /// The study's output directory ([`written`]): its files are replaced only where a study
+    /// wrote them, and join its record once written.
+    pub study_dir: Option<written::StudyDir>,
 }
 
 /// A file the command line named, with what may be replaced there.
@@ -60,6 +64,9 @@ impl Report {
     /// into place), prints the Markdown, then the note.
     pub fn write(&self) -> Result<(), Error> {
         for (path, contents) in &self.files {
+            if let Some(d) = self.study_dir.as_ref().filter(|d| d.holds(path)) {
+                d.check_file(path)?;
+            }
             let (inputs, replace) = match self.guarded.iter().find(|g| &g.path == path) {
                 Some(g) => (g.inputs.iter().map(PathBuf::as_path).collect(), g.replace),
                 None => (
@@ -72,6 +79,9 @@ impl Report {
             };
             outfile::write_bytes(path, &inputs, replace, contents)
                 .map_err(|e| Error::Io(e.to_string()))?;
+        }
+        if let Some(d) = &self.study_dir {
+            d.record(self.files.iter().map(|(p, _)| p).chain(&self.figures))?;
         }
         if !self.markdown.is_empty() {
             println!("{}", self.markdown.trim_end());

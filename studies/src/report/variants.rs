@@ -9,6 +9,10 @@ use crate::study::runs::Fmus;
 use crate::study::variants;
 use std::path::Path;
 
+/// The files [`variants`] writes into its directory: what the output policy checks before the
+/// work ([`super::written`]).
+pub const OUTPUTS: [&str; 2] = ["variants.md", "variants.json"];
+
 /// Runs the comparison on the evaluation's seeds, the choices made on its calibration seed, and
 /// builds the report for the directory `out`; `log` gets those choices as they are made. The
 /// estimator runs offline with its shipped calibration, so `fmus` carries no settings.
@@ -178,8 +182,8 @@ pub fn variants(
         ),
         ..Report::default()
     };
-    report.file(out.join("variants.md"), md);
+    report.file(out.join(OUTPUTS[0]), md);
     let json = serde_json::to_string_pretty(&json).unwrap_or_default();
-    report.file(out.join("variants.json"), json);
+    report.file(out.join(OUTPUTS[1]), json);
     Ok(report)
 }
