@@ -1,7 +1,7 @@
 """References between the repository's files: every `docs/NAME.md` and `tests/NAME.py` path named
 in the docs, the Python sources, the Rust sources and the Cargo/pyproject/requirements files
 exists; every `cargo xtask CMD` named is a command of xtask's usage text; every relative
-Markdown link between docs resolves. Oracle: the file system and xtask/src/main.rs's USAGE."""
+Markdown link between docs resolves. Oracle: the file system and xtask's USAGE text."""
 
 from __future__ import annotations
 
@@ -24,7 +24,9 @@ def sources() -> list[Path]:
 
 
 def xtask_commands() -> set[str]:
-    text = (REPO / "xtask" / "src" / "main.rs").read_text()
+    """The commands of xtask's USAGE text, wherever in xtask/src it is defined."""
+    text = next(t for t in (p.read_text() for p in sorted((REPO / "xtask" / "src").glob("*.rs")))
+                if "const USAGE" in t)
     usage = text[text.index("const USAGE"):]
     usage = usage[:usage.index('";')]
     commands = set(re.findall(r"^  ([a-z][\w-]*)", usage, re.M))

@@ -115,11 +115,11 @@ mod tests {
         };
         assert_eq!(parse(&["test"]).unwrap(), Command::Test(all));
         assert_eq!(
-            parse(&["test", "--python-only", "--", "tests/test_x.py", "-x"]).unwrap(),
+            parse(&["test", "--python-only", "--", "tests/test_parquet.py", "-x"]).unwrap(),
             Command::Test(TestOptions {
                 rust: false,
                 python: true,
-                pytest_args: vec!["tests/test_x.py".into(), "-x".into()],
+                pytest_args: vec!["tests/test_parquet.py".into(), "-x".into()],
             })
         );
         let Command::Test(o) = parse(&["test", "--rust-only"]).unwrap() else {

@@ -39,7 +39,7 @@ impl Group {
     }
 }
 
-/// The names [`cases`] writes into its directory for `groups`, the first held-out seed being
+/// The names [`cases()`] writes into its directory for `groups`, the first held-out seed being
 /// `first_seed`: what the output policy checks before the work ([`super::written`]).
 pub fn outputs(groups: &[Group], first_seed: u32) -> Vec<String> {
     let mut names = vec!["report.md".to_string()];

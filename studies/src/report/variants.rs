@@ -9,7 +9,7 @@ use crate::study::runs::Fmus;
 use crate::study::variants;
 use std::path::Path;
 
-/// The files [`variants`] writes into its directory: what the output policy checks before the
+/// The files [`variants()`] writes into its directory: what the output policy checks before the
 /// work ([`super::written`]).
 pub const OUTPUTS: [&str; 2] = ["variants.md", "variants.json"];
 
