@@ -8,8 +8,8 @@
 use crate::config::{Config, Note};
 use crate::core::Core;
 use crate::engine::Skip;
-use crate::filter::Vec4;
 use crate::learned::{Bank, Choice, Learned};
+use crate::step;
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
@@ -175,54 +175,63 @@ impl Model for Estimator {
         log: &Logger,
     ) -> Result<StepOutcome, String> {
         let speed = v.real[vr::SPEED as usize];
-        crate::plausible::speed(speed)?;
         let mut outcome = StepOutcome::Ok;
-        if speed.is_finite() {
-            v.real[vr::DISTANCE as usize] += speed * h;
-        }
-        if !(speed >= self.min_speed) || !speed.is_finite() {
-            if !self.holding {
-                log.info(&format!(
-                    "speed {speed} m/s is below min_speed {} m/s: holding the estimate",
-                    self.min_speed
-                ));
-                self.holding = true;
+        let settings = step::Settings {
+            min_speed: self.min_speed,
+            design_speed: self.design_speed,
+        };
+        let input = step::Input {
+            speed,
+            sensors: [
+                v.real[vr::WS_ACC_Y as usize],
+                v.real[vr::WS_YAW_RATE as usize],
+                v.real[vr::FRAME_ACC_Y as usize],
+                v.real[vr::WS_ROLL_RATE as usize],
+            ],
+        };
+        let core = self.core.as_mut().ok_or("the filter was not initialized")?;
+        let stepped = step::step(
+            settings,
+            core,
+            self.learned.as_mut(),
+            &mut v.real[vr::DISTANCE as usize],
+            h,
+            input,
+        )?;
+        let (update, implausible) = match stepped {
+            step::Stepped::Held { finite_speed } => {
+                if !self.holding {
+                    log.info(&format!(
+                        "speed {speed} m/s is below min_speed {} m/s: holding the estimate",
+                        self.min_speed
+                    ));
+                    self.holding = true;
+                }
+                if !finite_speed {
+                    self.repeats.warn(log, "non-finite speed", || {
+                        format!("non-finite speed {speed}: estimate held")
+                    });
+                    outcome = StepOutcome::Warning;
+                }
+                v.boolean[vr::UPDATED as usize] = false;
+                return Ok(outcome);
             }
-            if !speed.is_finite() {
-                self.repeats.warn(log, "non-finite speed", || {
-                    format!("non-finite speed {speed}: estimate held")
-                });
-                outcome = StepOutcome::Warning;
-            }
-            v.boolean[vr::UPDATED as usize] = false;
-            return Ok(outcome);
-        }
+            step::Stepped::Filtered {
+                update,
+                implausible,
+            } => (update, implausible),
+        };
         self.holding = false;
-        let mut x = [
-            v.real[vr::WS_ACC_Y as usize],
-            v.real[vr::WS_YAW_RATE as usize],
-            v.real[vr::FRAME_ACC_Y as usize],
-            // Read (and checked) only when the learned taps use it: unconnected it is 0.
-            if self.learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
-                v.real[vr::WS_ROLL_RATE as usize]
-            } else {
-                0.0
-            },
-        ];
-        let replaced = crate::plausible::sensors(&mut x);
-        let implausible = !replaced.is_empty();
-        if implausible {
+        if !implausible.is_empty() {
             self.repeats.warn(log, "implausible sensor sample", || {
                 format!(
                     "implausible sensor sample ({}): skipped like a non-finite one",
-                    replaced.join(", ")
+                    implausible.join(", ")
                 )
             });
             outcome = StepOutcome::Warning;
         }
-        let z = Vec4::new(x[0], x[1], x[2], 0.0);
-        let core = self.core.as_mut().ok_or("the filter was not initialized")?;
-        if let Some(l) = self.learned.as_mut()
+        if let Some(l) = self.learned.as_ref()
             && !self.step_warned
             && (h - l.sample_step()).abs() > STEP_TOLERANCE * l.sample_step()
         {
@@ -232,26 +241,20 @@ impl Model for Estimator {
                 ));
             self.step_warned = true;
         }
-        let filter_speed = if self.design_speed > 0.0 {
-            self.design_speed
-        } else {
-            speed
-        };
-        let result = core.step(filter_speed, h, &z)?;
         if let Some(note) = core.take_start_note() {
             log.warning(&note);
         }
-        let updated = match result {
+        let updated = match update {
             Ok(nis) => {
                 v.real[vr::NIS as usize] = nis;
                 true
             }
             Err(Skip::NonFinite) => {
-                if !implausible {
+                if implausible.is_empty() {
                     self.repeats.warn(log, "non-finite sensor sample", || {
                         format!(
                             "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
-                            z[0], z[1], z[2]
+                            input.sensors[0], input.sensors[1], input.sensors[2]
                         )
                     });
                 }
@@ -269,10 +272,7 @@ impl Model for Estimator {
             }
         };
         v.boolean[vr::UPDATED as usize] = updated;
-        if let Some(l) = self.learned.as_mut() {
-            let (kalman, kalman_std) = core.alignment();
-            let x = [x[0], x[1], x[2], x[3], kalman];
-            l.step(v.real[vr::DISTANCE as usize], speed, &x, kalman_std);
+        if let Some(l) = self.learned.as_ref() {
             let (lo, hi) = l.speed_range();
             let outside = !(speed >= lo && speed <= hi);
             if outside && !self.outside {

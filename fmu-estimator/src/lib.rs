@@ -10,6 +10,7 @@
 //! |---|---|
 //! | the FMI call, the variable table, what each FMI phase does | [`fmu`], [`variables`] |
 //! | the user's settings, read once at initialization | [`config`], [`calibration`] |
+//! | one sample's step, the same in the FMU and offline: distance, hold, sensors, filters | [`step`] |
 //! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
 //! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
 //! | the learned filter: grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
@@ -49,6 +50,7 @@ pub mod plausible;
 pub mod prior;
 pub mod smoother;
 pub mod statespace;
+pub mod step;
 pub mod variables;
 
 pub use fmu::Estimator;

@@ -10,8 +10,8 @@
 use crate::calibration::{self, SHIPPED};
 use crate::config::{Config, Note};
 use crate::core::Core;
-use crate::filter::Vec4;
 use crate::learned::{Estimate, Learned};
+use crate::step;
 use crate::variables::{VARIABLES, vr};
 use fmi_abi::Values;
 use fmi_abi::variables::Start;
@@ -393,44 +393,31 @@ fn run_from(
     let mut checked_p = check.then(CovarianceCheck::new);
     for k in 0..n {
         let s = &sample(k);
-        crate::plausible::speed(s.speed).map_err(|e| format!("sample {}: {e}", k + 1))?;
-        // Implausible sensor values are skipped like non-finite ones, as in the FMU.
-        let mut x = [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate];
-        crate::plausible::sensors(&mut x);
-        let checked = Sample {
-            ws_acc_y: x[0],
-            ws_yaw_rate: x[1],
-            frame_acc_y: x[2],
-            ws_roll_rate: x[3],
-            ..*s
+        let settings = step::Settings {
+            min_speed: config.min_speed,
+            design_speed: config.design_speed,
         };
-        let s = &checked;
-        if s.speed.is_finite() {
-            distance += s.speed * h;
-        }
-        if s.speed.is_finite() && s.speed >= config.min_speed {
-            let speed = if config.design_speed > 0.0 {
-                config.design_speed
-            } else {
-                s.speed
-            };
-            let z = Vec4::new(s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, 0.0);
-            if core.step(speed, h, &z)?.is_err() {
+        let input = step::Input {
+            speed: s.speed,
+            sensors: [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate],
+        };
+        let stepped = step::step(
+            settings,
+            &mut core,
+            learned.as_mut(),
+            &mut distance,
+            h,
+            input,
+        )
+        .map_err(|e| format!("sample {}: {e}", k + 1))?;
+        if let step::Stepped::Filtered { update, .. } = stepped {
+            if update.is_err() {
                 out.skipped += 1;
             }
             if let Some(c) = checked_p.as_mut() {
                 c.add(&core);
             }
             steps += 1;
-            if let Some(l) = learned.as_mut() {
-                let (kalman, kalman_std) = core.alignment();
-                l.step(
-                    distance,
-                    s.speed,
-                    &crate::learned::channels(s, kalman),
-                    kalman_std,
-                );
-            }
         }
         step_of.push(steps.checked_sub(1));
         out.distance.push(distance);
@@ -544,8 +531,18 @@ mod tests {
         let (config, _) = config(&values, None).unwrap();
         let speed = |k: usize| 3.0 + 0.002 * k as f64;
         let recorded = samples(6000, speed);
+        // A roll-rate column the three-sensor taps do not use, NaN or implausible in places:
+        // it must change nothing (the FMU leaves that input unread).
+        let with_roll: Vec<Sample> = recorded
+            .iter()
+            .enumerate()
+            .map(|(k, s)| Sample {
+                ws_roll_rate: [f64::NAN, 1e9, 0.01][k % 3],
+                ..*s
+            })
+            .collect();
         let offline =
-            process_learned(&config, learned(&values).unwrap(), 1e-3, &recorded, false).unwrap();
+            process_learned(&config, learned(&values).unwrap(), 1e-3, &with_roll, false).unwrap();
         let est = offline.learned.unwrap();
         assert!(
             est.iter()

@@ -1,0 +1,94 @@
+//! One sample through the estimator: the single per-sample step that the FMU's `fmi2DoStep`
+//! ([`crate::fmu`]) and offline processing ([`crate::offline`], the studies, the Python
+//! bindings) both call, so the two give the same estimates for the same samples by
+//! construction. What each caller adds is its own: the FMU logs and sets its outputs, offline
+//! keeps the per-sample series.
+//!
+//! | stage | rule |
+//! |---|---|
+//! | distance | advances by `speed * h` for every finite speed, also while the filter holds |
+//! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
+//! | roll-rate channel | read only when the learned taps use it; otherwise 0, so an unconnected or NaN roll-rate input changes nothing |
+//! | implausible sensors | replaced by NaN ([`crate::plausible::sensors`]): the measurement update is skipped, the prediction kept |
+//! | filter speed | `design_speed` when set, else the sample's speed |
+//! | learned filter | steps with the sensors and the Kalman estimate, at the sample's own speed |
+
+use crate::core::Core;
+use crate::engine::Skip;
+use crate::filter::Vec4;
+use crate::learned::Learned;
+
+/// One sample's inputs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Input {
+    pub speed: f64,
+    /// `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`, `ws_roll_rate`.
+    pub sensors: [f64; 4],
+}
+
+/// What the step did.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Stepped {
+    /// The filter held its estimate: the speed is below `min_speed`, or not finite.
+    Held { finite_speed: bool },
+    /// The filter stepped: the update's normalized innovation squared, or why it was skipped,
+    /// and the sensors replaced as implausible (their names and values).
+    Filtered {
+        update: Result<f64, Skip>,
+        implausible: Vec<String>,
+    },
+}
+
+/// The estimator's settings a step reads.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    pub min_speed: f64,
+    /// 0: the matrices follow the speed; above 0: built for this speed.
+    pub design_speed: f64,
+}
+
+/// Steps `core` (and `learned`) with one sample of step `h`, advancing `distance`. A negative
+/// speed is an error ([`crate::plausible::speed`]), as is a filter that cannot step.
+pub fn step(
+    settings: Settings,
+    core: &mut Core,
+    learned: Option<&mut Learned>,
+    distance: &mut f64,
+    h: f64,
+    input: Input,
+) -> Result<Stepped, String> {
+    let speed = input.speed;
+    crate::plausible::speed(speed)?;
+    if speed.is_finite() {
+        *distance += speed * h;
+    }
+    if !(speed >= settings.min_speed) || !speed.is_finite() {
+        return Ok(Stepped::Held {
+            finite_speed: speed.is_finite(),
+        });
+    }
+    let mut x = input.sensors;
+    if !learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
+        x[3] = 0.0;
+    }
+    let implausible = crate::plausible::sensors(&mut x);
+    let filter_speed = if settings.design_speed > 0.0 {
+        settings.design_speed
+    } else {
+        speed
+    };
+    let update = core.step(filter_speed, h, &Vec4::new(x[0], x[1], x[2], 0.0))?;
+    if let Some(l) = learned {
+        let (kalman, kalman_std) = core.alignment();
+        l.step(
+            *distance,
+            speed,
+            &[x[0], x[1], x[2], x[3], kalman],
+            kalman_std,
+        );
+    }
+    Ok(Stepped::Filtered {
+        update,
+        implausible,
+    })
+}
