@@ -49,6 +49,8 @@ pub struct Settings {
 
 /// Steps `core` (and `learned`) with one sample of step `h`, advancing `distance`. A negative
 /// speed is an error ([`crate::plausible::speed`]), as is a filter that cannot step.
+// Inlined into fmi2DoStep: as a call it cost 5-10 % of the FMU's step (bench do_step, same run).
+#[inline(always)]
 pub fn step(
     settings: Settings,
     core: &mut Core,
