@@ -10,8 +10,9 @@ use std::path::PathBuf;
 pub struct SimulateArgs {
     /// The .fmu file.
     pub fmu: PathBuf,
-    /// Input signals: CSV with a `time` column and one column per input variable (Real
-    /// continuous inputs interpolated; discrete, Integer, Enumeration and Boolean ones held).
+    /// Input signals: CSV, or Parquet by the .parquet extension, with a `time` column and one
+    /// column per input variable (Real continuous inputs interpolated; discrete, Integer,
+    /// Enumeration and Boolean ones held); a recording's `distance` column is ignored.
     #[arg(long)]
     pub input: Option<PathBuf>,
     /// Replay a recorded results.csv exactly: the value set at t is the row of t + h (a
