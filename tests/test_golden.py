@@ -1,6 +1,7 @@
 """The golden files (tests/golden/README.md): each packaged FMU, run on its `_in.csv` with the
 parameters of its case, reproduces its `_ref.csv` column by column, through fmpy and through
-our own master (`orchestrator simulate`), so that two importers agree with the reference.
+our own master (`orchestrator simulate`), so that two importers agree with the reference; the
+estimator's references also through the Python bindings' offline path (`estimate`).
 
 Oracle: the references on disk, written by tests/golden/regenerate.py from an earlier build;
 a change of any output fails here until the references are regenerated on purpose.
@@ -12,9 +13,10 @@ ulp in sin, cos or exp) and what the filters make of it, and it is 100 times bel
 smallest change the test must catch (a tap bank refitted to the last f32 digit moves
 `alignment` by 1.2e-7 of its largest value). Integer and Boolean outputs must be equal. Our
 master's clock passes the step as `h` where fmpy passes `(k + 1) h - k h`, so between the two
-importers the FMUs see steps an ulp apart; the comparison through the master allows the
-measured effect of that, per FMU (golden_cases.MASTER_ATOL_OF_SCALE: 1e-8 of a column's
-largest value for the estimator, 2e-5 for the vehicle).
+importers the FMUs see steps an ulp apart; the comparisons through the master and the
+bindings (which also step by `h`) allow the measured effect of that, per FMU
+(golden_cases.MASTER_ATOL_OF_SCALE: 1e-8 of a column's largest value for the estimator, 2e-5
+for the vehicle).
 """
 
 from __future__ import annotations
@@ -97,3 +99,28 @@ def test_the_comparison_flags_changes_the_size_of_a_refitted_tap_bank():
     assert not changed("alignment", row, lambda x: x * (1 + 1e-12))
     assert len(changed("active_estimator", row, lambda x: 3 - x)) == 1
     assert len(changed("contact_scale", row, lambda x: np.nan)) == 1
+
+
+ESTIMATOR_CASES = [c for c in CASES if c.fmu == "AlignmentEstimator"]
+
+
+@pytest.mark.parametrize("case", ESTIMATOR_CASES, ids=[c.name for c in ESTIMATOR_CASES])
+def test_the_bindings_offline_path_agrees_with_the_references(case):
+    """A third path: the Python bindings' `estimate` (the estimator's offline code, stepped by
+    exactly `step` as our master steps) on the same input. Its sample `k` is the input's row
+    `k` (read for the step ending at `(k + 1) h`), so the reference's row at `j * interval`
+    is its sample `j * every - 1`; row 0, before any step, has no sample."""
+    native = pytest.importorskip("track_alignment._native", reason="the bindings are built into .venv by `cargo xtask test`")
+    _, discrete = g.outputs(packaged_fmus()[case.fmu])
+    inp = g.read_table(case.input)
+    col = {n: np.ascontiguousarray(inp.column(n)) for n in inp.names}
+    out = native.estimate(col["speed"], col["ws_acc_y"], col["ws_yaw_rate"], col["frame_acc_y"], step=case.step,
+                          ws_roll_rate=col["ws_roll_rate"], settings=dict(case.parameters))
+    ref = g.read_table(case.ref)
+    names = [n for n in ref.names[1:] if isinstance(out.get(n), np.ndarray)]
+    assert {"alignment", "alignment_lagged", "alignment_kalman", "active_estimator", "contact_scale"} <= set(names), names
+    rows = np.arange(1, len(ref.values)) * case.every - 1
+    ours = g.Table(names, np.column_stack([np.asarray(out[n], dtype=np.float64)[rows] for n in names]))
+    theirs = g.Table(names, np.column_stack([ref.column(n)[1:] for n in names]))
+    bad = g.failures(g.compare(theirs, ours, discrete, g.MASTER_ATOL_OF_SCALE[case.fmu]))
+    assert not bad, f"{case.name}: the bindings' estimate against {case.ref}:\n" + "\n".join(bad)
