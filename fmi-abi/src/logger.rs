@@ -50,7 +50,7 @@ pub struct Logger {
     enabled: [bool; CATEGORIES.len()],
 }
 
-// The callbacks are plain C function pointers plus the caller's opaque environment pointer,
+// SAFETY: the callbacks are plain C function pointers plus the caller's opaque environment pointer,
 // which the FMI standard lets us hand back from whichever thread runs the instance.
 unsafe impl Send for Logger {}
 

@@ -169,7 +169,8 @@ fn one_cycle(
 ) -> Result<Vec<u64>> {
     let t = ctx.t;
     let api = t.api;
-    // SAFETY (whole function): `c` is our live instance; arrays match their lengths.
+    // SAFETY: for the whole block, `c` is our live instance and every array passed matches the
+    // length passed with it.
     unsafe {
         initialize(ctx, c, presets, Some(100.0))?;
         let (in_vr, in_val): (Vec<u32>, Vec<f64>) = inputs.iter().copied().unzip();

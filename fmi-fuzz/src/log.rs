@@ -95,10 +95,15 @@ unsafe extern "C" {
 }
 
 unsafe extern "C" fn libc_calloc(n: usize, size: usize) -> *mut c_void {
+    // SAFETY: calloc accepts any count and size; it returns NULL when it cannot allocate (or the
+    // product overflows), which is what fmi2CallbackAllocateMemory may return.
     unsafe { calloc(n, size) }
 }
 
 unsafe extern "C" fn libc_free(p: *mut c_void) {
+    // SAFETY: the FMI contract has the FMU free only NULL or memory it got from
+    // `libc_calloc`, i.e. from calloc. An FMU that breaks it is a finding of the fuzzer (valgrind
+    // reports it), not something this shim can check.
     unsafe { free(p) }
 }
 

@@ -177,6 +177,7 @@ impl Fmu {
                 found: version.map_or("NULL".into(), |v| format!("{v:?}")),
             });
         }
+        // SAFETY: as for fmi2GetVersion above: no arguments, a static string or NULL back.
         let types = unsafe { returned((functions.get_types_platform)()) };
         if types.as_deref() != Some("default") {
             return Err(ImportError::Incompatible {

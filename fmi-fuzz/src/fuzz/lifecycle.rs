@@ -20,6 +20,7 @@ impl Fuzzer<'_> {
             // SAFETY: no arguments.
             (unsafe { (self.t.api.get_version)() }, "2.0")
         } else {
+            // SAFETY: no arguments; the symbol was resolved with the FMI 2.0 signature.
             (unsafe { (self.t.api.get_types_platform)() }, "default")
         };
         self.stats.add(f, 0);
