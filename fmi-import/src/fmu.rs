@@ -232,6 +232,8 @@ impl Fmu {
         self.inner.resource_uri.to_str().unwrap_or("")
     }
 
+    /// The parsed `modelDescription.xml`, checked at [`open`](Fmu::open) to be FMI 2.0
+    /// co-simulation; the variables' value references and causalities come from here.
     pub fn model_description(&self) -> &ModelDescription {
         &self.inner.md
     }

@@ -156,6 +156,8 @@ impl Instance {
         &self.fmu.path
     }
 
+    /// The model description of the FMU this instance came from (shared with the [`Fmu`](crate::Fmu)), for
+    /// looking up value references without keeping the `Fmu` around.
     pub fn model_description(&self) -> &ModelDescription {
         &self.fmu.md
     }
