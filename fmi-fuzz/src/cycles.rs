@@ -16,9 +16,14 @@ use std::ffi::{CStr, CString, c_char, c_int};
 /// What the cycles did.
 #[derive(Debug, Default)]
 pub struct CycleReport {
+    /// Cycles completed (instantiate to free).
     pub cycles: u64,
+    /// FMI calls made in all, every one's status checked.
     pub calls: u64,
+    /// fmi2DoStep calls.
     pub steps: u64,
+    /// FMU-state round trips checked: save and restore, serialize, deserialize and restore, and
+    /// the reuse of an existing state (three per cycle).
     pub states: u64,
 }
 

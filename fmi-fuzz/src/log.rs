@@ -23,6 +23,7 @@ unsafe extern "C" {
 pub struct Record {
     /// `None` when the FMU passed a NULL instance name.
     pub instance: Option<String>,
+    /// The status argument as passed (an out-of-range value is kept, not mapped).
     pub status: i32,
     /// `None` when the FMU passed a NULL category.
     pub category: Option<String>,
