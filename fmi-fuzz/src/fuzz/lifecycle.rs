@@ -426,7 +426,8 @@ impl Fuzzer<'_> {
                 fmt_f(stop)
             ),
         );
-        // SAFETY: scalar arguments.
+        // SAFETY: `c` is a live instance, NULL or the foreign block (never a freed instance, see
+        // the module docs); the other arguments are scalars.
         let status = unsafe {
             (self.t.api.setup_experiment)(c, tol_defined, tol, start, stop_defined, stop)
         };
@@ -495,7 +496,8 @@ impl Fuzzer<'_> {
                 fmt_f(h)
             ),
         );
-        // SAFETY: scalar arguments.
+        // SAFETY: `c` is a live instance, NULL or the foreign block (never a freed instance, see
+        // the module docs); the other arguments are scalars.
         let status = unsafe { (self.t.api.do_step)(c, t, h, no_prior) };
         let off = known_time.is_some_and(|k| (t - k).abs() > 1e-6 * k.abs().max(1.0) || t.is_nan());
         let expect = self.expect(comp, Call::DoStep, Expect::Any, |_| {

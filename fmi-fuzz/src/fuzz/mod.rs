@@ -133,8 +133,8 @@ pub struct SeqResult {
 }
 
 /// One sequence in progress: random FMI calls on up to `MAX_INSTANCES` instances, each checked
-/// against the state-machine oracle, with the instances, saved states and serialized blobs
-/// it tracks so it can pass stale and foreign pointers on purpose.
+/// against the state-machine oracle. It keeps books of its instances, saved states and
+/// serialized blobs, so it passes NULL and foreign pointers on purpose but never a freed one.
 pub struct Fuzzer<'t> {
     t: &'t Target,
     cfg: &'t Config,
