@@ -11,7 +11,8 @@ pub type fmi2Component = *mut c_void;
 pub type fmi2ComponentEnvironment = *mut c_void;
 /// A saved FMU state, opaque to the importer; owned by the instance that made it.
 pub type fmi2FMUstate = *mut c_void;
-/// A value reference: an index per base type into the FMU's variables (from modelDescription.xml).
+/// A value reference: the handle of a variable within its base type, from modelDescription.xml
+/// (our FMUs number them densely from 0; others need not).
 pub type fmi2ValueReference = c_uint;
 /// A Real value: a C double.
 pub type fmi2Real = f64;
