@@ -17,12 +17,21 @@ use std::ffi::CString;
 /// The states of the co-simulation state machine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum State {
+    /// After fmi2Instantiate or fmi2Reset: parameters and start values may be set.
     Instantiated,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode: outputs read here are
+    /// computed from the current parameters (`Model::calculate_initial`).
     InitializationMode,
+    /// Ready for fmi2DoStep, inputs and tunable parameters.
     StepComplete,
+    /// The model ended the simulation within the last step (fmi2Discard with fmi2Terminated):
+    /// values may be read, no further step taken.
     StepFailed,
+    /// After fmi2Terminate: final values may be read.
     Terminated,
+    /// The model returned an error; values may be read, fmi2Reset recovers.
     Error,
+    /// A panic was caught; only fmi2FreeInstance is accepted.
     Fatal,
 }
 
@@ -45,13 +54,23 @@ impl State {
 #[derive(Clone, Serialize, Deserialize)]
 #[serde(bound = "M: Model")]
 pub struct Snapshot<M: Model> {
+    /// Where the state machine stood; restoring a state restores it too.
     pub state: State,
+    /// Every FMI variable's current value.
     pub values: Values,
+    /// The model's own state (filter, integrator...), beyond its FMI variables.
     pub model: M,
+    /// The current communication point in seconds: the next fmi2DoStep must start here.
     pub time: f64,
+    /// fmi2SetupExperiment's startTime (0 until it is called).
     pub start_time: f64,
+    /// fmi2SetupExperiment's stopTime, if it defined one.
     pub stop_time: Option<f64>,
+    /// A tunable parameter was set between steps: `Model::parameters_changed` runs before the
+    /// next step.
     pub parameters_dirty: bool,
+    /// Parameters or start values changed since `Model::calculate_initial` last ran: a read
+    /// in initialization mode recomputes first.
     pub initial_dirty: bool,
     /// Inputs were set since the outputs were last computed (direct feedthrough).
     pub inputs_dirty: bool,
@@ -62,6 +81,7 @@ pub struct Snapshot<M: Model> {
 
 /// An instance as fmi2Instantiate returns it (wrapped in a tagged handle by `export`).
 pub struct Instance<M: Model> {
+    /// Where the model's and the layer's messages go: the caller's logger callback.
     pub log: Logger,
     index: VarIndex,
     pub(crate) sim: Snapshot<M>,
@@ -75,6 +95,9 @@ pub(crate) const MAGIC: u64 = 0x5254_4745_4f4d_4649; // "RTGEOMFI"
 type Res<T = ()> = Result<T, fmi2Status>;
 
 impl<M: Model> Instance<M> {
+    /// fmi2Instantiate after the GUID and type checks: checks the variable table and makes the
+    /// model. On failure the logger is handed back with the reason, so the caller can still log
+    /// it to the instance's callbacks.
     pub fn new(ctx: &InstantiateContext, log: Logger) -> Result<Self, (Logger, String)> {
         let index = match VarIndex::new(M::variables()) {
             Ok(i) => i,
@@ -105,14 +128,17 @@ impl<M: Model> Instance<M> {
         })
     }
 
+    /// Where the state machine stands.
     pub fn state(&self) -> State {
         self.sim.state
     }
 
+    /// The current communication point in seconds.
     pub fn time(&self) -> f64 {
         self.sim.time
     }
 
+    /// The FMI variables as they stand, without the outputs' recomputation a get would do.
     pub fn values(&self) -> &Values {
         &self.sim.values
     }
@@ -150,6 +176,8 @@ impl<M: Model> Instance<M> {
         }
     }
 
+    /// fmi2SetupExperiment: refuses a non-finite start or a stop before it; the tolerance is
+    /// not used.
     pub fn setup_experiment(&mut self, start: f64, stop: Option<f64>) -> Res {
         self.log
             .call(|| format!("fmi2SetupExperiment(startTime={start}, stopTime={stop:?})"));
@@ -172,6 +200,7 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2EnterInitializationMode.
     pub fn enter_initialization_mode(&mut self) -> Res {
         self.log.call(|| "fmi2EnterInitializationMode()".into());
         self.require("fmi2EnterInitializationMode", &[State::Instantiated])?;
@@ -210,6 +239,9 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2ExitInitializationMode: checks every parameter against its range (naming the first
+    /// out of it), computes the initial values and lets the model check its parameters; a
+    /// refusal leaves the instance in initialization mode.
     pub fn exit_initialization_mode(&mut self) -> Res {
         self.log.call(|| "fmi2ExitInitializationMode()".into());
         self.require("fmi2ExitInitializationMode", &[State::InitializationMode])?;
@@ -228,6 +260,7 @@ impl<M: Model> Instance<M> {
         }
     }
 
+    /// fmi2Terminate: lets the model finish; a second call is accepted and does nothing.
     pub fn terminate(&mut self) -> Res {
         self.log.call(|| "fmi2Terminate()".into());
         if self.sim.state == State::Terminated {
@@ -247,6 +280,10 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2DoStep from `t` by `h` seconds. `t` must match the instance's time (to a relative
+    /// 1e-9) and `h` be positive and finite; a refused call changes nothing. OK or Warning as
+    /// the model says; Discard when the model ends the simulation within the step (the time is
+    /// then where it ended); a model error moves the instance to the error state.
     pub fn do_step(&mut self, t: f64, h: f64) -> Res<fmi2Status> {
         self.log.call(|| {
             format!("fmi2DoStep(currentCommunicationPoint={t}, communicationStepSize={h})")
@@ -392,6 +429,9 @@ impl<M: Model> Instance<M> {
         }
     }
 
+    /// fmi2GetReal: `out[k]` gets the value of `vr[k]`, after recomputing the outputs if inputs
+    /// were set (and the initial values, in initialization mode); an unknown reference is an
+    /// error, though the values before it are already written.
     pub fn get_real(&mut self, vr: &[u32], out: &mut [f64]) -> Res {
         self.check_get("fmi2GetReal")?;
         for (r, o) in vr.iter().zip(out.iter_mut()) {
@@ -401,6 +441,9 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2GetInteger: `out[k]` gets the value of `vr[k]`, after recomputing the outputs if inputs
+    /// were set (and the initial values, in initialization mode); an unknown reference is an
+    /// error, though the values before it are already written.
     pub fn get_integer(&mut self, vr: &[u32], out: &mut [i32]) -> Res {
         self.check_get("fmi2GetInteger")?;
         for (r, o) in vr.iter().zip(out.iter_mut()) {
@@ -410,6 +453,9 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2GetBoolean: `out[k]` gets the value of `vr[k]`, after recomputing the outputs if inputs
+    /// were set (and the initial values, in initialization mode); an unknown reference is an
+    /// error, though the values before it are already written.
     pub fn get_boolean(&mut self, vr: &[u32], out: &mut [bool]) -> Res {
         self.check_get("fmi2GetBoolean")?;
         for (r, o) in vr.iter().zip(out.iter_mut()) {
@@ -455,12 +501,16 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2SetReal: every reference is checked (known, settable in this state) before any value
+    /// changes, so a refused call changes nothing.
     pub fn set_real(&mut self, vr: &[u32], vals: &[f64]) -> Res {
         self.log
             .call(|| format!("fmi2SetReal(vr={vr:?}, value={vals:?})"));
         self.set_generic(Base::Real, "fmi2SetReal", vr, vals, |s, i, x| s.real[i] = x)
     }
 
+    /// fmi2SetInteger: every reference is checked (known, settable in this state) before any value
+    /// changes, so a refused call changes nothing.
     pub fn set_integer(&mut self, vr: &[u32], vals: &[i32]) -> Res {
         self.log
             .call(|| format!("fmi2SetInteger(vr={vr:?}, value={vals:?})"));
@@ -469,6 +519,8 @@ impl<M: Model> Instance<M> {
         })
     }
 
+    /// fmi2SetBoolean: every reference is checked (known, settable in this state) before any value
+    /// changes, so a refused call changes nothing.
     pub fn set_boolean(&mut self, vr: &[u32], vals: &[bool]) -> Res {
         self.log
             .call(|| format!("fmi2SetBoolean(vr={vr:?}, value={vals:?})"));
@@ -477,6 +529,8 @@ impl<M: Model> Instance<M> {
         })
     }
 
+    /// fmi2SetString: every reference is checked (known, settable in this state) before any value
+    /// changes, so a refused call changes nothing.
     pub fn set_string(&mut self, vr: &[u32], vals: &[String]) -> Res {
         self.log
             .call(|| format!("fmi2SetString(vr={vr:?}, value={vals:?})"));
@@ -513,6 +567,8 @@ impl<M: Model> Instance<M> {
         Ok(())
     }
 
+    /// fmi2GetRealStatus(fmi2LastSuccessfulTime): the time reached, also after a step the model
+    /// ended early.
     pub fn last_successful_time(&self) -> f64 {
         self.sim.time
     }
@@ -522,10 +578,13 @@ impl<M: Model> Instance<M> {
         self.sim.terminated
     }
 
+    /// fmi2GetFMUstate: a copy of everything the simulation depends on.
     pub fn snapshot(&self) -> Snapshot<M> {
         self.sim.clone()
     }
 
+    /// fmi2SetFMUstate: the instance continues exactly as when `snap` was taken; refused once
+    /// fatal, since a panic may have left the model inconsistent.
     pub fn restore(&mut self, snap: &Snapshot<M>) -> Res {
         if self.sim.state == State::Fatal {
             return Err(self.fail("fmi2SetFMUstate: the instance is in the fatal state"));
@@ -575,6 +634,9 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
+/// The inverse of [`serialize`]: refuses, with a message naming the cause, bytes from another
+/// FMU or build (header), truncated or extended (length), damaged (checksum), or of another
+/// variable table.
 pub fn deserialize<M: Model>(bytes: &[u8]) -> Result<Snapshot<M>, String> {
     let header = state_header::<M>();
     let Some(rest) = bytes.strip_prefix(header.as_slice()) else {

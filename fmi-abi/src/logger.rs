@@ -35,10 +35,17 @@ pub const CATEGORIES: &[(&CStr, &str)] = &[
 /// Index into [`CATEGORIES`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Category {
+    /// `logStatusWarning`: on from the start.
     Warning = 0,
+    /// `logStatusError`: on from the start.
     Error = 1,
+    /// `logStatusFatal`: on from the start.
     Fatal = 2,
+    /// `logCalls`: every FMI call with its arguments; on only with loggingOn or
+    /// fmi2SetDebugLogging.
     Calls = 3,
+    /// `logModel`: the model's informational messages; on only with loggingOn or
+    /// fmi2SetDebugLogging.
     Model = 4,
 }
 
@@ -50,7 +57,7 @@ pub struct Logger {
     enabled: [bool; CATEGORIES.len()],
 }
 
-// The callbacks are plain C function pointers plus the caller's opaque environment pointer,
+// SAFETY: the callbacks are plain C function pointers plus the caller's opaque environment pointer,
 // which the FMI standard lets us hand back from whichever thread runs the instance.
 unsafe impl Send for Logger {}
 
@@ -79,6 +86,7 @@ impl Logger {
         }
     }
 
+    /// The instance name as passed to fmi2Instantiate (NUL characters removed), for messages.
     pub fn instance_name(&self) -> &str {
         self.instance_name.to_str().unwrap_or("")
     }
@@ -102,10 +110,13 @@ impl Logger {
         unknown
     }
 
+    /// Whether a message of `category` would reach anybody, so callers can skip building it.
     pub fn enabled(&self, category: Category) -> bool {
         self.enabled[category as usize] && self.callbacks.and_then(|c| c.logger).is_some()
     }
 
+    /// Sends `message` to the importer's logger with `status` and the category's name, through
+    /// "%s" (NUL characters become spaces); dropped when the category is off or nobody listens.
     pub fn log(&self, status: fmi2Status, category: Category, message: &str) {
         if !self.enabled(category) {
             return;
@@ -128,18 +139,22 @@ impl Logger {
         }
     }
 
+    /// A message with fmi2Warning in `logStatusWarning`.
     pub fn warning(&self, message: &str) {
         self.log(fmi2Status::Warning, Category::Warning, message);
     }
 
+    /// A message with fmi2Error in `logStatusError`: say which argument or state was wrong.
     pub fn error(&self, message: &str) {
         self.log(fmi2Status::Error, Category::Error, message);
     }
 
+    /// A message with fmi2Fatal in `logStatusFatal`.
     pub fn fatal(&self, message: &str) {
         self.log(fmi2Status::Fatal, Category::Fatal, message);
     }
 
+    /// A message with fmi2OK in `logModel`, seen only when debug logging is on.
     pub fn info(&self, message: &str) {
         self.log(fmi2Status::OK, Category::Model, message);
     }
@@ -197,6 +212,8 @@ impl Repeats {
         }
     }
 
+    /// Forgets every count, so the next occurrence is logged in full again (for a model starting
+    /// a new run).
     pub fn clear(&mut self) {
         self.counts.clear();
     }

@@ -10,6 +10,7 @@ use std::path::PathBuf;
 /// Static facts written to modelDescription.xml.
 #[derive(Debug, Clone, Copy)]
 pub struct ModelInfo {
+    /// `modelName`: the name tools show; free text.
     pub model_name: &'static str,
     /// The shared library name and the `modelIdentifier` attribute.
     pub model_identifier: &'static str,
@@ -17,17 +18,24 @@ pub struct ModelInfo {
     /// make it at build time from what shapes them (crate `state-layout`), so it changes
     /// whenever the modelDescription.xml may.
     pub guid: &'static str,
+    /// `description`: one line for people.
     pub description: &'static str,
+    /// `author`.
     pub author: &'static str,
+    /// `version`: the model's own version (our FMUs use the crate's).
     pub version: &'static str,
+    /// `DefaultExperiment` startTime in seconds.
     pub default_start: f64,
+    /// `DefaultExperiment` stopTime in seconds.
     pub default_stop: f64,
+    /// `DefaultExperiment` stepSize in seconds: the communication step the model is made for.
     pub default_step: f64,
 }
 
 /// How a step ended when it did not fail.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum StepOutcome {
+    /// The step completed (fmi2OK).
     Ok,
     /// The step completed but something was logged as a warning (fmi2Warning).
     Warning,
@@ -36,6 +44,7 @@ pub enum StepOutcome {
     /// fmi2GetBooleanStatus(fmi2Terminated) true, so the master stops there (FMI 2.0 section
     /// 4.2.3). Further steps are refused; fmi2Terminate is allowed.
     Terminated {
+        /// Where the model ended, in seconds; NaN means the step's start.
         at: f64,
     },
 }
@@ -43,6 +52,7 @@ pub enum StepOutcome {
 /// What fmi2Instantiate learned from the importer.
 #[derive(Debug, Clone, Default)]
 pub struct InstantiateContext {
+    /// fmi2Instantiate's instanceName ("" when NULL), for the model's own messages.
     pub instance_name: String,
     /// Parsed fmuResourceLocation, when the importer gave a usable one.
     pub resources: Option<PathBuf>,
@@ -52,6 +62,8 @@ pub struct InstantiateContext {
 /// name and returns fmi2Error. A model must be cheap to clone (FMU state is a clone) and
 /// serializable (fmi2SerializeFMUstate).
 pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
+    /// The model's identity and default experiment, for modelDescription.xml and the GUID
+    /// check at fmi2Instantiate.
     const INFO: ModelInfo;
     /// The layout of the model's serialized state, written into every serialized FMU state
     /// beside the GUID: a state whose layout differs is refused with a message instead of being
@@ -60,6 +72,9 @@ pub trait Model: Clone + Send + Serialize + DeserializeOwned + 'static {
     /// it to a fingerprint of its sources; empty: the GUID alone decides.
     const STATE_LAYOUT: &'static str = "";
 
+    /// The variable table: the modelDescription.xml's variables and the layer's checks of every
+    /// get and set come from it, so the two cannot disagree. Value references index
+    /// [`Values`] per base type (see `VarIndex`).
     fn variables() -> &'static [VarSpec];
 
     /// A fresh model; the layer keeps a copy of it for fmi2Reset.

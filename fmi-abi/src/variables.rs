@@ -12,27 +12,44 @@ use serde::{Deserialize, Serialize};
 /// The base type and start value of a variable.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Start {
+    /// A Real, exchanged with fmi2GetReal/fmi2SetReal.
     Real(f64),
+    /// An Integer, exchanged with fmi2GetInteger/fmi2SetInteger.
     Integer(i32),
+    /// A Boolean, exchanged with fmi2GetBoolean/fmi2SetBoolean.
     Boolean(bool),
+    /// A String, exchanged with fmi2GetString/fmi2SetString.
     String(&'static str),
 }
 
 /// One row of the variable table.
 #[derive(Debug, Clone, Copy)]
 pub struct VarSpec {
+    /// The value reference: dense from 0 within the variable's base type, as it indexes [`Values`].
     pub vr: u32,
+    /// The `name` in modelDescription.xml, and what the layer's messages quote.
     pub name: &'static str,
+    /// The `description` in modelDescription.xml and the documentation's table: what it means, its
+    /// sign convention.
     pub description: &'static str,
+    /// Written as `causality`; with `variability` it decides in which states the layer accepts a
+    /// set.
     pub causality: Causality,
+    /// Written as `variability`; only tunable parameters may be set between steps.
     pub variability: Variability,
     /// `None` writes no `initial` attribute (required for inputs).
     pub initial: Option<Initial>,
+    /// The base type, and the start value written to the XML and held before the first set.
     pub start: Start,
     /// Whether the start value is written to the XML (not for `initial="calculated"`).
     pub has_start: bool,
+    /// The `unit` of a Real (SI, as written, e.g. "m/s2"); declared in `UnitDefinitions`.
     pub unit: Option<&'static str>,
+    /// Written as `min`; for parameters the layer also refuses a value below it at
+    /// fmi2ExitInitializationMode.
     pub min: Option<f64>,
+    /// Written as `max`; for parameters the layer also refuses a value above it at
+    /// fmi2ExitInitializationMode.
     pub max: Option<f64>,
 }
 
@@ -111,6 +128,7 @@ impl VarSpec {
         v
     }
 
+    /// A fixed Integer parameter (set before initialization ends only).
     pub const fn integer_parameter(
         vr: u32,
         name: &'static str,
@@ -124,6 +142,7 @@ impl VarSpec {
         v
     }
 
+    /// A fixed Boolean parameter (set before initialization ends only).
     pub const fn boolean_parameter(
         vr: u32,
         name: &'static str,
@@ -137,6 +156,7 @@ impl VarSpec {
         v
     }
 
+    /// A fixed String parameter (set before initialization ends only).
     pub const fn string_parameter(
         vr: u32,
         name: &'static str,
@@ -150,6 +170,8 @@ impl VarSpec {
         v
     }
 
+    /// A discrete Boolean input (changes only at communication points); inputs carry a start
+    /// value and no `initial`.
     pub const fn boolean_input(
         vr: u32,
         name: &'static str,
@@ -162,6 +184,8 @@ impl VarSpec {
         v
     }
 
+    /// A discrete Integer input (changes only at communication points); inputs carry a start
+    /// value and no `initial`.
     pub const fn integer_input(
         vr: u32,
         name: &'static str,
@@ -174,6 +198,7 @@ impl VarSpec {
         v
     }
 
+    /// A discrete Integer output set by each step; `start` is its value before the first step.
     pub const fn integer_output(
         vr: u32,
         name: &'static str,
@@ -187,6 +212,7 @@ impl VarSpec {
         v
     }
 
+    /// A discrete Boolean output set by each step; `start` is its value before the first step.
     pub const fn boolean_output(
         vr: u32,
         name: &'static str,
@@ -213,16 +239,19 @@ impl VarSpec {
         self
     }
 
+    /// Sets the `min` field: written to the XML, and enforced on parameters.
     pub const fn min(mut self, min: f64) -> Self {
         self.min = Some(min);
         self
     }
 
+    /// Sets the `max` field: written to the XML, and enforced on parameters.
     pub const fn max(mut self, max: f64) -> Self {
         self.max = Some(max);
         self
     }
 
+    /// Which value-reference space the variable lives in, from its start value's type.
     pub fn base(&self) -> Base {
         match self.start {
             Start::Real(_) => Base::Real,
@@ -232,6 +261,8 @@ impl VarSpec {
         }
     }
 
+    /// Parameters are range-checked at fmi2ExitInitializationMode and trigger
+    /// `Model::parameters_changed` when tuned.
     pub fn is_parameter(&self) -> bool {
         self.causality == Causality::Parameter
     }
@@ -240,15 +271,21 @@ impl VarSpec {
 /// The four value-reference spaces of FMI 2.0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Base {
+    /// fmi2GetReal / fmi2SetReal.
     Real,
+    /// fmi2GetInteger / fmi2SetInteger.
     Integer,
+    /// fmi2GetBoolean / fmi2SetBoolean.
     Boolean,
+    /// fmi2GetString / fmi2SetString.
     String,
 }
 
 impl Base {
+    /// The four spaces, for code that must cover each (the fuzzer picks from them).
     pub const ALL: [Base; 4] = [Base::Real, Base::Integer, Base::Boolean, Base::String];
 
+    /// The FMI type name, as the XML element and the fmi2Get/fmi2Set functions spell it.
     pub fn name(self) -> &'static str {
         match self {
             Base::Real => "Real",
@@ -334,9 +371,13 @@ impl VarIndex {
 /// The current values of every variable, indexed by value reference within each base type.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Values {
+    /// Real values, by value reference.
     pub real: Vec<f64>,
+    /// Integer values, by value reference.
     pub integer: Vec<i32>,
+    /// Boolean values, by value reference.
     pub boolean: Vec<bool>,
+    /// String values, by value reference.
     pub string: Vec<String>,
 }
 

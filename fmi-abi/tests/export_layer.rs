@@ -85,7 +85,11 @@ unsafe extern "C" fn logger(
     fmt: *const c_char,
     msg: *const c_char,
 ) {
+    // SAFETY: `env` is the component environment `Fmu::new` registered: a `Mutex<Logged>` in a Box
+    // the `Fmu` keeps alive as long as the instance.
     let log = unsafe { &*(env as *const Mutex<Logged>) };
+    // SAFETY: the layer passes NUL-terminated strings for the name, category, format and the "%s"
+    // argument.
     let s = |p: *const c_char| unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned();
     assert_eq!(s(fmt), "%s");
     log.lock().unwrap().push((s(name), status, s(cat), s(msg)));
@@ -113,6 +117,8 @@ impl Fmu {
         let name = CString::new("toy #1 100%").unwrap();
         let guid = CString::new(guid).unwrap();
         let res = CString::new("file:///tmp/toy%20dir/resources/").unwrap();
+        // SAFETY: the strings are NUL-terminated and live through the call (the layer copies what
+        // it keeps); `callbacks` is boxed and kept in the `Fmu` for the instance's life.
         let c = unsafe {
             x::instantiate::<Toy>(
                 name.as_ptr(),
@@ -133,6 +139,7 @@ impl Fmu {
         })
     }
     fn init(&self) {
+        // SAFETY: `self.c` is a live instance of `Fmu::new` (freed only by Drop).
         unsafe {
             assert_eq!(
                 x::setup_experiment::<Toy>(self.c, 0, 0.0, 0.0, 0, 0.0),
@@ -143,14 +150,17 @@ impl Fmu {
         }
     }
     fn set(&self, vr: u32, v: f64) -> fmi2Status {
+        // SAFETY: `self.c` is live; `vr` and `v` are one element each, as n = 1 says.
         unsafe { x::set_real::<Toy>(self.c, &vr, 1, &v) }
     }
     fn get(&self, vr: u32) -> (fmi2Status, f64) {
         let mut v = f64::NAN;
+        // SAFETY: `self.c` is live; `vr` and `v` are one element each, as n = 1 says.
         let s = unsafe { x::get_real::<Toy>(self.c, &vr, 1, &mut v) };
         (s, v)
     }
     fn step(&self, t: f64, h: f64) -> fmi2Status {
+        // SAFETY: `self.c` is live (freed only by Drop).
         unsafe { x::do_step::<Toy>(self.c, t, h, 1) }
     }
     fn last(&self) -> (String, i32, String, String) {
@@ -165,6 +175,8 @@ impl Fmu {
 
 impl Drop for Fmu {
     fn drop(&mut self) {
+        // SAFETY: `self.c` came from fmi2Instantiate and is freed here once; `Fmu::new` never
+        // builds an `Fmu` from a NULL instance.
         unsafe { x::free_instance::<Toy>(self.c) }
     }
 }
@@ -185,6 +197,8 @@ fn a_normal_run_follows_the_exact_solution_of_the_euler_scheme() {
 #[test]
 fn wrong_guid_and_model_exchange_are_refused_with_a_message() {
     assert!(Fmu::new("another-guid").is_none());
+    // SAFETY: the strings are NUL-terminated literals; NULL resources and callbacks are allowed by
+    // the layer (crate docs).
     let c = unsafe {
         x::instantiate::<Toy>(
             c"n".as_ptr(),
@@ -198,6 +212,8 @@ fn wrong_guid_and_model_exchange_are_refused_with_a_message() {
     };
     assert!(c.is_null());
     // NULL instance name, NULL resources and NULL callbacks are tolerated.
+    // SAFETY: the GUID is a NUL-terminated literal; NULL name, resources and callbacks are allowed
+    // by the layer (crate docs).
     let c = unsafe {
         x::instantiate::<Toy>(
             std::ptr::null(),
@@ -210,7 +226,9 @@ fn wrong_guid_and_model_exchange_are_refused_with_a_message() {
         )
     };
     assert!(!c.is_null());
+    // SAFETY: `c` came from fmi2Instantiate above and is freed once.
     unsafe { x::free_instance::<Toy>(c) };
+    // SAFETY: fmi2FreeInstance accepts NULL and does nothing.
     unsafe { x::free_instance::<Toy>(std::ptr::null_mut()) };
 }
 
@@ -257,6 +275,9 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
     );
     assert_eq!(f.get(9999).0, fmi2Status::Error);
     assert!(f.last().3.contains("unknown Real value reference 9999"));
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `Y` is one reference
+    // as n = 1 says; the NULL value array is the case under test and the layer checks it before
+    // writing.
     let null = unsafe { x::get_real::<Toy>(f.c, &Y, 1, std::ptr::null_mut()) };
     assert_eq!(null, fmi2Status::Error);
     assert!(f.last().3.contains("NULL"));
@@ -273,6 +294,7 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
     assert_eq!(f.step(0.0, 0.1), fmi2Status::OK);
     // A step whose end overflows to infinity is refused (the instance could never step again).
     let g = Fmu::new("toy-guid-1").unwrap();
+    // SAFETY: `g.c` is a live instance of `Fmu::new` (freed only by its Drop).
     unsafe {
         assert_eq!(
             x::setup_experiment::<Toy>(g.c, 0, 0.0, f64::MAX, 0, 0.0),
@@ -296,14 +318,19 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
     let vrs = [U, 9999];
     let vals = [7.0, 8.0];
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `vrs` and `vals`
+        // both hold the 2 elements passed.
         unsafe { x::set_real::<Toy>(f.c, vrs.as_ptr(), 2, vals.as_ptr()) },
         fmi2Status::Error
     );
     assert_eq!(f.get(U).1, 0.5);
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     assert_eq!(unsafe { x::terminate::<Toy>(f.c) }, fmi2Status::OK);
     // No set after Terminate, even of nothing (nvr = 0).
     let none: [u32; 0] = [];
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); with n = 0 no
+        // element is read, so the empty and NULL arrays are never dereferenced.
         unsafe { x::set_real::<Toy>(f.c, none.as_ptr(), 0, std::ptr::null()) },
         fmi2Status::Error
     );
@@ -313,6 +340,8 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
             .contains("fmi2SetReal is not allowed in state 'terminated'")
     );
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); with n = 0 no
+        // element is read, so the empty and NULL arrays are never dereferenced.
         unsafe { x::set_string::<Toy>(f.c, none.as_ptr(), 0, std::ptr::null()) },
         fmi2Status::Error
     );
@@ -326,8 +355,10 @@ fn illegal_calls_return_error_with_a_reason_and_change_nothing() {
         fmi2Status::OK,
         "final values may be read after Terminate (FMI 2.0 4.2.4)"
     );
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     assert_eq!(unsafe { x::cancel_step::<Toy>(f.c) }, fmi2Status::Error);
     assert_eq!(
+        // SAFETY: a NULL instance is refused by the layer's check before any use.
         unsafe { x::enter_initialization_mode::<Toy>(std::ptr::null_mut()) },
         fmi2Status::Error
     );
@@ -372,6 +403,8 @@ fn after_fatal_only_free_instance_is_accepted() {
     // Reset would otherwise resurrect an instance whose model panicked mid-step.
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     let mut t = 0.0;
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` and `t` are
+    // locals the layer writes one value to.
     unsafe {
         assert_eq!(x::reset::<Toy>(f.c), fmi2Status::Error);
         assert_eq!(
@@ -396,6 +429,8 @@ fn after_fatal_only_free_instance_is_accepted() {
 fn status_queries_are_refused_before_stepping_begins() {
     let f = Fmu::new("toy-guid-1").unwrap();
     let (mut t, mut b, mut i) = (f64::NAN, 7, 7);
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); each status is
+    // written to one live `&mut`.
     let query = |t: &mut f64, b: &mut c_int, i: &mut c_int| unsafe {
         [
             x::get_real_status::<Toy>(f.c, FMI2_LAST_SUCCESSFUL_TIME, t),
@@ -410,6 +445,7 @@ fn status_queries_are_refused_before_stepping_begins() {
         "{}",
         f.last().3
     );
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     unsafe {
         assert_eq!(
             x::setup_experiment::<Toy>(f.c, 0, 0.0, 0.0, 0, 0.0),
@@ -418,6 +454,7 @@ fn status_queries_are_refused_before_stepping_begins() {
         assert_eq!(x::enter_initialization_mode::<Toy>(f.c), fmi2Status::OK);
     }
     assert_eq!(query(&mut t, &mut b, &mut i), [fmi2Status::Error; 3]);
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     unsafe { assert_eq!(x::exit_initialization_mode::<Toy>(f.c), fmi2Status::OK) };
     assert_eq!(f.step(0.0, 0.25), fmi2Status::OK);
     assert_eq!(
@@ -425,6 +462,7 @@ fn status_queries_are_refused_before_stepping_begins() {
         [fmi2Status::OK, fmi2Status::OK, fmi2Status::Discard]
     );
     assert_eq!((t, b), (0.25, FMI2_FALSE));
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     unsafe { assert_eq!(x::terminate::<Toy>(f.c), fmi2Status::OK) };
     assert_eq!(query(&mut t, &mut b, &mut i)[0], fmi2Status::OK);
 }
@@ -437,6 +475,8 @@ fn every_damaged_copy_of_a_serialized_state_is_refused() {
     assert_eq!(f.step(0.0, 0.1), fmi2Status::OK);
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     let mut size = 0usize;
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` and `size` are
+    // locals the layer writes one value to; `s` is then a state of this instance.
     unsafe {
         assert_eq!(x::get_fmu_state::<Toy>(f.c, &mut s), fmi2Status::OK);
         assert_eq!(
@@ -445,6 +485,8 @@ fn every_damaged_copy_of_a_serialized_state_is_refused() {
         );
     }
     let mut good = vec![0 as c_char; size];
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `good` holds `size`
+    // bytes, as passed; `s` is a live state of this instance, freed once here.
     unsafe {
         assert_eq!(
             x::serialize_fmu_state::<Toy>(f.c, s, good.as_mut_ptr(), size),
@@ -454,8 +496,11 @@ fn every_damaged_copy_of_a_serialized_state_is_refused() {
     }
     let try_bytes = |b: &[c_char]| {
         let mut st: fmi2FMUstate = std::ptr::null_mut();
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `b` is a live
+        // slice of `b.len()` bytes; `st` is a local the layer writes to.
         let status = unsafe { x::deserialize_fmu_state::<Toy>(f.c, b.as_ptr(), b.len(), &mut st) };
         if !st.is_null() {
+            // SAFETY: `st` is a state the layer just made for this instance and is freed once.
             unsafe { x::free_fmu_state::<Toy>(f.c, &mut st) };
         }
         status
@@ -496,6 +541,7 @@ fn reset_gives_a_fresh_instance() {
     for k in 0..10 {
         f.step(k as f64 * 0.1, 0.1);
     }
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop).
     assert_eq!(unsafe { x::reset::<Toy>(f.c) }, fmi2Status::OK);
     // Back in "instantiated": k and u have their start values again, time is 0.
     f.init();
@@ -519,6 +565,8 @@ fn fmu_state_and_its_serialization_replay_bit_for_bit() {
     }
     let mut s: fmi2FMUstate = std::ptr::null_mut();
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` is a local
+        // the layer writes the new state to.
         unsafe { x::get_fmu_state::<Toy>(f.c, &mut s) },
         fmi2Status::OK
     );
@@ -532,33 +580,47 @@ fn fmu_state_and_its_serialization_replay_bit_for_bit() {
             .collect()
     };
     let first = run(&f);
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` is a live state
+    // of this instance from fmi2GetFMUstate.
     assert_eq!(unsafe { x::set_fmu_state::<Toy>(f.c, s) }, fmi2Status::OK);
     assert_eq!(run(&f), first);
     // Serialize, free, deserialize into a new state, restore, replay.
     let mut size = 0usize;
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` is a live
+        // state of this instance; `size` is a local written once.
         unsafe { x::serialized_fmu_state_size::<Toy>(f.c, s, &mut size) },
         fmi2Status::OK
     );
     let mut bytes = vec![0 as c_char; size];
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `bytes` holds
+        // `size` bytes, as passed; `s` is a live state of this instance.
         unsafe { x::serialize_fmu_state::<Toy>(f.c, s, bytes.as_mut_ptr(), size) },
         fmi2Status::OK
     );
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `bytes` holds
+        // `size` bytes, more than the `size - 1` passed; `s` is a live state of this instance.
         unsafe { x::serialize_fmu_state::<Toy>(f.c, s, bytes.as_mut_ptr(), size - 1) },
         fmi2Status::Error
     );
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s` is a live
+        // state of this instance, freed once (the layer sets it to NULL).
         unsafe { x::free_fmu_state::<Toy>(f.c, &mut s) },
         fmi2Status::OK
     );
     assert!(s.is_null());
     let mut s2: fmi2FMUstate = std::ptr::null_mut();
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `bytes` holds
+        // the `size` bytes passed; `s2` is a local the layer writes to.
         unsafe { x::deserialize_fmu_state::<Toy>(f.c, bytes.as_ptr(), size, &mut s2) },
         fmi2Status::OK
     );
+    // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s2` is a live state
+    // of this instance from fmi2DeSerializeFMUstate.
     assert_eq!(unsafe { x::set_fmu_state::<Toy>(f.c, s2) }, fmi2Status::OK);
     assert_eq!(run(&f), first);
     // A state of another layout (another build of the same FMU) is refused, naming the layout.
@@ -571,6 +633,8 @@ fn fmu_state_and_its_serialization_replay_bit_for_bit() {
     other[at + b"toy-layout-".len()] = b'2' as c_char;
     let mut s4: fmi2FMUstate = std::ptr::null_mut();
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `other` is a
+        // copy of `bytes`, `size` bytes long; `s4` is a local the layer writes to.
         unsafe { x::deserialize_fmu_state::<Toy>(f.c, other.as_ptr(), size, &mut s4) },
         fmi2Status::Error
     );
@@ -584,16 +648,22 @@ fn fmu_state_and_its_serialization_replay_bit_for_bit() {
     bytes[0] = b'X' as c_char;
     let mut s3: fmi2FMUstate = std::ptr::null_mut();
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `bytes` holds
+        // the `size` bytes passed; `s3` is a local the layer writes to.
         unsafe { x::deserialize_fmu_state::<Toy>(f.c, bytes.as_ptr(), size, &mut s3) },
         fmi2Status::Error
     );
     assert!(f.last().3.contains("not made by Toy"));
     assert!(s3.is_null());
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); `s2` is a live
+        // state of this instance, freed once.
         unsafe { x::free_fmu_state::<Toy>(f.c, &mut s2) },
         fmi2Status::OK
     );
     assert_eq!(
+        // SAFETY: `f.c` is a live instance of `Fmu::new` (freed only by its Drop); a NULL state is
+        // refused by the layer's check before any use.
         unsafe { x::set_fmu_state::<Toy>(f.c, std::ptr::null_mut()) },
         fmi2Status::Error
     );

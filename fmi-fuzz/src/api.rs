@@ -17,10 +17,15 @@ pub use fmi_abi::variables::Base;
 /// What the fuzzer needs to know about one variable.
 #[derive(Debug, Clone)]
 pub struct Var {
+    /// The variable's name, for reports and `--preset`.
     pub name: String,
+    /// Its value reference within `base`.
     pub vr: u32,
+    /// Which fmi2Get/fmi2Set family addresses it (Enumeration counts as Integer).
     pub base: Base,
+    /// With `variability` and `initial`, decides where the oracle expects a set to be accepted.
     pub causality: Causality,
+    /// With `causality` and `initial`, decides where the oracle expects a set to be accepted.
     pub variability: Variability,
     /// `initial`, or its default from the spec's table when the attribute is absent.
     pub initial: Option<Initial>,
@@ -69,12 +74,18 @@ fn default_initial(c: Causality, v: Variability) -> Option<Initial> {
 pub struct Target {
     /// Keeps the unpacked directory (and the importer's own handle of the library) alive.
     _fmu: fmi_import::Fmu,
+    /// The 34 entry points of the FMU's library, for raw calls.
     pub api: Api,
     _lib: Library,
+    /// The `.fmu` file, for reports and replay commands.
     pub path: PathBuf,
+    /// `modelName`, for reports.
     pub model_name: String,
+    /// The GUID to pass to fmi2Instantiate (the fuzzer also passes wrong ones).
     pub guid: CString,
+    /// The `file://` URI of the unpacked resources, for fmi2Instantiate.
     pub resource_uri: CString,
+    /// Every declared variable, in document order.
     pub vars: Vec<Var>,
     /// The names of the declared log categories.
     pub log_categories: Vec<String>,
@@ -83,6 +94,8 @@ pub struct Target {
 }
 
 impl Target {
+    /// Unpacks and checks the FMU with fmi-import, then loads its library a second time for
+    /// the raw calls; errors name the file and what is missing.
     pub fn open(path: &Path) -> Result<Target> {
         let fmu = fmi_import::Fmu::open(path)
             .map_err(|e| anyhow!("cannot open {}: {e}", path.display()))?;
@@ -144,14 +157,17 @@ impl Target {
         })
     }
 
+    /// The variables of one base type, e.g. to pick a valid value reference for a get or set.
     pub fn vars_of(&self, base: Base) -> impl Iterator<Item = &Var> {
         self.vars.iter().filter(move |v| v.base == base)
     }
 
+    /// The variable a (base type, value reference) pair addresses, if declared.
     pub fn var(&self, base: Base, vr: u32) -> Option<&Var> {
         self.vars.iter().find(|v| v.base == base && v.vr == vr)
     }
 
+    /// The variable of this name, e.g. for a `--preset`.
     pub fn var_named(&self, name: &str) -> Option<&Var> {
         self.vars.iter().find(|v| v.name == name)
     }
@@ -169,6 +185,7 @@ pub fn foreign_block(fill: u8) -> Box<[u64; 32]> {
     Box::new([b; 32])
 }
 
+/// The buffer as the `void*` an FMI function takes, to pass where an instance or state belongs.
 pub fn as_ptr(b: &[u64; 32]) -> *mut c_void {
     b.as_ptr() as *mut c_void
 }

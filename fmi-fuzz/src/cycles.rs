@@ -16,9 +16,14 @@ use std::ffi::{CStr, CString, c_char, c_int};
 /// What the cycles did.
 #[derive(Debug, Default)]
 pub struct CycleReport {
+    /// Cycles completed (instantiate to free).
     pub cycles: u64,
+    /// FMI calls made in all, every one's status checked.
     pub calls: u64,
+    /// fmi2DoStep calls.
     pub steps: u64,
+    /// FMU-state round trips checked: save and restore, serialize, deserialize and restore, and
+    /// the reuse of an existing state (three per cycle).
     pub states: u64,
 }
 
@@ -169,7 +174,8 @@ fn one_cycle(
 ) -> Result<Vec<u64>> {
     let t = ctx.t;
     let api = t.api;
-    // SAFETY (whole function): `c` is our live instance; arrays match their lengths.
+    // SAFETY: for the whole block, `c` is our live instance and every array passed matches the
+    // length passed with it.
     unsafe {
         initialize(ctx, c, presets, Some(100.0))?;
         let (in_vr, in_val): (Vec<u32>, Vec<f64>) = inputs.iter().copied().unzip();

@@ -23,6 +23,7 @@ unsafe extern "C" {
 pub struct Record {
     /// `None` when the FMU passed a NULL instance name.
     pub instance: Option<String>,
+    /// The status argument as passed (an out-of-range value is kept, not mapped).
     pub status: i32,
     /// `None` when the FMU passed a NULL category.
     pub category: Option<String>,
@@ -95,10 +96,15 @@ unsafe extern "C" {
 }
 
 unsafe extern "C" fn libc_calloc(n: usize, size: usize) -> *mut c_void {
+    // SAFETY: calloc accepts any count and size; it returns NULL when it cannot allocate (or the
+    // product overflows), which is what fmi2CallbackAllocateMemory may return.
     unsafe { calloc(n, size) }
 }
 
 unsafe extern "C" fn libc_free(p: *mut c_void) {
+    // SAFETY: the FMI contract has the FMU free only NULL or memory it got from
+    // `libc_calloc`, i.e. from calloc. An FMU that breaks it is a finding of the fuzzer (valgrind
+    // reports it), not something this shim can check.
     unsafe { free(p) }
 }
 

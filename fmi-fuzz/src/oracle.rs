@@ -13,16 +13,24 @@
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u8)]
 pub enum State {
+    /// After fmi2Instantiate or fmi2Reset.
     Instantiated = 1,
+    /// Between fmi2EnterInitializationMode and fmi2ExitInitializationMode.
     InitializationMode = 2,
+    /// Ready for fmi2DoStep.
     StepComplete = 4,
+    /// After fmi2DoStep returned fmi2Discard: results may be read, no step taken.
     StepFailed = 8,
+    /// After fmi2Terminate.
     Terminated = 16,
+    /// After fmi2Error: reads, FMU states, fmi2Reset and fmi2FreeInstance remain legal.
     Error = 32,
+    /// After fmi2Fatal: only fmi2FreeInstance.
     Fatal = 64,
 }
 
 impl State {
+    /// Every state, in the standard's order (bit order of [`States`]).
     pub const ALL: [State; 7] = [
         State::Instantiated,
         State::InitializationMode,
@@ -33,6 +41,7 @@ impl State {
         State::Fatal,
     ];
 
+    /// The standard's name for the state, as failure reports print it.
     pub fn name(self) -> &'static str {
         match self {
             State::Instantiated => "instantiated",
@@ -51,32 +60,42 @@ impl State {
 pub struct States(pub u8);
 
 impl States {
+    /// No state: a call allowed nowhere (fmi2CancelStep without asynchronous steps).
     pub const NONE: States = States(0);
 
+    /// The set of the listed states.
     pub fn of(states: &[State]) -> States {
         States(states.iter().fold(0, |m, s| m | *s as u8))
     }
+    /// The set holding only `s`: an instance whose state is known.
     pub fn one(s: State) -> States {
         States(s as u8)
     }
+    /// Whether the instance may be in `s`.
     pub fn contains(self, s: State) -> bool {
         self.0 & s as u8 != 0
     }
+    /// No state possible: a call was legal nowhere the instance might be.
     pub fn is_empty(self) -> bool {
         self.0 == 0
     }
+    /// Intersection: narrows the possible states to those where a call is legal.
     pub fn and(self, o: States) -> States {
         States(self.0 & o.0)
     }
+    /// Union: keeps the old states beside a new one when the FMU's reaction is ambiguous.
     pub fn or(self, o: States) -> States {
         States(self.0 | o.0)
     }
+    /// Difference: the possible states where a call is not legal.
     pub fn minus(self, o: States) -> States {
         States(self.0 & !o.0)
     }
+    /// The states in the set, in [`State::ALL`] order.
     pub fn iter(self) -> impl Iterator<Item = State> {
         State::ALL.into_iter().filter(move |s| self.contains(*s))
     }
+    /// The set as `{a,b}` with the standard's names, for failure reports.
     pub fn names(self) -> String {
         let v: Vec<&str> = self.iter().map(State::name).collect();
         format!("{{{}}}", v.join(","))
@@ -87,21 +106,38 @@ impl States {
 /// fmi2GetTypesPlatform and fmi2Instantiate, are always callable).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Call {
+    /// fmi2SetDebugLogging.
     SetDebugLogging,
+    /// fmi2FreeInstance: the only call allowed in the fatal state.
     FreeInstance,
+    /// fmi2SetupExperiment.
     SetupExperiment,
+    /// fmi2EnterInitializationMode.
     EnterInitializationMode,
+    /// fmi2ExitInitializationMode.
     ExitInitializationMode,
+    /// fmi2Terminate.
     Terminate,
+    /// fmi2Reset.
     Reset,
+    /// fmi2GetReal, fmi2GetInteger, fmi2GetBoolean and fmi2GetString (one row of the table).
     Get,
+    /// fmi2SetReal, fmi2SetInteger, fmi2SetBoolean and fmi2SetString (the state rule only; which
+    /// variables are settable is `Var::settable`).
     Set,
+    /// fmi2GetFMUstate, fmi2SetFMUstate, fmi2FreeFMUstate and the serialization functions.
     FmuState,
+    /// fmi2GetDirectionalDerivative.
     GetDirectionalDerivative,
+    /// fmi2SetRealInputDerivatives.
     SetRealInputDerivatives,
+    /// fmi2GetRealOutputDerivatives.
     GetRealOutputDerivatives,
+    /// fmi2DoStep.
     DoStep,
+    /// fmi2CancelStep: legal only while an asynchronous step runs, so never here.
     CancelStep,
+    /// fmi2GetStatus and the typed fmi2Get*Status functions.
     GetStatus,
 }
 

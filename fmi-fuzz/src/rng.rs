@@ -1,13 +1,16 @@
 //! A small seeded generator (SplitMix64): the same seed gives the same call sequence on every
 //! machine and with every version of the `rand` crate, so a failing seed stays reproducible.
 
+/// SplitMix64's state: one counter, advanced by the golden-ratio increment on every draw.
 pub struct Rng(u64);
 
 impl Rng {
+    /// Any seed is fine, 0 included (SplitMix64 has no bad seeds).
     pub fn new(seed: u64) -> Rng {
         Rng(seed)
     }
 
+    /// The next 64 uniformly distributed bits; every other draw is built from these.
     pub fn u64(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
         let mut z = self.0;
@@ -42,6 +45,7 @@ impl Rng {
         (lo.ln() + self.unit() * (hi.ln() - lo.ln())).exp()
     }
 
+    /// A uniformly chosen element; `items` must not be empty.
     pub fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
         &items[self.below(items.len())]
     }

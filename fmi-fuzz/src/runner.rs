@@ -22,15 +22,24 @@ use std::time::{Duration, Instant};
 /// Options of a fuzz run over one FMU.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
+    /// The FMU to fuzz.
     pub fmu: PathBuf,
+    /// How many sequences to run.
     pub sequences: u64,
+    /// The seed of the first sequence; sequence k uses seed + k, so any failing seed replays alone.
     pub seed: u64,
+    /// The longest sequence, in calls before the clean-up.
     pub max_len: usize,
     /// How long one sequence may run before it counts as hung.
     pub timeout: Duration,
+    /// Child processes running at once.
     pub jobs: usize,
+    /// Sequences per child process: larger batches start fewer processes, smaller ones lose less to
+    /// a crash.
     pub batch: u64,
+    /// `name=value` settings applied right after most instantiations.
     pub presets: Vec<(String, String)>,
+    /// Percentage of instances that get the presets.
     pub preset_percent: u32,
     /// Address-space limit of each child (MiB; 0 = none), so that a runaway allocation fails
     /// in the child instead of exhausting the machine.
@@ -44,11 +53,15 @@ pub struct RunOptions {
 /// What a run found.
 #[derive(Debug, Default)]
 pub struct Report {
+    /// Sequences run, the failing ones included.
     pub sequences: u64,
+    /// FMI calls made in all.
     pub calls: u64,
+    /// Wall-clock time of the run.
     pub seconds: f64,
     /// One entry per failing sequence: (seed, full report text).
     pub failures: Vec<(u64, String)>,
+    /// The statuses every function returned; set at the end of a run (None until then).
     pub stats: Option<StatsTable>,
     /// The run stopped at `max_failures` before all sequences ran.
     pub stopped_early: bool,
@@ -59,6 +72,8 @@ pub struct Report {
 pub struct StatsTable(pub Vec<[u64; 7]>);
 
 impl Report {
+    /// The status counts as a fixed-width table, one row per FMI function (Pending counted as
+    /// "other"); empty without stats.
     pub fn render_stats(&self) -> String {
         let mut s = String::new();
         let Some(StatsTable(rows)) = &self.stats else {

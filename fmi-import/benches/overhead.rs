@@ -48,7 +48,13 @@ fn raw(fmu: &Fmu, vr: u32, h: f64, steps: usize) -> f64 {
     let path = fmu
         .unpacked_dir()
         .join(format!("binaries/{PLATFORM}/{id}.{EXT}"));
+    // SAFETY: the library is the FMU this bench built and `Fmu::load` unpacked; loading it runs
+    // only the Rust or C runtime's initializers, which have no preconditions.
     let lib = unsafe { libloading::Library::new(&path) }.unwrap();
+    // SAFETY: the symbols are resolved with their FMI 2.0 signatures (the type aliases above)
+    // and `lib` outlives every call; the strings are NUL-terminated and live through
+    // fmi2Instantiate; `c` is checked non-NULL and freed once at the end; `vr` and `y` are one
+    // element each, as n = 1 says; calloc/free are the allocator pair FMI asks for.
     unsafe {
         let instantiate = *lib.get::<Instantiate>("fmi2Instantiate").unwrap();
         let setup = *lib.get::<Setup>("fmi2SetupExperiment").unwrap();

@@ -15,9 +15,11 @@ pub enum ImportError {
     /// reading modelDescription.xml).
     #[error("{}: {action}: {source}", path.display())]
     Io {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
         /// What we were doing, e.g. "cannot open the file".
         action: String,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -25,7 +27,9 @@ pub enum ImportError {
     /// The file is not a readable zip archive (corrupt, truncated, not a zip at all).
     #[error("{}: not a valid FMU archive (zip): {source}", path.display())]
     Archive {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// The zip reader's error (bad signature, truncated central directory...).
         #[source]
         source: zip::result::ZipError,
     },
@@ -33,8 +37,11 @@ pub enum ImportError {
     /// An entry could not be decompressed or written.
     #[error("{}: cannot extract entry '{entry}': {source}", path.display())]
     Extract {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// The entry name as stored in the archive.
         entry: String,
+        /// The decompressor's or the file system's error.
         #[source]
         source: std::io::Error,
     },
@@ -43,6 +50,7 @@ pub enum ImportError {
     /// Nothing has been extracted when this is returned.
     #[error("{}: refusing to unpack the archive: entry '{entry}' {reason}", path.display())]
     UnsafeEntry {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
         /// The entry name as stored (NUL shown as `\0`).
         entry: String,
@@ -55,6 +63,7 @@ pub enum ImportError {
     /// more than the size it declares. Nothing beyond the declared sizes has been written.
     #[error("{}: refusing to unpack the archive: {what}", path.display())]
     TooLarge {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
         /// The entry that crossed the limit (none when the entry count did).
         entry: Option<String>,
@@ -64,12 +73,17 @@ pub enum ImportError {
 
     /// The archive has no `modelDescription.xml` at its root.
     #[error("{}: the archive has no modelDescription.xml at its root", path.display())]
-    MissingModelDescription { path: PathBuf },
+    MissingModelDescription {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+    },
 
     /// `modelDescription.xml` could not be parsed; the source gives line and column.
     #[error("{}: modelDescription.xml: {source}", path.display())]
     ModelDescription {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// The parser's error, with line and column in the XML.
         #[source]
         source: ParseError,
     },
@@ -79,7 +93,12 @@ pub enum ImportError {
         "{}: modelDescription.xml declares fmiVersion=\"{version}\"; only FMI 2.0 is supported",
         path.display()
     )]
-    UnsupportedFmiVersion { path: PathBuf, version: String },
+    UnsupportedFmiVersion {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The `fmiVersion` attribute as written (e.g. "1.0", "3.0").
+        version: String,
+    },
 
     /// The FMU has no `<CoSimulation>` element (model exchange only).
     #[error(
@@ -87,20 +106,34 @@ pub enum ImportError {
         path.display(),
         model_exchange_note(.model_exchange)
     )]
-    NotCoSimulation { path: PathBuf, model_exchange: bool },
+    NotCoSimulation {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The FMU has a `<ModelExchange>` element instead, so the message can say it is a
+        /// model-exchange-only FMU rather than a broken one.
+        model_exchange: bool,
+    },
 
     /// `modelIdentifier` cannot name a file inside the archive.
     #[error(
         "{}: modelIdentifier \"{identifier}\" is not usable as a file name (empty, '.', '..', or contains '/', '\\\\', ':' or NUL)",
         path.display()
     )]
-    InvalidModelIdentifier { path: PathBuf, identifier: String },
+    InvalidModelIdentifier {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The `modelIdentifier` of `<CoSimulation>` as written.
+        identifier: String,
+    },
 
     /// This crate was built for a platform FMI 2.0 has no binaries folder for.
     #[error("{}: FMI 2.0 defines no binaries/ folder for this platform ({os}, {arch})", path.display())]
     UnsupportedPlatform {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// `std::env::consts::OS` of this build.
         os: &'static str,
+        /// `std::env::consts::ARCH` of this build.
         arch: &'static str,
     },
 
@@ -111,6 +144,7 @@ pub enum ImportError {
         platform_list(.available)
     )]
     MissingBinary {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
         /// The path inside the archive, e.g. `binaries/linux64/Model.so`.
         expected: String,
@@ -122,9 +156,11 @@ pub enum ImportError {
     /// shared library...); `message` is the loader's own text.
     #[error("{}: cannot load {library}: {message}", path.display())]
     Load {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
         /// The path inside the archive.
         library: String,
+        /// The dynamic loader's message (dlerror / FormatMessage).
         message: String,
     },
 
@@ -136,8 +172,11 @@ pub enum ImportError {
         missing.join(", ")
     )]
     MissingFunctions {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// The path inside the archive.
         library: String,
+        /// The FMI names of the functions not found, in the order they are resolved.
         missing: Vec<&'static str>,
     },
 
@@ -145,8 +184,11 @@ pub enum ImportError {
     /// "2.0" / "default".
     #[error("{}: {function}() returned {found}, expected \"{expected}\"", path.display())]
     Incompatible {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// `"fmi2GetVersion"` or `"fmi2GetTypesPlatform"`.
         function: &'static str,
+        /// What FMI 2.0 requires it to return.
         expected: &'static str,
         /// What it returned, quoted, or NULL.
         found: String,
@@ -154,14 +196,24 @@ pub enum ImportError {
 
     /// The instance name contains a NUL character.
     #[error("{}: the instance name {name:?} contains a NUL character", path.display())]
-    InvalidInstanceName { path: PathBuf, name: String },
+    InvalidInstanceName {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The name as the caller gave it (C strings cannot carry it).
+        name: String,
+    },
 
     /// The FMU declares `canBeInstantiatedOnlyOncePerProcess` and already has a live instance.
     #[error(
         "{}: the FMU declares canBeInstantiatedOnlyOncePerProcess and instance '{existing}' is still alive",
         path.display()
     )]
-    InstantiatedOnlyOnce { path: PathBuf, existing: String },
+    InstantiatedOnlyOnce {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The name of the live instance that must be dropped first.
+        existing: String,
+    },
 
     /// `fmi2Instantiate` returned NULL; `messages` quotes what the FMU logged meanwhile.
     #[error(
@@ -170,14 +222,23 @@ pub enum ImportError {
         quoted_messages(.messages)
     )]
     Instantiate {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
         path: PathBuf,
+        /// The instance name passed to fmi2Instantiate.
         instance: String,
+        /// The warnings and errors the FMU logged during fmi2Instantiate, in order: usually
+        /// the only clue to why it refused.
         messages: Vec<String>,
     },
 
     /// A variable name that the model description does not declare.
     #[error("{}: the FMU has no variable named '{name}'", path.display())]
-    UnknownVariable { path: PathBuf, name: String },
+    UnknownVariable {
+        /// The `.fmu` file, as passed to [`Fmu::open`](crate::Fmu::open).
+        path: PathBuf,
+        /// The name looked up, as the caller wrote it.
+        name: String,
+    },
 
     /// An FMI call made while setting up the instance (e.g. fmi2SetDebugLogging) failed.
     #[error(transparent)]

@@ -177,6 +177,7 @@ impl Fmu {
                 found: version.map_or("NULL".into(), |v| format!("{v:?}")),
             });
         }
+        // SAFETY: as for fmi2GetVersion above: no arguments, a static string or NULL back.
         let types = unsafe { returned((functions.get_types_platform)()) };
         if types.as_deref() != Some("default") {
             return Err(ImportError::Incompatible {
@@ -231,6 +232,8 @@ impl Fmu {
         self.inner.resource_uri.to_str().unwrap_or("")
     }
 
+    /// The parsed `modelDescription.xml`, checked at [`open`](Fmu::open) to be FMI 2.0
+    /// co-simulation; the variables' value references and causalities come from here.
     pub fn model_description(&self) -> &ModelDescription {
         &self.inner.md
     }

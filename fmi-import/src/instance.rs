@@ -112,6 +112,8 @@ impl Instance {
         if component.is_null() {
             // SAFETY: the FMU returned no instance, so nothing refers to these any more.
             let log = unsafe { Box::from_raw(log.as_ptr()) };
+            // SAFETY: `callbacks` came from `Box::into_raw` above and, with no instance made,
+            // nothing else holds it.
             drop(unsafe { Box::from_raw(callbacks.as_ptr()) });
             fmu.live.fetch_sub(1, Ordering::AcqRel);
             return Err(ImportError::Instantiate {
@@ -154,6 +156,8 @@ impl Instance {
         &self.fmu.path
     }
 
+    /// The model description of the FMU this instance came from (shared with the [`Fmu`](crate::Fmu)), for
+    /// looking up value references without keeping the `Fmu` around.
     pub fn model_description(&self) -> &ModelDescription {
         &self.fmu.md
     }
@@ -747,6 +751,10 @@ pub struct FmuState {
 // SAFETY: the pointer is only dereferenced by the FMU, in calls made by the owning Instance
 // (which checks ownership, and is itself used by one thread at a time); the shelf is a mutex.
 unsafe impl Send for FmuState {}
+// SAFETY: through a shared `&FmuState` our code only reads plain fields (`time`, `Debug` prints
+// the address without dereferencing it). The FMU touches the pointee only in calls the owning
+// Instance makes, one at a time (`&mut self`, ownership checked): it only reads a state passed
+// as `&FmuState` (set, serialize) and overwrites one only through `&mut FmuState` (update).
 unsafe impl Sync for FmuState {}
 
 impl FmuState {

@@ -77,7 +77,10 @@ macro_rules! functions {
         /// Some are resolved only to check the FMU is complete (this API does not call them).
         #[derive(Clone, Copy)]
         pub struct Functions {
-            $(pub $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,)*
+            $(
+                #[doc = concat!("`", $name, "`, resolved from the FMU's library.")]
+                pub $field: unsafe extern "C" fn($($arg),*) $(-> $ret)?,
+            )*
         }
 
         /// The names, in declaration order.

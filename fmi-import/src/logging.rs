@@ -257,6 +257,9 @@ mod tests {
         let env = &*state as *const LogState as *mut c_void;
         let cb = callbacks(env.cast());
         let logger = cb.logger.unwrap();
+        // SAFETY: `env` is a live boxed LogState (its header first, as the shim reads it); the
+        // strings are NUL-terminated literals or NULL, which the shim tolerates; the variadic
+        // arguments match the format: an int for %d, a NUL-terminated string for %s.
         unsafe {
             logger(
                 env,
@@ -287,6 +290,8 @@ mod tests {
         let env = &*state as *const LogState as *mut c_void;
         let long = "é".repeat(5000) + "%end";
         let c = std::ffi::CString::new(long.clone()).unwrap();
+        // SAFETY: `env` is a live boxed LogState; the strings are NUL-terminated and `c`
+        // outlives the call; one string argument for the one %s.
         unsafe {
             fmi_import_logger(
                 env,
@@ -305,6 +310,8 @@ mod tests {
     fn below_min_status_is_dropped_but_errors_are_kept() {
         let (seen, state) = capture(fmi2Status::Fatal);
         let env = &*state as *const LogState as *mut c_void;
+        // SAFETY: `env` is a live boxed LogState; NUL-terminated literals; the formats have no
+        // conversions, so no variadic arguments are read.
         unsafe {
             fmi_import_logger(env, c"x".as_ptr(), 0, c"c".as_ptr(), c"ok".as_ptr());
             fmi_import_logger(env, c"x".as_ptr(), 3, c"c".as_ptr(), c"bad".as_ptr());
@@ -321,6 +328,8 @@ mod tests {
         };
         let state = Box::new(LogState::new("p", &config));
         let env = &*state as *const LogState as *mut c_void;
+        // SAFETY: `env` is a live boxed LogState; NUL-terminated literals; the format has no
+        // conversions, so no variadic argument is read.
         unsafe {
             fmi_import_logger(env, c"x".as_ptr(), 3, c"c".as_ptr(), c"boom".as_ptr());
         }

@@ -42,6 +42,8 @@ pub struct UnpackLimits {
 }
 
 impl UnpackLimits {
+    /// The limits [`Fmu::open`](crate::Fmu::open) applies; as a `const` so callers can
+    /// change one field with `..UnpackLimits::DEFAULT`.
     pub const DEFAULT: UnpackLimits = UnpackLimits {
         max_total_bytes: 4 << 30,
         max_entries: 100_000,

@@ -94,26 +94,39 @@ use crate::track::Irregularity;
 use nalgebra::{SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
+/// Degrees of freedom: 5 for the car body, 5 per bogie frame, 2 per wheelset (see the module
+/// docs; the wheelsets' vertical motion and roll are prescribed by the track).
 pub const NDOF: usize = 23;
+/// One value per degree of freedom (displacements, velocities or accelerations), laid out as
+/// [`dof`] says.
 pub type Dof = SVector<f64, NDOF>;
 
 /// Index of the first degree of freedom of each body.
 pub mod dof {
+    /// The car body's five (y, z, roll, pitch, yaw).
     pub const CAR: usize = 0;
+    /// Bogie frame `k` (0 front, 1 rear): five, ordered as the car body's.
     pub const fn bogie(k: usize) -> usize {
         5 + 5 * k
     }
+    /// Wheelset `j` (0 leading to 3 trailing): lateral displacement, then yaw (offset
+    /// [`Y`] and 1).
     pub const fn wheelset(j: usize) -> usize {
         15 + 2 * j
     }
     /// Within a car body or bogie: y, z, roll, pitch, yaw.
     pub const Y: usize = 0;
+    /// Vertical displacement, up positive \[m\].
     pub const Z: usize = 1;
+    /// Roll about x, left side up positive \[rad\].
     pub const ROLL: usize = 2;
+    /// Pitch about y, nose down positive \[rad\].
     pub const PITCH: usize = 3;
+    /// Yaw about z, nose left positive \[rad\].
     pub const YAW: usize = 4;
 }
 
+/// Standard gravity \[m/s2\], for the static loads and the geometric stiffness of preloads.
 pub const GRAVITY: f64 = 9.81;
 
 /// Bodies: 0 car, 1-2 bogies (front, rear), 3-6 wheelsets (front to rear).
@@ -148,10 +161,16 @@ struct Rotational {
 pub struct ContactOptions {
     /// Multiplies all Kalker coefficients (the study's "Kalker -50 %" case).
     pub kalker_scale: f64,
+    /// Saturate the tangential forces at `friction` times the normal load (Shen-Hedrick-Elkins);
+    /// off, Kalker's linear forces grow without limit.
     pub saturation: bool,
+    /// Wheel-rail friction coefficient \[-\], used only by the saturation.
     pub friction: f64,
+    /// Add a flange force outside the dead band `flange_clearance`.
     pub flange: bool,
+    /// Lateral free play before flange contact \[m\].
     pub flange_clearance: f64,
+    /// Lateral stiffness of flange contact on the excess beyond the clearance \[N/m\].
     pub flange_stiffness: f64,
     /// The lateral components of the normal forces (gravitational stiffness and cross-level
     /// gravity). Off only in the Klingel test of a free wheelset.
@@ -180,8 +199,12 @@ impl Default for ContactOptions {
 /// The vehicle's constant data, built once from a parameter set.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Vehicle {
+    /// The parameter set the vehicle was built from.
     pub params: VehicleParams,
+    /// The contact model's switches.
     pub options: ContactOptions,
+    /// The equivalent conicity used: the FMU's `conicity` parameter when positive, else the
+    /// vehicle file's.
     pub conicity: f64,
     mass: Dof,
     elements: Vec<Element>,
@@ -197,6 +220,7 @@ pub struct Vehicle {
 /// The track seen by one wheelset at one instant, already scaled by the run-in ramp.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct WheelsetTrack {
+    /// The irregularities and their derivatives along the track at the wheelset's position.
     pub irr: Irregularity,
 }
 
@@ -207,12 +231,15 @@ pub struct Diagnostics {
     pub wheel_loads: [[f64; 2]; 4],
     /// Wheelset roll angle and rate (prescribed by the track and the cone).
     pub wheelset_roll: [f64; 4],
+    /// Wheelset roll rate \[rad/s\], for the roll-rate gyro.
     pub wheelset_roll_rate: [f64; 4],
 }
 
 impl Vehicle {
     // Bogie and wheelset indices address several arrays at once.
     #[allow(clippy::needless_range_loop)]
+    /// Builds the mass matrix, the suspension elements with their static preloads and the
+    /// creep coefficients at the static wheel load. `conicity` replaces the parameter set's.
     pub fn new(params: VehicleParams, conicity: f64, options: ContactOptions) -> Vehicle {
         let p = &params;
         let (mc, mb, mw) = (p.car_body.mass, p.bogie.mass, p.wheelset.mass);
@@ -331,14 +358,18 @@ impl Vehicle {
         self.wheelset_x[0] - self.wheelset_x[j]
     }
 
+    /// Longitudinal position of bogie pivot `k` from the car centre, forward positive \[m\].
     pub fn bogie_x(&self, k: usize) -> f64 {
         self.bogie_x[k]
     }
 
+    /// Kalker's coefficients at the static wheel load, scaled by `kalker_scale`.
     pub fn creep_law(&self) -> &CreepLaw {
         &self.creep
     }
 
+    /// The (diagonal) mass matrix: masses \[kg\] and moments of inertia \[kg m2\] per degree of
+    /// freedom.
     pub fn mass_diagonal(&self) -> &Dof {
         &self.mass
     }

@@ -13,68 +13,127 @@ use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values,
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-/// Value references.
+/// Value references, dense from 0 within each base type (so a Real and an Integer may share a
+/// number). Each names its FMI variable; what the variable means, its sign convention and its
+/// start value are in [`VARIABLES`].
 pub mod vr {
     // Real
+    /// `speed` (Real input, m/s).
     pub const SPEED: u32 = 0;
+    /// `ws_acc_y` (Real output, m/s2).
     pub const WS_ACC_Y: u32 = 1;
+    /// `ws_yaw_rate` (Real output, rad/s).
     pub const WS_YAW_RATE: u32 = 2;
+    /// `frame_acc_y` (Real output, m/s2).
     pub const FRAME_ACC_Y: u32 = 3;
+    /// `distance` (Real output, m).
     pub const DISTANCE: u32 = 4;
+    /// `alignment` (Real output, m).
     pub const ALIGNMENT: u32 = 5;
+    /// `vertical_profile` (Real output, m).
     pub const VERTICAL_PROFILE: u32 = 6;
+    /// `cross_level` (Real output, m).
     pub const CROSS_LEVEL: u32 = 7;
+    /// `ws_y` (Real output, m).
     pub const WS_Y: u32 = 8;
+    /// `ws_yaw` (Real output, rad).
     pub const WS_YAW: u32 = 9;
+    /// `ws_vy` (Real output, m/s).
     pub const WS_VY: u32 = 10;
+    /// `ws_yaw_rate_true` (Real output, rad/s).
     pub const WS_YAW_RATE_TRUE: u32 = 11;
+    /// `frame_y` (Real output, m).
     pub const FRAME_Y: u32 = 12;
+    /// `frame_vy` (Real output, m/s).
     pub const FRAME_VY: u32 = 13;
+    /// `ws_acc_y_clean` (Real output, m/s2).
     pub const WS_ACC_Y_CLEAN: u32 = 14;
+    /// `frame_acc_y_clean` (Real output, m/s2).
     pub const FRAME_ACC_Y_CLEAN: u32 = 15;
+    /// `ws_roll` (Real output, rad).
     pub const WS_ROLL: u32 = 16;
+    /// `bogie_y` (Real output, m).
     pub const BOGIE_Y: u32 = 17;
+    /// `bogie_roll` (Real output, rad).
     pub const BOGIE_ROLL: u32 = 18;
+    /// `bogie_yaw` (Real output, rad).
     pub const BOGIE_YAW: u32 = 19;
+    /// `body_y` (Real output, m).
     pub const BODY_Y: u32 = 20;
+    /// `body_roll` (Real output, rad).
     pub const BODY_ROLL: u32 = 21;
+    /// `body_yaw` (Real output, rad).
     pub const BODY_YAW: u32 = 22;
+    /// `body_z` (Real output, m).
     pub const BODY_Z: u32 = 23;
+    /// `wheel_load_left` (Real output, calculated at initialization, N).
     pub const WHEEL_LOAD_LEFT: u32 = 24;
+    /// `wheel_load_right` (Real output, calculated at initialization, N).
     pub const WHEEL_LOAD_RIGHT: u32 = 25;
+    /// `conicity` (Real parameter, dimensionless).
     pub const CONICITY: u32 = 26;
+    /// `kalker_scale` (Real parameter, dimensionless).
     pub const KALKER_SCALE: u32 = 27;
+    /// `harmonic_amplitude` (Real parameter, m).
     pub const HARMONIC_AMPLITUDE: u32 = 28;
+    /// `harmonic_wavelength` (Real parameter, m).
     pub const HARMONIC_WAVELENGTH: u32 = 29;
+    /// `ramp_length` (Real parameter, m).
     pub const RAMP_LENGTH: u32 = 30;
+    /// `min_wavelength` (Real parameter, m).
     pub const MIN_WAVELENGTH: u32 = 31;
+    /// `max_wavelength` (Real parameter, m).
     pub const MAX_WAVELENGTH: u32 = 32;
+    /// `sigma_acc` (Real parameter, m/s2).
     pub const SIGMA_ACC: u32 = 33;
+    /// `sigma_gyro` (Real parameter, rad/s).
     pub const SIGMA_GYRO: u32 = 34;
+    /// `friction` (Real parameter, dimensionless).
     pub const FRICTION: u32 = 35;
+    /// `flange_clearance` (Real parameter, m).
     pub const FLANGE_CLEARANCE: u32 = 36;
+    /// `flange_stiffness` (Real parameter, N/m).
     pub const FLANGE_STIFFNESS: u32 = 37;
+    /// `max_internal_step` (Real parameter, s).
     pub const MAX_INTERNAL_STEP: u32 = 38;
+    /// `min_speed` (Real parameter, m/s).
     pub const MIN_SPEED: u32 = 39;
+    /// `forward_speed` (Real output, m/s).
     pub const FORWARD_SPEED: u32 = 40;
+    /// `ws_roll_rate` (Real output, rad/s).
     pub const WS_ROLL_RATE: u32 = 41;
+    /// `ws_roll_rate_true` (Real output, rad/s).
     pub const WS_ROLL_RATE_TRUE: u32 = 42;
+    /// `sigma_roll_gyro` (Real parameter, rad/s).
     pub const SIGMA_ROLL_GYRO: u32 = 43;
     // Integer
+    /// `track_seed` (Integer parameter).
     pub const TRACK_SEED: u32 = 0;
+    /// `spectrum` (Integer parameter).
     pub const SPECTRUM: u32 = 1;
+    /// `noise_seed` (Integer parameter).
     pub const NOISE_SEED: u32 = 2;
     // Boolean
+    /// `lateral_irregularity` (Boolean parameter).
     pub const LATERAL_IRREGULARITY: u32 = 0;
+    /// `vertical_irregularity` (Boolean parameter).
     pub const VERTICAL_IRREGULARITY: u32 = 1;
+    /// `sensor_noise` (Boolean parameter).
     pub const SENSOR_NOISE: u32 = 2;
+    /// `creep_saturation` (Boolean parameter).
     pub const CREEP_SATURATION: u32 = 3;
+    /// `flange_contact` (Boolean parameter).
     pub const FLANGE_CONTACT: u32 = 4;
     // String
+    /// `vehicle` (String parameter).
     pub const VEHICLE: u32 = 0;
+    /// `track_file` (String parameter).
     pub const TRACK_FILE: u32 = 1;
 }
 
+/// The variable table: modelDescription.xml, the documentation's table and the export layer's
+/// checks all come from it, so the three cannot disagree. The descriptions say where each
+/// sensor sits and give the sign conventions.
 pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_input(
         vr::SPEED,

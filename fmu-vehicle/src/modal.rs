@@ -74,8 +74,11 @@ pub fn subsystem(a: &DMatrix<f64>, dofs: &[usize]) -> DMatrix<f64> {
 /// One mode: eigenvalue, damped frequency \[Hz\] and damping ratio.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mode {
+    /// The eigenvalue of the state matrix \[1/s\]; a positive real part is an unstable mode.
     pub eigenvalue: Complex<f64>,
+    /// Damped natural frequency `|Im| / (2 pi)` \[Hz\]; 0 for an overdamped mode.
     pub frequency: f64,
+    /// Damping ratio `-Re / |lambda|` (1 critical, negative unstable).
     pub damping: f64,
 }
 
@@ -94,8 +97,12 @@ impl Mode {
 /// imaginary part), sorted by frequency; overdamped (real) modes are kept with frequency 0.
 #[derive(Debug, Clone)]
 pub struct Modes {
+    /// The speed the equations were linearized at \[m/s\]: the creep forces, and so the lateral
+    /// modes, depend on it.
     pub speed: f64,
+    /// Modes of the lateral subsystem (lateral, roll, yaw): where hunting appears.
     pub lateral: Vec<Mode>,
+    /// Modes of the vertical subsystem (bounce, pitch).
     pub vertical: Vec<Mode>,
     /// Largest coupling entry between the two subsystems relative to the largest entry of A
     /// (zero for a symmetric vehicle on straight track).
@@ -113,6 +120,8 @@ fn modes_of(a: &DMatrix<f64>) -> Vec<Mode> {
     m
 }
 
+/// The modes of `vehicle` at speed `v` \[m/s\], from the state matrix of the same right-hand
+/// side the simulation integrates.
 pub fn modes(vehicle: &Vehicle, v: f64) -> Modes {
     let a = state_matrix(vehicle, v);
     let (lat, ver) = (lateral_dofs(), vertical_dofs());

@@ -6,38 +6,66 @@
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// One wheelset: a rigid axle with two coned wheels (the `[wheelset]` table). SI units, as in the
+/// vehicle files, which give each value's source.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Wheelset {
+    /// Mass of one wheelset \[kg\] (the paper's m).
     pub mass: f64,
+    /// Moment of inertia about the vertical axis \[kg m2\] (the paper's I).
     pub yaw_inertia: f64,
+    /// Moment of inertia about the track's longitudinal axis \[kg m2\].
     pub roll_inertia: f64,
+    /// Moment of inertia about the axle \[kg m2\]: with the spin speed it gives the gyroscopic yaw
+    /// moment of a rolling wheelset.
     pub spin_inertia: f64,
+    /// Half the lateral distance between the two contact points \[m\] (the paper's l).
     pub half_gauge: f64,
+    /// Wheel rolling radius r0 with the wheelset centred \[m\].
     pub rolling_radius: f64,
+    /// Equivalent conicity \[-\] (the paper's alpha): the rolling-radius difference per metre of
+    /// lateral displacement is 2 times it; with `half_gauge` and `rolling_radius` it sets Klingel's
+    /// wavelength 2 pi sqrt(r0 l / conicity).
     pub conicity: f64,
+    /// Transverse radius of the rail head \[m\], for the Hertz contact ellipse.
     pub rail_crown_radius: f64,
 }
 
+/// One bogie frame, carrying two wheelsets through the primary suspension (`[bogie]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Bogie {
+    /// Bogie frame mass \[kg\], without wheelsets.
     pub mass: f64,
+    /// Frame moment of inertia about the longitudinal axis \[kg m2\].
     pub roll_inertia: f64,
+    /// Frame moment of inertia about the lateral axis \[kg m2\].
     pub pitch_inertia: f64,
+    /// Frame moment of inertia about the vertical axis \[kg m2\].
     pub yaw_inertia: f64,
+    /// Half the distance between the bogie's two axles \[m\]; must be less than
+    /// `CarBody::semi_bogie_distance`.
     pub semi_wheelbase: f64,
+    /// Height of the frame's centre of gravity above the rail \[m\].
     pub cg_height: f64,
 }
 
+/// The car body, on two bogies through the secondary suspension (`[car_body]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CarBody {
+    /// Car body mass \[kg\], without bogies and wheelsets.
     pub mass: f64,
+    /// Body moment of inertia about the longitudinal axis \[kg m2\].
     pub roll_inertia: f64,
+    /// Body moment of inertia about the lateral axis \[kg m2\].
     pub pitch_inertia: f64,
+    /// Body moment of inertia about the vertical axis \[kg m2\].
     pub yaw_inertia: f64,
+    /// Half the distance between the two bogie pivots \[m\].
     pub semi_bogie_distance: f64,
+    /// Height of the body's centre of gravity above the rail \[m\].
     pub cg_height: f64,
 }
 
@@ -46,13 +74,22 @@ pub struct CarBody {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Stage {
+    /// Longitudinal stiffness of one element \[N/m\].
     pub kx: f64,
+    /// Lateral stiffness of one element \[N/m\].
     pub ky: f64,
+    /// Vertical stiffness of one element \[N/m\].
     pub kz: f64,
+    /// Longitudinal damping of one element \[N s/m\].
     pub cx: f64,
+    /// Lateral damping of one element \[N s/m\].
     pub cy: f64,
+    /// Vertical damping of one element \[N s/m\].
     pub cz: f64,
+    /// Lateral distance of each element from the centre line \[m\] (primary: the paper's l_s).
     pub semi_spacing: f64,
+    /// Height of the elements above the rail \[m\]: where their forces act, so their lateral forces
+    /// also roll the bodies.
     pub height: f64,
     /// Secondary only: rotational yaw stiffness per side [N m/rad].
     #[serde(default)]
@@ -62,30 +99,46 @@ pub struct Stage {
     pub anti_roll: f64,
 }
 
+/// A whole vehicle file: one car with two bogies and four wheelsets. Unknown keys are refused
+/// (a misspelt key would otherwise silently keep a default), and [`check`](Self::check) refuses
+/// non-physical values.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleParams {
+    /// A label for messages and reports; not used in the equations.
     pub name: String,
+    /// Each of the four wheelsets (all alike).
     pub wheelset: Wheelset,
+    /// Each of the two bogie frames (alike).
     pub bogie: Bogie,
+    /// The car body.
     pub car_body: CarBody,
+    /// Wheelset to bogie frame, per axle box.
     pub primary: Stage,
+    /// Bogie frame to car body, per bogie side.
     pub secondary: Stage,
 }
 
+/// `resources/ml95.toml`: the ML95-like metro car of the estimation study (the default).
 pub const ML95_TOML: &str = include_str!("../resources/ml95.toml");
+/// `resources/manchester.toml`: Manchester Benchmark vehicle 1 (Iwnicki 1998), a heavier
+/// main-line car, for checking results do not hinge on one vehicle.
 pub const MANCHESTER_TOML: &str = include_str!("../resources/manchester.toml");
 
 impl VehicleParams {
+    /// The built-in [`ML95_TOML`].
     pub fn ml95() -> VehicleParams {
         Self::parse(ML95_TOML, "ml95.toml").expect("the built-in ML95 file is valid")
     }
 
+    /// The built-in [`MANCHESTER_TOML`].
     pub fn manchester() -> VehicleParams {
         Self::parse(MANCHESTER_TOML, "manchester.toml")
             .expect("the built-in Manchester file is valid")
     }
 
+    /// Parses and [`check`](Self::check)s a vehicle file's text; errors start with `origin`
+    /// (the file name) and name the offending key.
     pub fn parse(text: &str, origin: &str) -> Result<VehicleParams, String> {
         let p: VehicleParams =
             toml::from_str(text).map_err(|e| format!("vehicle file {origin}: {e}"))?;
@@ -94,6 +147,7 @@ impl VehicleParams {
         Ok(p)
     }
 
+    /// Reads and [`parse`](Self::parse)s a vehicle file (at most 1 MiB).
     pub fn load(path: &Path) -> Result<VehicleParams, String> {
         // A vehicle file is a few kilobytes of TOML; 1 MiB leaves room for comments.
         let text = fmi_abi::resource::read_text(path, "vehicle file", 1 << 20)?;
@@ -193,6 +247,7 @@ impl VehicleParams {
         self.car_body.mass / 4.0 + self.bogie.mass / 2.0
     }
 
+    /// The whole vehicle's mass \[kg\]: body, two bogie frames, four wheelsets.
     pub fn total_mass(&self) -> f64 {
         self.car_body.mass + 2.0 * self.bogie.mass + 4.0 * self.wheelset.mass
     }

@@ -62,6 +62,8 @@ pub struct NoiseRng {
 }
 
 impl NoiseRng {
+    /// A generator whose state is `seed` expanded by SplitMix64 (as Blackman and Vigna
+    /// recommend), so nearby seeds give unrelated streams.
     pub fn new(seed: u64) -> NoiseRng {
         // splitmix64 expands the seed into the four words of state.
         let mut x = seed;
@@ -109,6 +111,7 @@ impl NoiseRng {
         }
     }
 
+    /// The next 64 uniform bits (xoshiro256++).
     pub fn next_u64(&mut self) -> u64 {
         let s = &mut self.s;
         let result = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
@@ -127,6 +130,8 @@ impl NoiseRng {
         ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 
+    /// A standard normal deviate (mean 0, variance 1); the polar method makes two at a time and
+    /// keeps the second for the next call, which is part of the FMU state.
     pub fn normal(&mut self) -> f64 {
         if let Some(x) = self.spare.take() {
             return x;
@@ -146,16 +151,23 @@ impl NoiseRng {
 /// Sensor noise configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SensorNoise {
+    /// Off: every sensor output equals its `_clean` twin and no deviate is drawn.
     pub enabled: bool,
+    /// Standard deviation per sample of both accelerometers \[m/s2\] (white, Gaussian).
     pub sigma_acc: f64,
+    /// Standard deviation per sample of the yaw gyroscope \[rad/s\].
     pub sigma_gyro: f64,
     /// Of the wheelset roll gyroscope, which has its own generator.
     pub sigma_roll_gyro: f64,
 }
 
+/// How the simulation integrates and starts.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SimConfig {
+    /// Upper bound of the Runge-Kutta step \[s\]; the step also shrinks with the speed (module
+    /// docs).
     pub max_internal_step: f64,
+    /// Length of the run-in ramp of the irregularities \[m\] (module docs); 0: none.
     pub ramp_length: f64,
     /// Below this speed the vehicle is taken to stand still: the state is held.
     pub min_speed: f64,
@@ -174,51 +186,92 @@ impl Default for SimConfig {
 /// Everything the FMU reports after a step.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Outputs {
+    /// Axle-box accelerometer on the leading wheelset, with noise: `y_w'' + g phi_w` \[m/s2\]
+    /// (module docs, "Sensors").
     pub ws_acc_y: f64,
+    /// Yaw gyroscope on the leading wheelset, with noise \[rad/s\], nose left positive.
     pub ws_yaw_rate: f64,
+    /// Lateral accelerometer on the leading bogie frame above the leading wheelset, with noise
+    /// \[m/s2\].
     pub frame_acc_y: f64,
+    /// `ws_acc_y` without noise.
     pub ws_acc_y_clean: f64,
+    /// `ws_yaw_rate` without noise: the true yaw rate.
     pub ws_yaw_rate_clean: f64,
+    /// `frame_acc_y` without noise.
     pub frame_acc_y_clean: f64,
+    /// Position of the leading wheelset along the track \[m\].
     pub distance: f64,
+    /// Ramped alignment at the leading wheelset \[m\]: the truth an estimator is scored against.
     pub alignment: f64,
+    /// Ramped vertical profile at the leading wheelset \[m\].
     pub vertical_profile: f64,
+    /// Ramped cross-level at the leading wheelset, left rail minus right rail height \[m\].
     pub cross_level: f64,
+    /// Leading wheelset lateral displacement from the ideal centre line \[m\], left positive.
     pub ws_y: f64,
+    /// Leading wheelset yaw \[rad\].
     pub ws_yaw: f64,
+    /// Leading wheelset lateral velocity \[m/s\].
     pub ws_vy: f64,
+    /// Leading wheelset roll, cross-level plus cone roll \[rad\], left side up positive.
     pub ws_roll: f64,
+    /// Lateral displacement of the leading bogie frame at the point above the leading wheelset,
+    /// `y_b + a psi_b` \[m\].
     pub frame_y: f64,
+    /// Lateral velocity of that point \[m/s\].
     pub frame_vy: f64,
+    /// Leading bogie frame lateral displacement at its centre of gravity \[m\].
     pub bogie_y: f64,
+    /// Leading bogie frame roll \[rad\].
     pub bogie_roll: f64,
+    /// Leading bogie frame yaw \[rad\].
     pub bogie_yaw: f64,
+    /// Car body lateral displacement \[m\].
     pub body_y: f64,
+    /// Car body roll \[rad\].
     pub body_roll: f64,
+    /// Car body yaw \[rad\].
     pub body_yaw: f64,
+    /// Car body bounce from static equilibrium, up positive \[m\].
     pub body_z: f64,
+    /// Normal load on the leading wheelset's left wheel \[N\], static plus dynamic.
     pub wheel_load_left: f64,
+    /// Normal load on the leading wheelset's right wheel \[N\].
     pub wheel_load_right: f64,
+    /// The speed run at over the last step \[m/s\]; 0 when standing (below `min_speed`).
     pub forward_speed: f64,
+    /// Roll gyroscope on the leading wheelset, with noise: the time derivative of `ws_roll`
+    /// \[rad/s\] (module docs).
     pub ws_roll_rate: f64,
+    /// `ws_roll_rate` without noise; 0 when standing.
     pub ws_roll_rate_clean: f64,
 }
 
 /// The running simulation: everything here is part of an FMU state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Simulation {
+    /// The vehicle's constant data.
     pub vehicle: Vehicle,
+    /// The irregularities, grown as the vehicle runs.
     pub track: Track,
+    /// Integration and run-in settings.
     pub config: SimConfig,
+    /// Sensor noise settings.
     pub noise: SensorNoise,
+    /// The accelerometers' and yaw gyroscope's noise generator, seeded by `noise_seed`.
     pub rng: NoiseRng,
     /// The roll gyroscope's generator: `rng` at the start, jumped by 2^128 draws.
     pub roll_rng: NoiseRng,
+    /// Displacements from static equilibrium, laid out as [`dof`] says.
     pub q: Dof,
+    /// Velocities, laid out like `q`.
     pub qd: Dof,
     /// Position of the leading wheelset along the track \[m\].
     pub s: f64,
+    /// The sensors and truth at the current communication point.
     pub outputs: Outputs,
+    /// Runge-Kutta steps taken so far (for the benchmarks and the step-size tests).
     pub substeps: u64,
 }
 
@@ -242,6 +295,8 @@ fn ramped(s: f64, len: f64, f: (f64, f64, f64)) -> (f64, f64, f64) {
 }
 
 impl Simulation {
+    /// The vehicle at rest in static equilibrium at `s = 0`, its outputs already measured
+    /// (without noise); `noise_seed` seeds both noise generators.
     pub fn new(
         vehicle: Vehicle,
         track: Track,

@@ -14,8 +14,11 @@ pub enum ParseError {
     /// The text is not well-formed XML.
     #[error("malformed XML at line {line}, column {column}: {message}")]
     Xml {
+        /// 1-based line where the XML reader stopped.
         line: usize,
+        /// 1-based column there, in characters (a tab counts as one).
         column: usize,
+        /// The XML reader's description (unclosed tag, bad entity...).
         message: String,
     },
 
@@ -24,8 +27,11 @@ pub enum ParseError {
         "line {line}, column {column}: the root element is <{found}>, expected <fmiModelDescription>"
     )]
     NotModelDescription {
+        /// 1-based line of the root element's `<`.
         line: usize,
+        /// 1-based column of the root element's `<`, in characters.
         column: usize,
+        /// The root element's name as written.
         found: String,
     },
 
@@ -35,9 +41,13 @@ pub enum ParseError {
         in_variable(.variable)
     )]
     MissingAttribute {
+        /// 1-based line of the `<` of the element lacking the attribute.
         line: usize,
+        /// 1-based column of that `<`, in characters.
         column: usize,
+        /// The element's name, e.g. `Real`.
         element: String,
+        /// The attribute the standard requires there.
         attribute: &'static str,
         /// The enclosing `ScalarVariable`'s name, when known.
         variable: Option<String>,
@@ -49,31 +59,44 @@ pub enum ParseError {
         in_variable(.variable)
     )]
     InvalidValue {
+        /// 1-based line of the attribute's name.
         line: usize,
+        /// 1-based column of the attribute's name, in characters.
         column: usize,
+        /// The element carrying the attribute.
         element: String,
+        /// The attribute's name.
         attribute: &'static str,
+        /// The value as written.
         value: String,
         /// What would have been accepted, e.g. "a floating-point number".
         expected: &'static str,
+        /// The enclosing `ScalarVariable`'s name, when known.
         variable: Option<String>,
     },
 
     /// A required child element is absent (e.g. a `ScalarVariable` without a type element).
     #[error("line {line}, column {column}: <{element}>{} has no {expected} element", in_variable(.variable))]
     MissingElement {
+        /// 1-based line of the parent element's `<`.
         line: usize,
+        /// 1-based column of the parent element's `<`, in characters.
         column: usize,
+        /// The parent element's name.
         element: String,
         /// The child (or choice of children) that was expected.
         expected: &'static str,
+        /// The enclosing `ScalarVariable`'s name, when known.
         variable: Option<String>,
     },
 
-    /// The file could not be read (missing, unreadable, not UTF-8).
+    /// The file could not be read (missing, unreadable). Text that is not UTF-8 is an
+    /// [`InFile`](ParseError::InFile) error pointing at the first bad byte.
     #[error("cannot read {}: {source}", path.display())]
     Io {
+        /// The file as passed to `from_file`.
         path: PathBuf,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -81,7 +104,9 @@ pub enum ParseError {
     /// A parse error in a file read with `from_file`.
     #[error("{}: {source}", path.display())]
     InFile {
+        /// The file as passed to `from_file`.
         path: PathBuf,
+        /// The error inside the document, with its line and column.
         #[source]
         source: Box<ParseError>,
     },

@@ -14,6 +14,8 @@ use crate::types::*;
 pub struct Violation {
     /// The variable the rule is about, if any.
     pub variable: Option<String>,
+    /// The rule and what broke it, phrased for the author of the file (e.g. which attribute to
+    /// add).
     pub message: String,
 }
 

@@ -30,6 +30,7 @@ pub struct Element {
     pub offset: usize,
     /// Attributes in document order, without namespace declarations.
     pub attributes: Vec<Attribute>,
+    /// Child elements in document order (text and comments are not kept).
     pub children: Vec<Element>,
 }
 
@@ -84,6 +85,7 @@ pub struct XmlError {
     pub line: usize,
     /// 1-based column of `offset`, counted in characters.
     pub column: usize,
+    /// What is wrong, in the reader's words.
     pub message: String,
 }
 

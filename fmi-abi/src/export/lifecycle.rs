@@ -10,10 +10,12 @@ use crate::types::*;
 use std::ffi::{c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+/// fmi2GetTypesPlatform: "default", the platform types of the FMI 2.0 headers (a static string).
 pub fn get_types_platform() -> *const c_char {
     c"default".as_ptr()
 }
 
+/// fmi2GetVersion: "2.0" (a static string).
 pub fn get_version() -> *const c_char {
     c"2.0".as_ptr()
 }

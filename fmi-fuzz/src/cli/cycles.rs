@@ -5,17 +5,23 @@ use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
 
+/// The options of `fmi-fuzz cycles`.
 #[derive(Args)]
 pub struct CyclesArgs {
+    /// An FMU to run the cycles on (repeatable).
     #[arg(long = "fmu")]
     pub fmus: Vec<PathBuf>,
+    /// Cycles per FMU: instantiate, initialize, step, FMU states, free.
     #[arg(long, default_value_t = 1000)]
     pub cycles: u64,
     /// Communication steps per cycle.
     #[arg(long, default_value_t = 10)]
     pub steps: u64,
+    /// Communication step size in seconds.
     #[arg(long, default_value_t = 1e-3)]
     pub step_size: f64,
+    /// `name=value` set after each instantiation (repeatable), e.g. to make an expensive
+    /// initialization cheap.
     #[arg(long = "preset", value_parser = parse_preset)]
     pub presets: Vec<(String, String)>,
 }

@@ -11,6 +11,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+/// The options of the default command.
 #[derive(Args)]
 pub struct FuzzArgs {
     /// An FMU to fuzz (repeatable).

@@ -17,12 +17,15 @@ use clap::{Parser, Subcommand};
     args_conflicts_with_subcommands = true
 )]
 pub struct Cli {
+    /// A subcommand; none means fuzzing with the top-level options.
     #[command(subcommand)]
     pub command: Option<Cmd>,
+    /// The fuzzing options, used when there is no subcommand.
     #[command(flatten)]
     pub fuzz: fuzz::FuzzArgs,
 }
 
+/// The commands besides fuzzing.
 #[derive(Subcommand)]
 pub enum Cmd {
     /// Instantiate/initialize/step/FMU-state/free cycles (run this under valgrind).

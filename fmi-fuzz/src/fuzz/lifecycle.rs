@@ -20,6 +20,7 @@ impl Fuzzer<'_> {
             // SAFETY: no arguments.
             (unsafe { (self.t.api.get_version)() }, "2.0")
         } else {
+            // SAFETY: no arguments; the symbol was resolved with the FMI 2.0 signature.
             (unsafe { (self.t.api.get_types_platform)() }, "default")
         };
         self.stats.add(f, 0);
@@ -425,7 +426,8 @@ impl Fuzzer<'_> {
                 fmt_f(stop)
             ),
         );
-        // SAFETY: scalar arguments.
+        // SAFETY: `c` is a live instance, NULL or the foreign block (never a freed instance, see
+        // the module docs); the other arguments are scalars.
         let status = unsafe {
             (self.t.api.setup_experiment)(c, tol_defined, tol, start, stop_defined, stop)
         };
@@ -494,7 +496,8 @@ impl Fuzzer<'_> {
                 fmt_f(h)
             ),
         );
-        // SAFETY: scalar arguments.
+        // SAFETY: `c` is a live instance, NULL or the foreign block (never a freed instance, see
+        // the module docs); the other arguments are scalars.
         let status = unsafe { (self.t.api.do_step)(c, t, h, no_prior) };
         let off = known_time.is_some_and(|k| (t - k).abs() > 1e-6 * k.abs().max(1.0) || t.is_nan());
         let expect = self.expect(comp, Call::DoStep, Expect::Any, |_| {

@@ -59,6 +59,8 @@ const CANARY_BYTE: u8 = 0xA5;
 /// Counts of returned statuses per function: `[function][status]`, status 6 = outside 0..=5.
 #[derive(Clone)]
 pub struct Stats {
+    /// Indexed by the function's position in `NAMES`; columns fmi2OK..fmi2Pending and one for any
+    /// other value.
     pub counts: Vec<[u64; 7]>,
 }
 
@@ -80,6 +82,7 @@ impl Stats {
         self.counts[f][col] += 1;
     }
 
+    /// Adds another sequence's or worker's counts.
     pub fn merge(&mut self, o: &Stats) {
         for (a, b) in self.counts.iter_mut().zip(&o.counts) {
             for (x, y) in a.iter_mut().zip(b) {
@@ -88,6 +91,7 @@ impl Stats {
         }
     }
 
+    /// All calls counted.
     pub fn total(&self) -> u64 {
         self.counts.iter().flatten().sum()
     }
@@ -102,9 +106,12 @@ pub enum Trace {
     Stream,
 }
 
+/// What every sequence of a run shares (the seed is per sequence).
 #[derive(Debug, Clone)]
 pub struct Config {
+    /// The longest sequence, in calls before the clean-up.
     pub max_len: usize,
+    /// Whether calls are printed as they are made.
     pub trace: Trace,
     /// Variable settings applied right after most instantiations (by name), to make an
     /// expensive initialization cheap, e.g. `lateral_irregularity=false`.
@@ -115,12 +122,19 @@ pub struct Config {
 
 /// What one sequence did.
 pub struct SeqResult {
+    /// The seed that replays the sequence (`--seed S --sequences 1 --trace`).
     pub seed: u64,
+    /// FMI calls made, clean-up included.
     pub calls: u64,
+    /// One line per broken expectation: the call, what the oracle expected and what came back.
     pub failures: Vec<String>,
+    /// Every call made, in order, for the failure report.
     pub trace: Vec<String>,
 }
 
+/// One sequence in progress: random FMI calls on up to `MAX_INSTANCES` instances, each checked
+/// against the state-machine oracle. It keeps books of its instances, saved states and
+/// serialized blobs, so it passes NULL and foreign pointers on purpose but never a freed one.
 pub struct Fuzzer<'t> {
     t: &'t Target,
     cfg: &'t Config,
@@ -133,6 +147,7 @@ pub struct Fuzzer<'t> {
     trace: Vec<String>,
     failures: Vec<String>,
     calls: u64,
+    /// The statuses each function returned, merged into the run's table by the runner.
     pub stats: Stats,
     caps: Caps,
 }
@@ -154,6 +169,7 @@ fn target_caps(t: &Target) -> Caps {
 }
 
 impl<'t> Fuzzer<'t> {
+    /// A sequence determined by `seed` alone: the same seed replays the same calls.
     pub fn new(t: &'t Target, cfg: &'t Config, seed: u64) -> Fuzzer<'t> {
         let md_caps = target_caps(t);
         Fuzzer {

@@ -214,15 +214,23 @@ impl TrackSpec {
 /// Irregularities at one position `s`, with derivatives along `s` (m, 1, 1/m).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Irregularity {
+    /// Alignment `xi_a`, the mean lateral deviation of the two rails, left positive \[m\].
     pub alignment: f64,
+    /// d(xi_a)/ds \[1\]; times `V` gives the rate seen by a wheelset.
     pub alignment_ds: f64,
+    /// d2(xi_a)/ds2 \[1/m\]; times `V^2` gives the lateral acceleration the track imposes.
     pub alignment_ds2: f64,
+    /// Vertical profile `xi_vp`, the mean height deviation of the two rails, up positive \[m\].
     pub vertical: f64,
+    /// d(xi_vp)/ds \[1\].
     pub vertical_ds: f64,
+    /// d2(xi_vp)/ds2 \[1/m\].
     pub vertical_ds2: f64,
     /// Height difference `u_z^lr - u_z^rr` \[m\].
     pub cross_level: f64,
+    /// d(xi_cl)/ds \[1\]; `V xi_cl_s / (2 l)` is the track's roll rate.
     pub cross_level_ds: f64,
+    /// d2(xi_cl)/ds2 \[1/m\].
     pub cross_level_ds2: f64,
 }
 

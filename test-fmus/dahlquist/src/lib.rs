@@ -33,6 +33,7 @@ static VARIABLES: &[VarSpec] = &[
     .min(0.0),
 ];
 
+/// The model the export layer wraps (`fmu_dahlquist_export` makes it an FMU). x = x0 at the start; `end_at` > 0 ends the run there with fmi2Terminated. Stateless apart from its FMI variables, so its FMU state is the variable values alone.
 #[derive(Clone, Serialize, Deserialize)]
 pub struct Dahlquist;
 
@@ -89,8 +90,12 @@ impl Model for Dahlquist {
     }
 }
 
+/// The method section of the FMU's documentation/index.html (`cargo xtask fmu` prepends it
+/// to the generated variable table).
 pub const METHOD_HTML: &str = "<h2>Method</h2><p>x' = -k x + u, integrated exactly over each communication step with u held.</p>";
 
+/// The modelDescription.xml the FMU ships, generated from the variable table, so the XML and
+/// the code cannot disagree.
 pub fn model_description() -> model_description::ModelDescription {
     fmi_abi::description::model_description::<Dahlquist>()
 }

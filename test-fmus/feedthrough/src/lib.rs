@@ -54,6 +54,7 @@ static VARIABLES: &[VarSpec] = &[
     ),
 ];
 
+/// The model the export layer wraps (`fmu_feedthrough_export` makes it an FMU). Stateless apart from its FMI variables: every output is recomputed from the inputs at each step, so its FMU state is the variable values alone.
 #[derive(Clone, Serialize, Deserialize)]
 pub struct Feedthrough;
 
@@ -119,9 +120,13 @@ impl Model for Feedthrough {
     }
 }
 
+/// The method section of the FMU's documentation/index.html (`cargo xtask fmu` prepends it
+/// to the generated variable table).
 pub const METHOD_HTML: &str =
     "<h2>Method</h2><p>y = gain * u + offset at every step; fmi2Error from fail_at on.</p>";
 
+/// The modelDescription.xml the FMU ships, generated from the variable table, so the XML and
+/// the code cannot disagree.
 pub fn model_description() -> model_description::ModelDescription {
     fmi_abi::description::model_description::<Feedthrough>()
 }
