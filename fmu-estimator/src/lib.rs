@@ -39,6 +39,7 @@ pub mod config;
 pub mod core;
 pub mod discretize;
 pub mod engine;
+pub mod error;
 pub mod filter;
 pub mod fmu;
 pub mod learned;
