@@ -53,8 +53,8 @@ pub enum Error {
     TapFile { tap_file: String, message: String },
 }
 
-/// The learned filter still speaks in strings: its callers inside this crate pass an [`Error`]
-/// to it as text.
+/// The learned modules (`learned` here, `study::learned` in the studies) still return text: an
+/// [`Error`] reaching one of them becomes its message, until they have typed errors too.
 impl From<Error> for String {
     fn from(e: Error) -> String {
         e.to_string()

@@ -733,6 +733,25 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_derailment_is_read_from_its_message_only() {
+        // As an importer logs it: fmi-abi's prefix, then do_step's text.
+        assert!(is_derailment(
+            "fmi2DoStep at t=12.5: derailed: the leading wheelset is 39.4 mm off the track centre line"
+        ));
+        assert!(is_derailment(
+            "derailed: the leading wheelset is 39.4 mm off"
+        ));
+        for other in [
+            "fmi2DoStep at t=1: the vehicle state became non-finite at distance 3 m",
+            "fmi2DoStep at t=1: the vehicle derailed",
+            "underailed: x",
+            "fmi2DoStep at t=1: not derailed: x",
+        ] {
+            assert!(!is_derailment(other), "{other}");
+        }
+    }
+
+    #[test]
     fn absurd_steps_and_speeds_are_refused_instead_of_attempted() {
         let ctx = InstantiateContext {
             instance_name: "t".into(),

@@ -145,3 +145,89 @@ impl From<Error> for String {
         e.to_string()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fmi_abi::types::fmi2Status;
+    use fmi_import::FmiError;
+
+    /// A failed fmi2DoStep of the vehicle, as the master reports it, the FMU having logged
+    /// `message` (the export layer's prefix and the model's text).
+    fn step_failed(message: &str) -> RunError {
+        RunError::Fmi {
+            error: FmiError {
+                instance: "vehicle".into(),
+                fmu: "RailVehicle.fmu".into(),
+                function: "fmi2DoStep",
+                status: fmi2Status::Error,
+                time: Some(12.5),
+                last_successful_time: None,
+                terminated: false,
+                messages: vec![message.into()],
+            },
+            results: None,
+        }
+    }
+
+    #[test]
+    fn a_derailment_is_its_own_kind_and_exits_as_a_failed_run() {
+        // The text the vehicle FMU logs (fmu_vehicle::fmu's do_step, behind fmi-abi's prefix).
+        let derailed = step_failed(
+            "fmi2DoStep at t=12.5: derailed: the leading wheelset is 39.4 mm off the track centre line at distance 375.0 m (flange clearance 9.0 mm + 30 mm of flange): the vehicle is unstable at 30 m/s with these parameters (hunting), and the model cannot go on",
+        );
+        let text = derailed.to_string();
+        let e = Error::from(derailed);
+        assert!(matches!(e, Error::Derailed(_)), "{e:?}");
+        assert!(e.is_derailment());
+        assert_eq!(e.exit_code(), 3);
+        assert_eq!(
+            e.to_string(),
+            text,
+            "the message is the master's, unchanged"
+        );
+        let e = e.context("case x, seed 1");
+        assert!(e.is_derailment());
+        assert_eq!(e.exit_code(), 3);
+        assert_eq!(e.to_string(), format!("case x, seed 1: {text}"));
+        // Another failure of the same step, or the word elsewhere in a message, is not one.
+        for other in [
+            "fmi2DoStep at t=1: the vehicle state became non-finite at distance 3 m",
+            "fmi2DoStep at t=1: the track model derailed nothing: a comment",
+        ] {
+            let e = Error::from(step_failed(other));
+            assert!(matches!(e, Error::Run(_)), "{other}");
+            assert!(!e.is_derailment(), "{other}");
+            assert_eq!(e.exit_code(), 3, "{other}");
+        }
+    }
+
+    #[test]
+    fn exit_codes_follow_the_kind() {
+        let setting = fmu_estimator::error::SettingError::Lag(-1.0);
+        let cases: [(Error, i32); 7] = [
+            (Error::input("--seeds: none"), 2),
+            (setting.clone().into(), 2),
+            (
+                crate::study::metrics::MetricError::NotEnoughSamples.into(),
+                2,
+            ),
+            (Error::Learned("fit failed".into()), 2),
+            (
+                Error::write(std::path::Path::new("/x/report.md"), "disk full"),
+                1,
+            ),
+            (RunError::Config("--stop -1".into()).into(), 2),
+            (Error::input("--set a=b: no component 'a'").context("x"), 2),
+        ];
+        for (e, code) in cases {
+            assert_eq!(e.exit_code(), code, "{e}");
+            assert!(!e.is_derailment(), "{e}");
+        }
+        // The estimator's message is its own, unchanged.
+        assert_eq!(
+            Error::from(setting).to_string(),
+            "parameter 'lag' = -1 m must be 0 (off) or a positive lag"
+        );
+    }
+}
