@@ -36,6 +36,7 @@
 //!   with the 5 mm virtual measurement, and much better with a weaker one (0.93 at 20 mm): the
 //!   calibration study decides; these defaults only have to be sane.
 
+use crate::error::CalibrationError;
 use crate::filter::Mat4;
 use crate::model::Mat7;
 use serde::{Deserialize, Serialize};
@@ -75,30 +76,22 @@ struct Noise {
 
 fn matrix<const N: usize>(
     rows: &[Vec<f64>],
-    name: &str,
+    name: &'static str,
     file: &Path,
-) -> Result<nalgebra::SMatrix<f64, N, N>, String> {
+) -> Result<nalgebra::SMatrix<f64, N, N>, CalibrationError> {
+    let file = file.to_path_buf();
     if rows.len() != N || rows.iter().any(|r| r.len() != N) {
-        return Err(format!(
-            "{}: '{name}' must be {N} rows of {N} numbers",
-            file.display()
-        ));
+        return Err(CalibrationError::Shape { file, name, n: N });
     }
     let m = nalgebra::SMatrix::<f64, N, N>::from_fn(|i, j| rows[i][j]);
     if m.iter().any(|x| !x.is_finite()) {
-        return Err(format!(
-            "{}: '{name}' holds a non-finite number",
-            file.display()
-        ));
+        return Err(CalibrationError::NonFinite { file, name });
     }
     if (m - m.transpose()).amax() > 1e-12 * m.amax() {
-        return Err(format!("{}: '{name}' is not symmetric", file.display()));
+        return Err(CalibrationError::NotSymmetric { file, name });
     }
     if (0..N).any(|i| m[(i, i)] < 0.0) {
-        return Err(format!(
-            "{}: '{name}' has a negative diagonal entry",
-            file.display()
-        ));
+        return Err(CalibrationError::NegativeDiagonal { file, name });
     }
     Ok(m)
 }
@@ -121,9 +114,8 @@ impl Calibration {
 pub const SHIPPED: &str = include_str!("../resources/calibration.toml");
 
 /// Reads a calibration file. `Ok(None)`: the file holds no matrices (not yet calibrated).
-pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
-    // A calibration file is a few kilobytes of TOML.
-    let text = fmi_abi::resource::read_text(path, "calibration file", 1 << 20)?;
+pub fn load(path: &Path) -> Result<Option<Calibration>, CalibrationError> {
+    let text = read(path)?;
     parse(&text, path)
 }
 
@@ -131,17 +123,24 @@ pub fn load(path: &Path) -> Result<Option<Calibration>, String> {
 /// parameters it was made with. The FMU takes them as its defaults at build time only
 /// (build.rs); a master that points `calibration_file` at another file must set them as
 /// parameters too (the orchestrator's studies do).
-pub fn file_parameters(path: &Path) -> Result<BTreeMap<String, f64>, String> {
-    let text = fmi_abi::resource::read_text(path, "calibration file", 1 << 20)?;
-    Ok(file(&text, path)?.parameters.unwrap_or_default())
+pub fn file_parameters(path: &Path) -> Result<BTreeMap<String, f64>, CalibrationError> {
+    Ok(file(&read(path)?, path)?.parameters.unwrap_or_default())
 }
 
-fn file(text: &str, path: &Path) -> Result<File, String> {
-    toml::from_str(text).map_err(|e| format!("calibration file {}: {e}", path.display()))
+fn read(path: &Path) -> Result<String, CalibrationError> {
+    // A calibration file is a few kilobytes of TOML.
+    fmi_abi::resource::read_text(path, "calibration file", 1 << 20).map_err(CalibrationError::Read)
+}
+
+fn file(text: &str, path: &Path) -> Result<File, CalibrationError> {
+    toml::from_str(text).map_err(|e| CalibrationError::Toml {
+        file: path.to_path_buf(),
+        message: e.to_string(),
+    })
 }
 
 /// Parses a calibration file's text; `path` names it in messages.
-pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
+pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, CalibrationError> {
     let file = file(text, path)?;
     let status = file.status.unwrap_or_else(|| "unspecified".into());
     let (q, r) = file.noise.map_or((None, None), |n| (n.q, n.r));
@@ -151,16 +150,15 @@ pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
             let step_size = file
                 .step_size
                 .filter(|h| *h > 0.0 && h.is_finite())
-                .ok_or_else(|| {
-                    format!(
-                        "{}: 'step_size' (the step Q was computed for) must be a positive number",
-                        path.display()
-                    )
+                .ok_or_else(|| CalibrationError::StepSize {
+                    file: path.to_path_buf(),
                 })?;
             let q = matrix::<7>(&q, "q", path)?;
             let r = matrix::<4>(&r, "r", path)?;
             if r.cholesky().is_none() {
-                return Err(format!("{}: 'r' is not positive definite", path.display()));
+                return Err(CalibrationError::RNotPositiveDefinite {
+                    file: path.to_path_buf(),
+                });
             }
             Ok(Some(Calibration {
                 status,
@@ -170,10 +168,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, String> {
                 parameters: file.parameters.unwrap_or_default(),
             }))
         }
-        _ => Err(format!(
-            "{}: give both 'q' and 'r', or neither",
-            path.display()
-        )),
+        _ => Err(CalibrationError::Incomplete {
+            file: path.to_path_buf(),
+        }),
     }
 }
 
@@ -241,16 +238,23 @@ pub(crate) mod tests {
             "bad1",
             "step_size = 0.001\n[noise]\nq = [[1.0]]\nr = [[1.0]]\n",
         );
-        let e = load(&p).unwrap_err();
+        let e = load(&p).unwrap_err().to_string();
         assert!(
             e.contains("calibration.toml") && e.contains("'q' must be 7 rows"),
             "{e}"
         );
         let p = write("bad2", "[noise]\nq = [[1.0]]\n");
-        assert!(load(&p).unwrap_err().contains("both"));
+        assert!(load(&p).unwrap_err().to_string().contains("both"));
         let p = write("bad3", "this is = not toml [");
-        assert!(load(&p).unwrap_err().contains("calibration.toml"));
-        let e = load(Path::new("/nonexistent/calibration.toml")).unwrap_err();
+        assert!(
+            load(&p)
+                .unwrap_err()
+                .to_string()
+                .contains("calibration.toml")
+        );
+        let e = load(Path::new("/nonexistent/calibration.toml"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("/nonexistent/calibration.toml"), "{e}");
     }
 }

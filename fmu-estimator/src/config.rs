@@ -7,6 +7,7 @@ use crate::calibration::{self, Calibration};
 use crate::core::Core;
 use crate::discretize::Scheme;
 use crate::engine::{Engine, Gain};
+use crate::error::{Error, SettingError};
 use crate::filter::{Mat4, Vec4, Vec7};
 use crate::params::Params;
 use crate::prior::{AlignmentModel, Spectrum};
@@ -111,10 +112,7 @@ pub fn parameter_mismatches(v: &Values, file: &BTreeMap<String, f64>) -> Vec<Str
 
 impl Config {
     /// The configuration from the FMI values; `resources` is the FMU's resources directory.
-    pub fn from_values(
-        v: &Values,
-        resources: Option<&Path>,
-    ) -> Result<(Config, Vec<Note>), String> {
+    pub fn from_values(v: &Values, resources: Option<&Path>) -> Result<(Config, Vec<Note>), Error> {
         let mut notes = Vec::new();
         let params = params_from(v);
         params.check()?;
@@ -172,11 +170,11 @@ impl Config {
                 // A file the user named must exist: running on without it would give results
                 // for a calibration they did not ask for.
                 Some(path) if v.string[vr::CALIBRATION_FILE as usize] != DEFAULT_CALIBRATION_FILE => {
-                    return Err(format!(
-                        "parameter 'calibration_file' = '{}': {} does not exist",
-                        v.string[vr::CALIBRATION_FILE as usize],
-                        path.display()
-                    ));
+                    return Err(SettingError::CalibrationMissing {
+                        name: v.string[vr::CALIBRATION_FILE as usize].clone(),
+                        path,
+                    }
+                    .into());
                 }
                 Some(path) => notes.push(Note::Warning(format!(
                     "calibration file {} not found: using the diagonal noise model from the FMI parameters",
@@ -188,17 +186,15 @@ impl Config {
             }
         }
         if calibrated.is_none() && sig.iter().any(|s| !(*s > 0.0)) {
-            return Err("the measurement noise sigmas (sigma_acc_ws, sigma_yaw_rate, sigma_acc_frame, sigma_xi) must be positive".into());
+            return Err(SettingError::Sigmas.into());
         }
         let design_speed = r(vr::DESIGN_SPEED);
         if !(design_speed >= 0.0 && design_speed.is_finite()) {
-            return Err(format!(
-                "parameter 'design_speed' = {design_speed} must be 0 (follow the speed input) or a positive speed"
-            ));
+            return Err(SettingError::DesignSpeed(design_speed).into());
         }
         let prior_sigma_xi = r(vr::PRIOR_SIGMA_XI);
         if prior_sigma_xi.is_nan() {
-            return Err("parameter 'prior_sigma_xi' is NaN".into());
+            return Err(SettingError::PriorSigmaNan.into());
         }
         let config = Config {
             params,

@@ -1,7 +1,8 @@
 //! The filter behind the FMU, for whichever state dimension the alignment prior needs: one
 //! enum, so the FMU and the offline processor call one set of methods.
 
-use crate::engine::{Engine, Skip};
+use crate::engine::Engine;
+use crate::error::StepError;
 use crate::filter::Vec4;
 use crate::observability::pbh_rank;
 use crate::smoother::smooth;
@@ -29,7 +30,7 @@ macro_rules! each {
 }
 
 impl Core {
-    pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<Result<f64, Skip>, String> {
+    pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<f64, StepError> {
         each!(self, e => e.step(speed, h, z))
     }
 

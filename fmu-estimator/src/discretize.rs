@@ -8,6 +8,7 @@
 //! - [`Scheme::Exact`], the matrix exponential `F = exp(F_c h)`: exact for the linear model at
 //!   any step.
 
+use crate::error::SettingError;
 use crate::model::Mat7;
 use nalgebra::SMatrix;
 use serde::{Deserialize, Serialize};
@@ -21,13 +22,11 @@ pub enum Scheme {
 }
 
 impl Scheme {
-    pub fn from_fmi(code: i32) -> Result<Scheme, String> {
+    pub fn from_fmi(code: i32) -> Result<Scheme, SettingError> {
         match code {
             1 => Ok(Scheme::Taylor2),
             2 => Ok(Scheme::Exact),
-            other => Err(format!(
-                "parameter 'discretization' = {other}: use 1 (the paper's second-order Taylor scheme) or 2 (exact, matrix exponential)"
-            )),
+            other => Err(SettingError::Discretization(other)),
         }
     }
 }

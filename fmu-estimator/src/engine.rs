@@ -29,6 +29,7 @@
 //! speed, so the relative mismatch grows as the speed falls (0.1 % of the speed at 5 m/s).
 
 use crate::discretize::Scheme;
+use crate::error::{GainError, SettingError, StepError};
 use crate::filter::{Kalman, Mat4, Vec4};
 use crate::smoother::History;
 use crate::statespace::{Discrete, StateSpace, XI};
@@ -52,14 +53,12 @@ impl Gain {
     /// steady-state one a better one under the variable-speed profile (whole Jrel 0.167
     /// against 0.262), where the time-varying covariance lags the speed; it is also twice as
     /// fast.
-    pub fn from_fmi(code: i32, learned: bool) -> Result<Gain, String> {
+    pub fn from_fmi(code: i32, learned: bool) -> Result<Gain, SettingError> {
         match code {
             0 if learned => Ok(Gain::SteadyState),
             0 | 1 => Ok(Gain::TimeVarying),
             2 => Ok(Gain::SteadyState),
-            other => Err(format!(
-                "parameter 'gain' = {other}: use 0 (the estimator's own), 1 (time-varying Kalman gain) or 2 (steady-state gain from the Riccati equation, scheduled on speed)"
-            )),
+            other => Err(SettingError::Gain(other)),
         }
     }
 }
@@ -105,11 +104,9 @@ pub fn steady_state<const N: usize>(
     d: &Discrete<N>,
     r: &Mat4,
     _p0: &SMatrix<f64, N, N>,
-) -> Result<SteadyState<N>, String> {
+) -> Result<SteadyState<N>, GainError> {
     const MAX_DOUBLINGS: usize = 200;
-    let r_inv = r
-        .try_inverse()
-        .ok_or("steady-state gain: the measurement noise covariance R is singular")?;
+    let r_inv = r.try_inverse().ok_or(GainError::SingularR)?;
     let mut a = d.f.transpose();
     let mut g = d.hm.transpose() * r_inv * d.hm;
     let mut x = d.q;
@@ -118,12 +115,9 @@ pub fn steady_state<const N: usize>(
     loop {
         iterations += 1;
         if iterations > MAX_DOUBLINGS {
-            return Err(format!(
-                "steady-state gain: the doubling algorithm did not converge in {MAX_DOUBLINGS} steps (is the system detectable?)"
-            ));
+            return Err(GainError::NotConverged(MAX_DOUBLINGS));
         }
-        let w = inverse(&(id + g * x))
-            .ok_or("steady-state gain: singular matrix in the doubling algorithm")?;
+        let w = inverse(&(id + g * x)).ok_or(GainError::SingularDoubling)?;
         let a_next = a * w * a;
         let g_next = g + a * w * g * a.transpose();
         let x_next = x + a.transpose() * x * w * a;
@@ -132,7 +126,7 @@ pub fn steady_state<const N: usize>(
         g = (g_next + g_next.transpose()) * 0.5;
         x = (x_next + x_next.transpose()) * 0.5;
         if !x.iter().all(|v| v.is_finite()) {
-            return Err("steady-state gain: the doubling algorithm diverged (is the system stabilizable and detectable?)".into());
+            return Err(GainError::Diverged);
         }
         if change <= 1e-15 * x.amax() {
             break;
@@ -143,27 +137,26 @@ pub fn steady_state<const N: usize>(
     for _ in 0..3 {
         let mut kf = Kalman::new(SVector::<f64, N>::zeros(), p_pred);
         kf.update(&d.hm, r, &Vec4::zeros())
-            .ok_or("steady-state gain: the innovation covariance is not positive definite")?;
+            .ok_or(GainError::InnovationNotPositiveDefinite)?;
         kf.predict(&d.f, &d.q);
         p_pred = kf.p;
     }
     let s = d.hm * p_pred * d.hm.transpose() + r;
-    let s_inv = s
-        .try_inverse()
-        .ok_or("steady-state gain: singular innovation covariance")?;
+    let s_inv = s.try_inverse().ok_or(GainError::SingularInnovation)?;
     let k = p_pred * d.hm.transpose() * s_inv;
     // The fixed-point check in the form the filter computes (its update, then predict): the
     // textbook residual F P F^T + Q - F P H^T S^-1 H P F^T - P cancels terms up to |H|^2 |P|^2 / |S|
     // and loses about seven digits here (the accelerometer rows of H are of order 1e5).
     let mut kf = Kalman::new(SVector::<f64, N>::zeros(), p_pred);
     kf.update(&d.hm, r, &Vec4::zeros())
-        .ok_or("steady-state gain: the innovation covariance is not positive definite")?;
+        .ok_or(GainError::InnovationNotPositiveDefinite)?;
     kf.predict(&d.f, &d.q);
     let residual = (kf.p - p_pred).amax() / p_pred.amax();
     if residual > 1e-8 {
-        return Err(format!(
-            "steady-state gain: one Riccati step still changes P by {residual:.3e} (relative) after {iterations} doublings"
-        ));
+        return Err(GainError::Residual {
+            residual,
+            iterations,
+        });
     }
     let i_kh = id - k * d.hm;
     let p_filt = i_kh * p_pred * i_kh.transpose() + k * r * k.transpose();
@@ -184,11 +177,13 @@ fn inverse<const N: usize>(m: &SMatrix<f64, N, N>) -> Option<SMatrix<f64, N, N>>
 }
 
 /// Why a measurement update was skipped.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 pub enum Skip {
     /// A sensor sample was NaN or infinite: the prediction is kept.
+    #[error("non-finite sensor sample")]
     NonFinite,
     /// The innovation covariance was not positive definite.
+    #[error("innovation covariance not positive definite")]
     NotPositiveDefinite,
 }
 
@@ -256,7 +251,7 @@ impl<const N: usize> Engine<N> {
     /// differs from the last ones: the speed compared exactly (a constant-speed run builds them
     /// once), the step within [`fmi_abi::step::RELATIVE`] (a master's clock rounding, as
     /// libcosim's alternating 1 ms +- 1 ulp, is not a new step).
-    fn ensure_discrete(&mut self, speed: f64, h: f64) -> Result<(), String> {
+    fn ensure_discrete(&mut self, speed: f64, h: f64) -> Result<(), GainError> {
         if let Some(d) = &self.discrete
             && d.speed == speed
             && fmi_abi::step::same(d.h, h)
@@ -297,7 +292,7 @@ impl<const N: usize> Engine<N> {
     }
 
     /// The steady-state filter of speed bin `bin` (`d`'s), solved at the bin's centre once.
-    fn scheduled_gain(&mut self, d: &Discrete<N>, bin: i64) -> Result<SteadyState<N>, String> {
+    fn scheduled_gain(&mut self, d: &Discrete<N>, bin: i64) -> Result<SteadyState<N>, GainError> {
         if !fmi_abi::step::same(self.gains_h, d.h) || self.gains.len() >= GAIN_BINS_KEPT {
             self.gains.clear();
             self.gains_h = d.h;
@@ -324,8 +319,9 @@ impl<const N: usize> Engine<N> {
     }
 
     /// One step of `h` at `speed` with the samples `z` (the fourth is the virtual measurement,
-    /// 0). Returns the NIS of the update, or why the update was skipped.
-    pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<Result<f64, Skip>, String> {
+    /// 0). Returns the NIS of the update, or why the update was skipped
+    /// ([`StepError::Skipped`]: the prediction is kept) or the gain failed.
+    pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<f64, StepError> {
         self.ensure_discrete(speed, h)?;
         let d = self.discrete.as_ref().expect("built above");
         match &self.steady {
@@ -360,7 +356,7 @@ impl<const N: usize> Engine<N> {
             let f = hist.transitions.len() - 1;
             hist.push(x_pred, p_pred, self.filter.x, self.filter.p, f);
         }
-        Ok(result)
+        result.map_err(StepError::Skipped)
     }
 
     /// The alignment estimate and its standard deviation.
@@ -447,7 +443,7 @@ mod tests {
         let mut max_diff = 0.0f64;
         for k in 0..3000 {
             let z = sensors(k as f64 * 1e-3);
-            ss.step(speed(k), 1e-3, &z).unwrap().unwrap();
+            ss.step(speed(k), 1e-3, &z).unwrap();
             let d = space.discrete(speed(k), 1e-3, Scheme::Taylor2);
             let gain = steady_state(&d, &r(), &p0).unwrap().k;
             exact = d.f * exact;
@@ -461,8 +457,8 @@ mod tests {
         for (v, centre) in [(20.004, 20.0), (19.7351, 19.74), (20.3, 20.3)] {
             let mut e = Engine::new(space.clone(), Scheme::Taylor2, Gain::SteadyState, r(), p0);
             // Reached from another speed first: the bin's gain does not depend on the path.
-            e.step(19.9, 1e-3, &Vec4::zeros()).unwrap().unwrap();
-            e.step(v, 1e-3, &Vec4::zeros()).unwrap().unwrap();
+            e.step(19.9, 1e-3, &Vec4::zeros()).unwrap();
+            e.step(v, 1e-3, &Vec4::zeros()).unwrap();
             let centre = space.discrete(centre, 1e-3, Scheme::Taylor2);
             let want = steady_state(&centre, &r(), &p0).unwrap();
             assert_eq!(e.steady.as_ref().unwrap().k, want.k, "{v}");
@@ -484,8 +480,8 @@ mod tests {
         let mut max_late = 0.0f64;
         for k in 0..20_000 {
             let z = sensors(k as f64 * 1e-3);
-            a.step(20.0, 1e-3, &z).unwrap().unwrap();
-            b.step(20.0, 1e-3, &z).unwrap().unwrap();
+            a.step(20.0, 1e-3, &z).unwrap();
+            b.step(20.0, 1e-3, &z).unwrap();
             if k > 15_000 {
                 max_late = max_late.max((a.filter.x - b.filter.x).amax());
             }
@@ -510,8 +506,8 @@ mod tests {
             odd += (h != 1e-3) as usize;
             let t = k as f64 * 1e-3;
             let z = Vec4::new((3.0 * t).sin() * 0.1, (5.0 * t).cos() * 1e-3, 0.0, 0.0);
-            exact.step(20.0, 1e-3, &z).unwrap().unwrap();
-            jittered.step(20.0, h, &z).unwrap().unwrap();
+            exact.step(20.0, 1e-3, &z).unwrap();
+            jittered.step(20.0, h, &z).unwrap();
         }
         assert!(odd > 1000, "the clock rounds on {odd} steps");
         assert_eq!((exact.rebuilds, jittered.rebuilds), (1, 1));
@@ -523,7 +519,10 @@ mod tests {
         let (space, p0) = paper();
         let mut e = Engine::new(space, Scheme::Taylor2, Gain::TimeVarying, r(), p0);
         let z = Vec4::new(f64::NAN, 0.0, 0.0, 0.0);
-        assert_eq!(e.step(20.0, 1e-3, &z).unwrap(), Err(Skip::NonFinite));
+        assert_eq!(
+            e.step(20.0, 1e-3, &z),
+            Err(StepError::Skipped(Skip::NonFinite))
+        );
         assert_eq!(e.skipped, 1);
         assert!(e.filter.x.iter().all(|x| x.is_finite()));
     }

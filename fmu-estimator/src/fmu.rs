@@ -8,6 +8,7 @@
 use crate::config::{Config, Note};
 use crate::core::Core;
 use crate::engine::Skip;
+use crate::error::{Error, SettingError};
 use crate::learned::{Bank, Choice, Learned};
 use crate::step;
 use fmi_abi::{InstantiateContext, Logger, Model, ModelInfo, StepOutcome, Values, VarSpec};
@@ -134,7 +135,9 @@ impl Model for Estimator {
     }
 
     fn exit_initialization(&mut self, v: &mut Values, log: &Logger) -> Result<(), String> {
-        let (config, notes) = Config::from_values(v, self.resources.as_deref())?;
+        // fmi-abi's Model takes messages: the layer logs them with fmi2Error.
+        let (config, notes) =
+            Config::from_values(v, self.resources.as_deref()).map_err(|e| e.to_string())?;
         for note in notes {
             match note {
                 Note::Info(m) => log.info(&m),
@@ -153,7 +156,8 @@ impl Model for Estimator {
         }
         self.min_speed = config.min_speed;
         self.design_speed = config.design_speed;
-        self.learned = learned_from_values(v, self.resources.as_deref(), log)?;
+        self.learned =
+            learned_from_values(v, self.resources.as_deref(), log).map_err(|e| e.to_string())?;
         self.core = Some(core);
         self.holding = false;
         self.outside = false;
@@ -197,7 +201,8 @@ impl Model for Estimator {
             &mut v.real[vr::DISTANCE as usize],
             h,
             input,
-        )?;
+        )
+        .map_err(|e| e.to_string())?;
         let (update, implausible) = match stepped {
             step::Stepped::Held { finite_speed } => {
                 if !self.holding {
@@ -294,41 +299,35 @@ pub fn learned_from_values(
     v: &Values,
     resources: Option<&std::path::Path>,
     log: &Logger,
-) -> Result<Option<Learned>, String> {
+) -> Result<Option<Learned>, Error> {
     match v.integer[vr::ESTIMATOR as usize] {
         1 => return Ok(None),
         2 => {}
-        e => {
-            return Err(format!(
-                "parameter 'estimator' = {e}: 1 (the paper's filter) or 2 (learned)"
-            ));
-        }
+        e => return Err(SettingError::Estimator(e).into()),
     }
     let lag = v.real[vr::LAG as usize];
     if !(lag >= 0.0 && lag.is_finite()) {
-        return Err(format!(
-            "parameter 'lag' = {lag} m must be 0 (off) or a positive lag"
-        ));
+        return Err(SettingError::Lag(lag).into());
     }
     let name = v.string[vr::TAP_FILE as usize].trim().to_string();
     let bank = match resources {
-        _ if std::path::Path::new(&name).is_absolute() => Bank::load(std::path::Path::new(&name))?,
-        Some(dir) => Bank::load(&dir.join(&name))?,
+        _ if std::path::Path::new(&name).is_absolute() => {
+            Bank::load(std::path::Path::new(&name)).map_err(Error::Learned)?
+        }
+        Some(dir) => Bank::load(&dir.join(&name)).map_err(Error::Learned)?,
         None => match crate::learned::shipped_named(&name) {
-            Some(bank) => bank?,
-            None => {
-                return Err(format!(
-                    "tap_file '{name}' is relative and the FMU has no resources directory: give an absolute path or a shipped bank ({})",
-                    crate::learned::SHIPPED.join(", ")
-                ));
-            }
+            Some(bank) => bank.map_err(Error::Learned)?,
+            None => return Err(SettingError::TapFileRelative { name }.into()),
         },
     };
     let choice = Choice {
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
         lag,
     };
-    let learned = Learned::new(&bank, choice).map_err(|e| format!("tap_file '{name}': {e}"))?;
+    let learned = Learned::new(&bank, choice).map_err(|message| Error::TapFile {
+        tap_file: name.clone(),
+        message,
+    })?;
     // `gain` is not among them: the taps were fitted with the time-varying channel, which the
     // steady-state one equals once the start-up has passed (Gain::from_fmi).
     let own = [

@@ -28,6 +28,9 @@
 //! Offline (recordings, the studies, the Python bindings): [`offline`] runs the same steps over a
 //! whole record, and [`smoother`] adds the Rauch-Tung-Striebel smoother.
 //!
+//! Errors are typed by concern in [`error`] (a refused setting, a calibration file, the gain, a
+//! sample); the FMU logs their message with fmi2Error.
+//!
 //! The FMU's variables are listed in `documentation/index.html` inside the packaged FMU and in
 //! `docs/estimator-fmu.md`.
 
@@ -39,6 +42,7 @@ pub mod config;
 pub mod core;
 pub mod discretize;
 pub mod engine;
+pub mod error;
 pub mod filter;
 pub mod fmu;
 pub mod learned;

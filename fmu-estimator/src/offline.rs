@@ -10,6 +10,7 @@
 use crate::calibration::{self, SHIPPED};
 use crate::config::{Config, Note};
 use crate::core::Core;
+use crate::error::{Error, SettingError};
 use crate::learned::{Estimate, Learned};
 use crate::step;
 use crate::variables::{VARIABLES, vr};
@@ -155,7 +156,7 @@ pub struct Columns<'a> {
 
 impl Columns<'_> {
     /// Refuses columns of unequal length, naming the first that differs from `speed`.
-    pub fn check(&self) -> Result<usize, String> {
+    pub fn check(&self) -> Result<usize, Error> {
         let n = self.speed.len();
         let others = [
             ("ws_acc_y", Some(self.ws_acc_y)),
@@ -167,10 +168,11 @@ impl Columns<'_> {
             if let Some(c) = column
                 && c.len() != n
             {
-                return Err(format!(
-                    "column '{name}' has {} samples, 'speed' has {n}",
-                    c.len()
-                ));
+                return Err(Error::ColumnLength {
+                    column: name,
+                    len: c.len(),
+                    speed_len: n,
+                });
             }
         }
         Ok(n)
@@ -189,17 +191,21 @@ impl Columns<'_> {
 
 /// The FMU's parameter values with `overrides` (FMI name, value as text) applied, refusing
 /// unknown names, non-parameters and unparsable values by name.
-pub fn settings(overrides: &[(String, String)]) -> Result<Values, String> {
+pub fn settings(overrides: &[(String, String)]) -> Result<Values, Error> {
     let mut v = Values::from_table(VARIABLES);
     for (name, text) in overrides {
         let spec = VARIABLES
             .iter()
             .find(|s| s.name == name)
-            .ok_or_else(|| format!("the estimator has no variable '{name}'"))?;
+            .ok_or_else(|| SettingError::UnknownVariable(name.clone()))?;
         if !spec.is_parameter() {
-            return Err(format!("'{name}' is not a parameter of the estimator"));
+            return Err(SettingError::NotParameter(name.clone()).into());
         }
-        let bad = |what: &str| format!("'{name}' = '{text}': {what}");
+        let bad = |expected: &'static str| SettingError::Value {
+            name: name.clone(),
+            text: text.clone(),
+            expected,
+        };
         let i = spec.vr as usize;
         match spec.start {
             Start::Real(_) => {
@@ -212,7 +218,7 @@ pub fn settings(overrides: &[(String, String)]) -> Result<Values, String> {
                 v.boolean[i] = match text.trim() {
                     "true" | "1" => true,
                     "false" | "0" => false,
-                    _ => return Err(bad("not a boolean (true/false)")),
+                    _ => return Err(bad("not a boolean (true/false)").into()),
                 }
             }
             Start::String(_) => v.string[i] = text.clone(),
@@ -223,7 +229,7 @@ pub fn settings(overrides: &[(String, String)]) -> Result<Values, String> {
 
 /// The configuration for `values`. The calibration file is the one named by `calibration`, or,
 /// if none is given and `use_calibration_file` is on, the file shipped in the FMU (built in).
-pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Vec<Note>), String> {
+pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Vec<Note>), Error> {
     let use_file = values.boolean[vr::USE_CALIBRATION_FILE as usize];
     let mut v = values.clone();
     v.boolean[vr::USE_CALIBRATION_FILE as usize] = false;
@@ -247,7 +253,7 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
 
 /// The learned filter `values` ask for (`estimator` 2), as the FMU builds it, with the tap bank
 /// built into the library unless `tap_file` is absolute.
-pub fn learned(values: &Values) -> Result<Option<Learned>, String> {
+pub fn learned(values: &Values) -> Result<Option<Learned>, Error> {
     crate::fmu::learned_from_values(values, None, &fmi_abi::Logger::silent())
 }
 
@@ -258,7 +264,7 @@ pub fn process(
     h: f64,
     samples: &[Sample],
     smooth: bool,
-) -> Result<Processed, String> {
+) -> Result<Processed, Error> {
     // The Kalman filter is the estimate here: `gain` 0 means its own (time-varying) gain, not
     // the one the learned filter's channel takes.
     let alone = Config {
@@ -276,7 +282,7 @@ pub fn process_learned(
     h: f64,
     samples: &[Sample],
     smooth: bool,
-) -> Result<Processed, String> {
+) -> Result<Processed, Error> {
     run(
         config,
         learned,
@@ -295,7 +301,7 @@ pub fn process_columns(
     h: f64,
     columns: &Columns,
     smooth: bool,
-) -> Result<Processed, String> {
+) -> Result<Processed, Error> {
     let n = columns.check()?;
     run(config, learned, h, n, |k| columns.sample(k), smooth, false)
 }
@@ -308,7 +314,7 @@ pub fn process_columns_checked(
     h: f64,
     columns: &Columns,
     smooth: bool,
-) -> Result<Processed, String> {
+) -> Result<Processed, Error> {
     let n = columns.check()?;
     run(config, learned, h, n, |k| columns.sample(k), smooth, true)
 }
@@ -323,7 +329,7 @@ fn run(
     sample: impl Fn(usize) -> Sample,
     smooth: bool,
     check: bool,
-) -> Result<Processed, String> {
+) -> Result<Processed, Error> {
     let start = Resume::new(config, learned);
     Ok(run_from(config, start, h, n, sample, smooth, check)?.0)
 }
@@ -357,7 +363,7 @@ pub fn process_columns_from(
     h: f64,
     columns: &Columns,
     check: bool,
-) -> Result<(Processed, Resume), String> {
+) -> Result<(Processed, Resume), Error> {
     let n = columns.check()?;
     run_from(config, start, h, n, |k| columns.sample(k), false, check)
 }
@@ -371,7 +377,7 @@ fn run_from(
     sample: impl Fn(usize) -> Sample,
     smooth: bool,
     check: bool,
-) -> Result<(Processed, Resume), String> {
+) -> Result<(Processed, Resume), Error> {
     let Resume {
         mut core,
         mut learned,
@@ -380,7 +386,7 @@ fn run_from(
     let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
     let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
     if !(h > 0.0 && h.is_finite()) {
-        return Err(format!("step {h} s must be a positive number"));
+        return Err(Error::SampleStep(h));
     }
     if smooth {
         core.record_history();
@@ -409,7 +415,10 @@ fn run_from(
             h,
             input,
         )
-        .map_err(|e| format!("sample {}: {e}", k + 1))?;
+        .map_err(|source| Error::AtSample {
+            index: k + 1,
+            source,
+        })?;
         if let step::Stepped::Filtered { update, .. } = stepped {
             if update.is_err() {
                 out.skipped += 1;
@@ -638,7 +647,10 @@ mod tests {
             ws_roll_rate: None,
         };
         let err = process_columns(&config, None, 1e-3, &short, false).unwrap_err();
-        assert!(err.contains("'ws_yaw_rate' has 2999 samples"), "{err}");
+        assert!(
+            err.to_string().contains("'ws_yaw_rate' has 2999 samples"),
+            "{err}"
+        );
     }
 
     /// Oracle: causality. Cutting the record at sample `k` (here: changing every sample from
@@ -679,14 +691,25 @@ mod tests {
 
     #[test]
     fn bad_settings_are_named() {
-        let e = settings(&[("nope".into(), "1".into())]).unwrap_err();
+        let e = settings(&[("nope".into(), "1".into())])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("'nope'"), "{e}");
-        let e = settings(&[("prior_a".into(), "x".into())]).unwrap_err();
+        let e = settings(&[("prior_a".into(), "x".into())])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("prior_a") && e.contains("not a number"), "{e}");
-        let e = settings(&[("alignment".into(), "1".into())]).unwrap_err();
+        let e = settings(&[("alignment".into(), "1".into())])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("not a parameter"), "{e}");
         let v = settings(&[("alignment_model".into(), "7".into())]).unwrap();
-        assert!(config(&v, None).unwrap_err().contains("alignment_model"));
+        assert!(
+            config(&v, None)
+                .unwrap_err()
+                .to_string()
+                .contains("alignment_model")
+        );
     }
 
     /// The smoother's estimate is at least as good as the filter's on data from the model

@@ -11,6 +11,7 @@
 //! kx, cx, ky, cy are the paper's identified equivalents; they are re-identified against our
 //! vehicle model in the calibration study (issue 5), which rewrites them.
 
+use crate::error::SettingError;
 use serde::{Deserialize, Serialize};
 
 /// Physical parameters of the simplified model (SI units, see `model` for the meaning).
@@ -79,7 +80,7 @@ impl Params {
     };
 
     /// Refuses values for which the model has no meaning, naming the parameter (FMI name).
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), SettingError> {
         let positive = [
             ("m", self.m),
             ("I", self.i),
@@ -89,16 +90,11 @@ impl Params {
         ];
         for (name, v) in positive {
             if !(v > 0.0) || !v.is_finite() {
-                return Err(format!(
-                    "parameter '{name}' = {v} must be a positive finite number"
-                ));
+                return Err(SettingError::NotPositive { name, value: v });
             }
         }
         if !(self.alpha > 0.0) || !self.alpha.is_finite() {
-            return Err(format!(
-                "parameter 'alpha' (conicity) = {} must be positive: with zero conicity the wheelset has no guidance and the alignment does not enter the model",
-                self.alpha
-            ));
+            return Err(SettingError::Conicity(self.alpha));
         }
         let non_negative = [
             ("l_s", self.l_s),
@@ -114,9 +110,7 @@ impl Params {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0) || !v.is_finite() {
-                return Err(format!(
-                    "parameter '{name}' = {v} must be a non-negative finite number"
-                ));
+                return Err(SettingError::Negative { name, value: v });
             }
         }
         Ok(())

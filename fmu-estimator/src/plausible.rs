@@ -6,6 +6,8 @@
 //! | accelerometers | beyond [`MAX_ACC`]: the sample is skipped like a non-finite one | no axle-box or frame accelerometer reads 200 g; such a value is a fault, and one sample of 1e300 m/s2 would otherwise put 1e301 m into the estimate |
 //! | gyroscopes | beyond [`MAX_RATE`]: skipped likewise | a wheelset does not turn at 100 rad/s about a vertical or longitudinal axis |
 
+use crate::error::SampleError;
+
 /// Largest plausible acceleration sample \[m/s2\] (200 g: axle-box shocks at wheel flats stay
 /// below 100 g).
 pub const MAX_ACC: f64 = 2000.0;
@@ -13,11 +15,9 @@ pub const MAX_ACC: f64 = 2000.0;
 pub const MAX_RATE: f64 = 100.0;
 
 /// An error if `speed` is negative (NaN and infinite speeds are held over, not refused).
-pub fn speed(speed: f64) -> Result<(), String> {
+pub fn speed(speed: f64) -> Result<(), SampleError> {
     if speed < 0.0 {
-        return Err(format!(
-            "input 'speed' = {speed} m/s is negative: the estimator is for forward running (give the speed's magnitude along the direction the sensors were mounted for)"
-        ));
+        return Err(SampleError::NegativeSpeed(speed));
     }
     Ok(())
 }
@@ -49,7 +49,7 @@ mod tests {
     #[test]
     fn negative_speeds_are_refused_by_name() {
         assert!(speed(0.0).is_ok() && speed(20.0).is_ok() && speed(f64::NAN).is_ok());
-        let e = speed(-3.0).unwrap_err();
+        let e = speed(-3.0).unwrap_err().to_string();
         assert!(e.contains("'speed'") && e.contains("-3"), "{e}");
     }
 

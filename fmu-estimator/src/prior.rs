@@ -44,6 +44,7 @@
 //! vehicle FMU's default track uses the same spectrum; a track of another quality calls for the
 //! matching `prior_a` (high disturbance: 6.125e-7).
 
+use crate::error::SettingError;
 use serde::{Deserialize, Serialize};
 
 /// The alignment prior (FMI parameter `alignment_model`).
@@ -91,20 +92,21 @@ impl Spectrum {
         self.a * c2 / ((o2 + r2) * (o2 + c2))
     }
 
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), SettingError> {
         let ok = |x: f64| x.is_finite() && x > 0.0;
         if !(ok(self.a) && ok(self.omega_c) && self.omega_r.is_finite() && self.omega_r >= 0.0) {
-            return Err(format!(
-                "alignment prior: prior_a = {}, prior_omega_r = {}, prior_omega_c = {} must be positive finite numbers (omega_r may be 0)",
-                self.a, self.omega_r, self.omega_c
-            ));
+            return Err(SettingError::Prior {
+                a: self.a,
+                omega_r: self.omega_r,
+                omega_c: self.omega_c,
+            });
         }
         Ok(())
     }
 }
 
 impl AlignmentModel {
-    pub fn from_fmi(code: i32, spectrum: Spectrum) -> Result<AlignmentModel, String> {
+    pub fn from_fmi(code: i32, spectrum: Spectrum) -> Result<AlignmentModel, SettingError> {
         match code {
             1 => Ok(AlignmentModel::RandomWalk),
             2 | 3 => {
@@ -115,9 +117,7 @@ impl AlignmentModel {
                     AlignmentModel::Shaping(spectrum)
                 })
             }
-            other => Err(format!(
-                "parameter 'alignment_model' = {other}: use 1 (the paper's random walk), 2 (integrated random walk) or 3 (shaping filter of the track spectrum)"
-            )),
+            other => Err(SettingError::AlignmentModel(other)),
         }
     }
 
@@ -182,7 +182,8 @@ mod tests {
     #[test]
     fn bad_codes_and_spectra_are_refused_by_name() {
         let e = AlignmentModel::from_fmi(4, Spectrum::GERMAN_LOW).unwrap_err();
-        assert!(e.contains("alignment_model"), "{e}");
+        assert_eq!(e, crate::error::SettingError::AlignmentModel(4));
+        assert!(e.to_string().contains("alignment_model"), "{e}");
         let bad = Spectrum {
             a: f64::NAN,
             ..Spectrum::GERMAN_LOW
@@ -190,6 +191,7 @@ mod tests {
         assert!(
             AlignmentModel::from_fmi(3, bad)
                 .unwrap_err()
+                .to_string()
                 .contains("prior_a")
         );
         assert_eq!(

@@ -15,6 +15,7 @@
 
 use crate::core::Core;
 use crate::engine::Skip;
+use crate::error::{SampleError, StepError};
 use crate::filter::Vec4;
 use crate::learned::Learned;
 
@@ -58,7 +59,7 @@ pub fn step(
     distance: &mut f64,
     h: f64,
     input: Input,
-) -> Result<Stepped, String> {
+) -> Result<Stepped, SampleError> {
     let speed = input.speed;
     crate::plausible::speed(speed)?;
     if speed.is_finite() {
@@ -79,7 +80,11 @@ pub fn step(
     } else {
         speed
     };
-    let update = core.step(filter_speed, h, &Vec4::new(x[0], x[1], x[2], 0.0))?;
+    let update = match core.step(filter_speed, h, &Vec4::new(x[0], x[1], x[2], 0.0)) {
+        Ok(nis) => Ok(nis),
+        Err(StepError::Skipped(skip)) => Err(skip),
+        Err(StepError::Gain(e)) => return Err(SampleError::Gain(e)),
+    };
     if let Some(l) = learned {
         let (kalman, kalman_std) = core.alignment();
         l.step(

@@ -521,9 +521,18 @@ const MAX_SUBSTEPS: f64 = 1e6;
 /// coefficients halved reaches 0.37 m at 30 m/s (hunting).
 pub const DERAILMENT_MARGIN: f64 = 0.03;
 
-/// The word every derailment error carries, for callers that treat it as a result (an unstable
-/// running condition) rather than a failure.
+/// The word every derailment error starts with (`derailed: the leading wheelset is ...`), for
+/// callers that treat it as a result (an unstable running condition) rather than a failure.
 pub const DERAILED: &str = "derailed";
+
+/// Whether `message`, as an importer receives it from this FMU's log, reports a derailment.
+/// FMI carries an FMU's failure to its importer as text only (fmi2DoStep returns fmi2Error and
+/// the reason is the message logged with it; the export layer puts `fmi2DoStep at t=T: ` in
+/// front of the model's text), so this is the one place that reads that text: the message has
+/// a `: `-separated part that is exactly [`DERAILED`].
+pub fn is_derailment(message: &str) -> bool {
+    message.starts_with(&format!("{DERAILED}: ")) || message.contains(&format!(": {DERAILED}: "))
+}
 
 /// The FMI model state.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -781,6 +790,25 @@ impl Model for RailVehicle {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_derailment_is_read_from_its_message_only() {
+        // As an importer logs it: fmi-abi's prefix, then do_step's text.
+        assert!(is_derailment(
+            "fmi2DoStep at t=12.5: derailed: the leading wheelset is 39.4 mm off the track centre line"
+        ));
+        assert!(is_derailment(
+            "derailed: the leading wheelset is 39.4 mm off"
+        ));
+        for other in [
+            "fmi2DoStep at t=1: the vehicle state became non-finite at distance 3 m",
+            "fmi2DoStep at t=1: the vehicle derailed",
+            "underailed: x",
+            "fmi2DoStep at t=1: not derailed: x",
+        ] {
+            assert!(!is_derailment(other), "{other}");
+        }
+    }
 
     #[test]
     fn absurd_steps_and_speeds_are_refused_instead_of_attempted() {

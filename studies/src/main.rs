@@ -4,7 +4,8 @@
 //! [`alignment_studies::cli`].
 //!
 //! Exit codes as `orchestrator`'s (docs/orchestrator.md): 0 success; 1 results cannot be
-//! written or the output is refused (`orchestrator::outfile`); 2 bad input; 3 an FMU failed during a run; 130 `run` interrupted (Ctrl-C, SIGTERM,
+//! written or the output is refused (`orchestrator::outfile`); 2 bad input; 3 an FMU failed
+//! during a run (a derailment of the vehicle is one); 130 `run` interrupted (Ctrl-C, SIGTERM,
 //! SIGHUP: it stops at the next step boundary and keeps the results).
 
 use alignment_studies::Error;

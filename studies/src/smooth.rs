@@ -21,37 +21,61 @@ use orchestrator::record::push_f64;
 /// How every CSV this command writes begins: an existing file that starts so was written by
 /// it, and is replaced without `--force` ([`orchestrator::outfile`]).
 pub const CSV_MARK: &[u8] = b"time,distance,alignment_filtered,alignment_filtered_std,";
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// A recording the estimator cannot read; every variant names the file (and the line where
+/// one applies). Bad input (exit 2).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RecordingError {
+    /// The file cannot be read as CSV or Parquet, in the reader's words (they name the file).
+    #[error("{0}")]
+    Read(String),
+    /// A column the estimator needs is missing or unreadable.
+    #[error("{}: {message}", file.display())]
+    Column { file: PathBuf, message: String },
+    #[error("{}: fewer than 2 rows (the step is read from the time column)", file.display())]
+    FewRows { file: PathBuf },
+    #[error("{}: time does not increase at line 3", file.display())]
+    TimeNotIncreasing { file: PathBuf },
+    #[error(
+        "{}: the time step changes at line {line} ({step} s instead of {expected} s): the filter needs a constant step",
+        file.display()
+    )]
+    StepChanges {
+        file: PathBuf,
+        line: usize,
+        step: f64,
+        expected: f64,
+    },
+}
 
 /// Reads the samples and the step from a CSV file.
-pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), String> {
-    let cols = orchestrator::csv::Csv::read_any(path)?;
+pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), RecordingError> {
+    let cols = orchestrator::csv::Csv::read_any(path).map_err(RecordingError::Read)?;
+    let file = || path.to_path_buf();
     let find = |names: &[&str]| {
         cols.column(names)
-            .map_err(|e| format!("{}: {e}", path.display()))
+            .map_err(|message| RecordingError::Column {
+                file: file(),
+                message,
+            })
     };
     let time = find(&["time"])?;
     if time.len() < 2 {
-        return Err(format!(
-            "{}: fewer than 2 rows (the step is read from the time column)",
-            path.display()
-        ));
+        return Err(RecordingError::FewRows { file: file() });
     }
     let h = time[1] - time[0];
     if !(h > 0.0) {
-        return Err(format!(
-            "{}: time does not increase at line 3",
-            path.display()
-        ));
+        return Err(RecordingError::TimeNotIncreasing { file: file() });
     }
     for (k, w) in time.windows(2).enumerate() {
         if ((w[1] - w[0]) - h).abs() > 1e-6 * h {
-            return Err(format!(
-                "{}: the time step changes at line {} ({} s instead of {h} s): the filter needs a constant step",
-                path.display(),
-                k + 3,
-                w[1] - w[0]
-            ));
+            return Err(RecordingError::StepChanges {
+                file: file(),
+                line: k + 3,
+                step: w[1] - w[0],
+                expected: h,
+            });
         }
     }
     let speed = find(&["speed", "forward_speed"])?;
@@ -124,11 +148,12 @@ fn learned_columns(
     samples: &[Sample],
     h: f64,
     distance: &[f64],
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+) -> Result<(Vec<f64>, Vec<f64>), crate::Error> {
     // A saved learned smoother is about a megabyte of JSON; the bound only stops a device or a
     // runaway file.
-    let text = fmi_abi::resource::read_text(file, "learned smoother file", 1 << 30)?;
-    let l = LearnedSmoother::from_json(&text, file)?;
+    let text = fmi_abi::resource::read_text(file, "learned smoother file", 1 << 30)
+        .map_err(crate::Error::Input)?;
+    let l = LearnedSmoother::from_json(&text, file).map_err(crate::Error::Learned)?;
     // A standing start (a run's results.csv begins with the vehicle's outputs before its first
     // step, at speed 0) gets no learned estimate (NaN): the taps hold the dynamics at the one
     // speed they were fitted at. A stop later in the record is refused by the speed check.
@@ -137,10 +162,10 @@ fn learned_columns(
         .position(|s| s.speed > 0.0)
         .unwrap_or(samples.len());
     let (samples, moving) = (&samples[first..], &distance[first..]);
-    let kalman = l.kalman(samples, h)?;
+    let kalman = l.kalman(samples, h).map_err(crate::Error::Learned)?;
     let (learned, hybrid) = l
         .apply(samples, h, &kalman)
-        .map_err(|e| format!("{}: {e}", file.display()))?;
+        .map_err(|e| crate::Error::Learned(format!("{}: {e}", file.display())))?;
     // From its grid (every `decimation`-th sample) to every sample, linearly in distance.
     let grid: Vec<f64> = moving.iter().step_by(l.decimation).copied().collect();
     let standing = vec![f64::NAN; first];
@@ -249,13 +274,18 @@ mod tests {
     #[test]
     fn missing_columns_and_uneven_steps_are_named() {
         let p = write("missing", "time,speed,ws_acc_y\n0,1,2\n1,1,2\n2,1,2\n");
-        let e = read_samples(&p).unwrap_err();
+        let e = read_samples(&p).unwrap_err().to_string();
         assert!(e.contains("ws_yaw_rate") && e.contains("in.csv"), "{e}");
         let p = write(
             "uneven",
             "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n0,1,0,0,0\n0.001,1,0,0,0\n0.003,1,0,0,0\n",
         );
         let e = read_samples(&p).unwrap_err();
+        assert!(
+            matches!(e, RecordingError::StepChanges { line: 4, .. }),
+            "{e}"
+        );
+        let e = e.to_string();
         assert!(e.contains("line 4") && e.contains("constant step"), "{e}");
     }
 }

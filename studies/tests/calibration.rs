@@ -42,7 +42,8 @@ fn a_filter_calibrated_for_another_vehicle_beats_the_shipped_one_on_it() {
     );
     fmus.set("vehicle", "vehicle", "manchester.toml").unwrap();
     let e = fmus.set("vehicle", "track_seed", "3").unwrap_err();
-    assert!(e.contains("set by the studies"), "{e}");
+    assert_eq!(e.exit_code(), 2, "bad input: {e}");
+    assert!(e.to_string().contains("set by the studies"), "{e}");
     let vehicle = fmus.vehicle_params().unwrap();
     let manchester = fmu_vehicle::params::VehicleParams::manchester();
     assert_eq!(vehicle.wheelset.mass, manchester.wheelset.mass);

@@ -65,7 +65,7 @@ pub fn execute(a: &LearnArgs) -> Result<Report, Error> {
 }
 
 /// A length in m: a finite number above zero.
-fn positive_m(s: &str) -> Result<f64, String> {
+fn positive_m(s: &str) -> Result<f64, Error> {
     orchestrator::cli::positive(s)
-        .map_err(|_| "expected a finite number of metres above zero".into())
+        .map_err(|_| Error::input("expected a finite number of metres above zero"))
 }

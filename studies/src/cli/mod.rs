@@ -59,9 +59,9 @@ impl StudyFmus {
         let mut fmus = self.fmus.fmus();
         for s in &self.set {
             let (name, value) = orchestrator::cli::split_assignment(s)?;
-            let e = Endpoint::parse(name).map_err(|e| format!("--set {s}: {e}"))?;
+            let e = Endpoint::parse(name).map_err(|e| Error::Input(format!("--set {s}: {e}")))?;
             fmus.set(&e.component, &e.variable, value)
-                .map_err(|e| format!("--set {s}: {e}"))?;
+                .map_err(|e| e.context(format!("--set {s}")))?;
         }
         Ok(fmus)
     }

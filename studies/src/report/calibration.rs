@@ -34,7 +34,7 @@ pub fn calibration(
     ));
     create_dir(plots)?;
     let figure = plots.join(FIGURE);
-    plot::model_adjustment(&figure, &id).map_err(Error::Io)?;
+    plot::model_adjustment(&figure, &id)?;
     log(&format!("wrote {}", figure.display()));
     let cal = calibrate::calibrate(fmus, &id.params, seed, runs::STOP, runs::STEP)?;
     let r = cal.r.diagonal().map(f64::sqrt);

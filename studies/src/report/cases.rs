@@ -123,8 +123,7 @@ pub fn cases(
             Group::Robustness | Group::Resonance => {
                 let svg = format!("{}.svg", title.to_lowercase());
                 let path = out.join(&svg);
-                plot::case_bars(&path, slice, &format!("{title}: Jrel per band"))
-                    .map_err(Error::Io)?;
+                plot::case_bars(&path, slice, &format!("{title}: Jrel per band"))?;
                 report.figures.push(path);
                 md.push_str(&format!("![{title}: Jrel per band]({svg})\n\n"));
             }
@@ -213,10 +212,9 @@ fn first_seed(
         out.join("standard_spectra.svg"),
     );
     let title = format!("estimated vs true alignment, {heading}");
-    plot::estimate_vs_truth(&alignment, &ts.distance, &ts.estimate, &ts.truth, &title)
-        .map_err(Error::Io)?;
+    plot::estimate_vs_truth(&alignment, &ts.distance, &ts.estimate, &ts.truth, &title)?;
     let title = format!("amplitude spectra, {heading}");
-    plot::spectra(&spectra, &ts.distance, &ts.estimate, &ts.truth, &title).map_err(Error::Io)?;
+    plot::spectra(&spectra, &ts.distance, &ts.estimate, &ts.truth, &title)?;
     report.figures.extend([alignment, spectra]);
     Ok(format!(
         "Seed {seed}: time series [{csv}]({csv}).\n\n![estimated vs true alignment](standard_alignment.svg)\n\n![amplitude spectra](standard_spectra.svg)\n\n"
@@ -249,7 +247,7 @@ fn first_lateral_mode(fmus: &Fmus) -> Result<fmu_vehicle::modal::Mode, Error> {
     );
     fmu_vehicle::modal::modes(&vehicle, 20.0)
         .first_lateral()
-        .ok_or_else(|| "the vehicle has no lightly damped lateral mode at 20 m/s".into())
+        .ok_or_else(|| Error::input("the vehicle has no lightly damped lateral mode at 20 m/s"))
 }
 
 #[cfg(test)]

@@ -37,7 +37,9 @@ pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error>
     let grid = a.grid;
     // The grid the filter will have (a whole number of samples), checked before the runs.
     let speed = a.speed.unwrap_or(20.0);
-    let grid = STEP * speed * decimation(speed, grid).map_err(|e| format!("--grid: {e}"))? as f64;
+    let grid = STEP
+        * speed
+        * decimation(speed, grid).map_err(|e| Error::Input(format!("--grid: {e}")))? as f64;
     let lookahead = match a.lag {
         None => Lookahead::Smoother,
         Some(m) if (0.0..=SMOOTHER_WINDOW).contains(&m) => {
@@ -59,7 +61,8 @@ pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error>
         lookahead,
         grid,
         default_partner(lookahead, sigma),
-    )?;
+    )
+    .map_err(Error::Learned)?;
     let ahead = match l.lookahead {
         Lookahead::Smoother => format!("smoother, {SMOOTHER_WINDOW} m each way"),
         Lookahead::FixedLag(n) => format!("look-ahead {} m", n as f64 * l.grid()),

@@ -78,11 +78,13 @@ pub fn calibrate(
     let col = |n: &str| {
         table
             .column(&format!("vehicle.{n}"))
-            .ok_or_else(|| format!("no column {n}"))
+            .ok_or_else(|| crate::Error::Input(format!("no column {n}")))
     };
     let truth: Vec<&[f64]> = TRUTH.iter().map(|n| col(n)).collect::<Result<_, _>>()?;
     let sensors: Vec<&[f64]> = SENSORS.iter().map(|n| col(n)).collect::<Result<_, _>>()?;
-    let speed = *col("forward_speed")?.last().ok_or("empty run")?;
+    let speed = *col("forward_speed")?
+        .last()
+        .ok_or_else(|| crate::Error::input("empty run"))?;
     let fc = state_matrix(params, speed);
     let f = transition(&fc, step, Scheme::Taylor2);
     let h = measurement_matrix(&fc);
@@ -90,7 +92,9 @@ pub fn calibrate(
     let first = (1.0 / step).round() as usize;
     let n = truth[0].len();
     if n <= first + 1 {
-        return Err(format!("the calibration run is too short ({n} samples)").into());
+        return Err(crate::Error::Input(format!(
+            "the calibration run is too short ({n} samples)"
+        )));
     }
     let (mut q, mut r) = (Mat7::zeros(), Mat4::zeros());
     for k in first..n {
@@ -196,16 +200,19 @@ pub fn to_toml(c: &Calibration, identification_seed: u32, provenance: &str) -> S
 /// once and the candidates are evaluated offline ([`super::variants::tune_prior_sigma`]).
 pub fn tune_prior(fmus: &Fmus, c: &Calibration) -> Result<Calibration, crate::Error> {
     use super::variants;
-    let dir = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let dir =
+        tempfile::tempdir().map_err(|e| crate::Error::Io(format!("temporary directory: {e}")))?;
     let path = dir.path().join("candidate.toml");
     std::fs::write(&path, candidate_file(c, c.virtual_scale, c.xi_scale))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| crate::Error::Io(format!("{}: {e}", path.display())))?;
     let record = variants::record(fmus, super::runs::seeded(c.seed), super::runs::STOP, None)?;
     let base: Vec<(String, String)> = parameter_settings(&c.params)
         .into_iter()
         .map(|(k, v)| match v {
             orchestrator::system::Value::Real(x) => Ok((k, format!("{x:e}"))),
-            other => Err(format!("parameter {k}: unexpected value {other:?}")),
+            other => Err(crate::Error::Input(format!(
+                "parameter {k}: unexpected value {other:?}"
+            ))),
         })
         .collect::<Result<_, _>>()?;
     let (s, j) = variants::tune_prior_sigma(&record, 2, &base, Some(&path))?;
@@ -270,7 +277,8 @@ pub const XI_SCALES: [f64; 5] = [1.0, 1e1, 1e2, 1e3, 1e4];
 /// calibration track by a grid over [`VIRTUAL_SCALES`] x [`XI_SCALES`].
 pub fn tune(fmus: &Fmus, c: &Calibration, stop: f64) -> Result<Calibration, crate::Error> {
     use rayon::prelude::*;
-    let dir = tempfile::tempdir().map_err(|e| format!("temporary directory: {e}"))?;
+    let dir =
+        tempfile::tempdir().map_err(|e| crate::Error::Io(format!("temporary directory: {e}")))?;
     let grid: Vec<(f64, f64)> = VIRTUAL_SCALES
         .iter()
         .flat_map(|&v| XI_SCALES.iter().map(move |&x| (v, x)))

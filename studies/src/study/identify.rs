@@ -18,6 +18,7 @@
 
 use super::optimize::nelder_mead;
 use super::runs::{Fmus, Settings, vehicle_run};
+use crate::Error;
 use fmu_estimator::discretize::{Scheme, transition};
 use fmu_estimator::filter::Vec7;
 use fmu_estimator::model::state_matrix;
@@ -146,7 +147,7 @@ pub fn identify(
         table
             .column(&format!("vehicle.{n}"))
             .map(|c| c.to_vec())
-            .ok_or_else(|| format!("no column {n}"))
+            .ok_or_else(|| Error::Input(format!("no column {n}")))
     };
     let (y, psi, xi, v) = (
         col("ws_y")?,
@@ -154,7 +155,10 @@ pub fn identify(
         col("alignment")?,
         col("forward_speed")?,
     );
-    let t = table.column("time").ok_or("no time column")?.to_vec();
+    let t = table
+        .column("time")
+        .ok_or_else(|| Error::input("no time column"))?
+        .to_vec();
     let speed = v.last().copied().unwrap_or(20.0);
     // Row k is time t_k; the step from t_k to t_(k+1) uses the alignment at t_k.
     let drive = &xi[..xi.len() - 1];

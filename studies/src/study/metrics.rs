@@ -103,13 +103,41 @@ pub fn common_grid(a: &[f64], b: &[f64], ds: f64) -> Vec<f64> {
     (0..n).map(|k| start + k as f64 * ds).collect()
 }
 
+/// Why a signal cannot be filtered or evaluated in the metric's bands: the record (or the
+/// grid) does not suffice. Bad input to a study (exit 2).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MetricError {
+    #[error("the Butterworth design did not return second-order sections")]
+    NotSos,
+    #[error("{samples} samples are too few for the {filter} (at least {needed})")]
+    TooShort {
+        samples: usize,
+        /// The filter, e.g. "D1 band-pass".
+        filter: String,
+        needed: usize,
+    },
+    #[error("band {band} needs wavelengths above {} m: the grid step {ds} m is too coarse", 2.0 * ds)]
+    CoarseGrid { band: &'static str, ds: f64 },
+    #[error("trimming {trim} m at each end leaves nothing of {length} m")]
+    Trim { trim: f64, length: f64 },
+    #[error("not enough samples to evaluate")]
+    NotEnoughSamples,
+}
+
+/// `study::learned` still returns text (until the lead converts it).
+impl From<MetricError> for String {
+    fn from(e: MetricError) -> String {
+        e.to_string()
+    }
+}
+
 /// A Butterworth design in second-order sections (`cutoffs` in the units of `fs`).
 pub fn butter(
     order: usize,
     cutoffs: Vec<f64>,
     kind: FilterBandType,
     fs: f64,
-) -> Result<Vec<Sos<f64>>, String> {
+) -> Result<Vec<Sos<f64>>, MetricError> {
     match butter_dyn(
         order,
         cutoffs,
@@ -119,39 +147,39 @@ pub fn butter(
         Some(fs),
     ) {
         DigitalFilter::Sos(s) => Ok(s.sos),
-        _ => Err("the Butterworth design did not return second-order sections".into()),
+        _ => Err(MetricError::NotSos),
     }
 }
 
 /// Zero-phase filtering (`sosfiltfilt`, odd padding), refusing signals too short for its padding
 /// (`sosfiltfilt` would panic); `what` names the filter in the message.
-pub fn filtfilt(x: &[f64], sos: &[Sos<f64>], what: &str) -> Result<Vec<f64>, String> {
+pub fn filtfilt(x: &[f64], sos: &[Sos<f64>], what: &str) -> Result<Vec<f64>, MetricError> {
     // sosfiltfilt pads with 3 (2 sections + 1) samples at each end.
     let needed = 3 * (2 * sos.len() + 1) + 1;
     if x.len() < needed {
-        return Err(format!(
-            "{} samples are too few for the {what} (at least {needed})",
-            x.len()
-        ));
+        return Err(MetricError::TooShort {
+            samples: x.len(),
+            filter: what.to_string(),
+            needed,
+        });
     }
     Ok(sosfiltfilt_dyn(x.iter(), sos))
 }
 
-fn sections(band: &Band, ds: f64) -> Result<Vec<Sos<f64>>, String> {
+fn sections(band: &Band, ds: f64) -> Result<Vec<Sos<f64>>, MetricError> {
     let fs = 1.0 / ds;
     let (lo, hi) = (1.0 / band.long, 1.0 / band.short);
     if !(hi < fs / 2.0) {
-        return Err(format!(
-            "band {} needs wavelengths above {} m: the grid step {ds} m is too coarse",
-            band.name,
-            2.0 * ds
-        ));
+        return Err(MetricError::CoarseGrid {
+            band: band.name,
+            ds,
+        });
     }
     butter(ORDER, vec![lo, hi], FilterBandType::Bandpass, fs)
 }
 
 /// Zero-phase band-pass of a signal sampled every `ds` metres.
-pub fn bandpass(x: &[f64], ds: f64, band: &Band) -> Result<Vec<f64>, String> {
+pub fn bandpass(x: &[f64], ds: f64, band: &Band) -> Result<Vec<f64>, MetricError> {
     filtfilt(x, &sections(band, ds)?, &format!("{} band-pass", band.name))
 }
 
@@ -166,14 +194,14 @@ pub fn accuracy(
     ds: f64,
     band: &Band,
     trim: f64,
-) -> Result<Accuracy, String> {
+) -> Result<Accuracy, MetricError> {
     let (e, t) = (bandpass(estimate, ds, band)?, bandpass(truth, ds, band)?);
     let n = (trim / ds).round() as usize;
     if 2 * n >= e.len() {
-        return Err(format!(
-            "trimming {trim} m at each end leaves nothing of {} m",
-            e.len() as f64 * ds
-        ));
+        return Err(MetricError::Trim {
+            trim,
+            length: e.len() as f64 * ds,
+        });
     }
     let (e, t) = (&e[n..e.len() - n], &t[n..t.len() - n]);
     let err: Vec<f64> = e.iter().zip(t).map(|(a, b)| a - b).collect();
@@ -216,9 +244,9 @@ pub fn evaluate(
     truth: &[f64],
     ds: f64,
     trim: f64,
-) -> Result<BandMetrics, String> {
+) -> Result<BandMetrics, MetricError> {
     if estimate.len() < 2 || truth.len() < 2 {
-        return Err("not enough samples to evaluate".into());
+        return Err(MetricError::NotEnoughSamples);
     }
     let grid = common_grid(estimate_distance, truth_distance, ds);
     let e = resample(estimate_distance, estimate, &grid);
@@ -319,11 +347,13 @@ mod tests {
         assert!(
             bandpass(&[0.0; 10], 0.05, &BANDS[0])
                 .unwrap_err()
+                .to_string()
                 .contains("too few")
         );
         assert!(
             bandpass(&[0.0; 1000], 2.0, &BANDS[0])
                 .unwrap_err()
+                .to_string()
                 .contains("too coarse")
         );
     }

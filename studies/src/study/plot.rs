@@ -15,6 +15,7 @@
 use super::identify::Identification;
 use super::metrics::{BANDS, bandpass, common_grid, resample};
 use super::standard::{DS, TRIM};
+use crate::Error;
 use orchestrator::master::Table;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -37,8 +38,11 @@ const PALETTE: [RGBColor; 8] = [
 /// At most this many points per drawn line (the SVG stays small; 0.2 m at 400 m).
 const MAX_POINTS: usize = 2000;
 
-fn err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> String + '_ {
-    move |e| format!("cannot draw {}: {e}", path.display())
+fn err<E: std::fmt::Display>(path: &Path) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::Draw {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
 }
 
 /// Every `k`-th point so that at most [`MAX_POINTS`] remain (the last one kept).
@@ -54,7 +58,7 @@ fn decimate(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
 
 /// `[lo, hi]` of the values with a 5 % margin (never empty).
 /// An SVG drawing area of `size` pixels on a white background.
-fn white_svg(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, String> {
+fn white_svg(path: &Path, size: (u32, u32)) -> Result<DrawingArea<SVGBackend<'_>, Shift>, Error> {
     let root = SVGBackend::new(path, size).into_drawing_area();
     root.fill(&WHITE).map_err(err(path))?;
     Ok(root)
@@ -71,7 +75,7 @@ fn two_lines(
     (b, b_label): (&[f64], &str),
     (x_desc, y_desc): (&str, &str),
     y_label_size: u32,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let (y0, y1) = range(a.iter().chain(b).copied());
     let mut builder = ChartBuilder::on(area);
     if let Some(c) = caption {
@@ -123,14 +127,14 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 /// Estimate and truth (both sampled at `distance`) on the metrics' uniform grid.
-fn on_grid(distance: &[f64], estimate: &[f64], truth: &[f64]) -> Result<Grid, String> {
+fn on_grid(distance: &[f64], estimate: &[f64], truth: &[f64]) -> Result<Grid, Error> {
     if distance.len() < 2 || estimate.len() != distance.len() || truth.len() != distance.len() {
-        return Err(format!(
+        return Err(Error::Input(format!(
             "distance, estimate and truth need equal lengths of at least 2 ({}, {}, {})",
             distance.len(),
             estimate.len(),
             truth.len()
-        ));
+        )));
     }
     let s = common_grid(distance, distance, DS);
     Ok(Grid {
@@ -155,7 +159,7 @@ pub fn estimate_vs_truth(
     estimate: &[f64],
     truth: &[f64],
     title: &str,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let g = on_grid(distance, estimate, truth)?;
     let n = (TRIM / DS).round() as usize;
     let root = white_svg(path, (1000, 1100))?;
@@ -165,10 +169,10 @@ pub fn estimate_vs_truth(
         let e = bandpass(&g.e, DS, band)?;
         let t = bandpass(&g.t, DS, band)?;
         if 2 * n >= e.len() {
-            return Err(format!(
+            return Err(Error::Input(format!(
                 "{} m is too short to trim {TRIM} m at each end",
                 e.len() as f64 * DS
-            ));
+            )));
         }
         let s = &g.s[n..g.s.len() - n];
         let mm = |x: &[f64]| {
@@ -265,7 +269,7 @@ pub fn spectra(
     estimate: &[f64],
     truth: &[f64],
     title: &str,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let g = on_grid(distance, estimate, truth)?;
     let (lo, hi) = (1.0, 250.0);
     let keep = |x: &[f64]| -> Vec<(f64, f64)> {
@@ -277,7 +281,9 @@ pub fn spectra(
     };
     let (e, t) = (keep(&g.e), keep(&g.t));
     if e.is_empty() {
-        return Err("the record is too short for a spectrum between 1 and 250 m".into());
+        return Err(Error::input(
+            "the record is too short for a spectrum between 1 and 250 m",
+        ));
     }
     let top = e.iter().chain(&t).map(|p| p.1).fold(1e-9, f64::max) * 2.0;
     let bottom = (top * 1e-5).max(1e-9);
@@ -325,14 +331,16 @@ pub fn spectra(
 
 /// The vehicle's wheelset lateral displacement `y` \[mm\] and yaw `psi` \[mrad\] against the
 /// identified simplified model's, over time, two panels.
-pub fn model_adjustment(path: &Path, id: &Identification) -> Result<(), String> {
+pub fn model_adjustment(path: &Path, id: &Identification) -> Result<(), Error> {
     let n = id.time.len();
     if n < 2
         || [&id.y_vehicle, &id.psi_vehicle, &id.y_model, &id.psi_model]
             .iter()
             .any(|v| v.len() != n)
     {
-        return Err("the identification's signals need equal lengths of at least 2".into());
+        return Err(Error::input(
+            "the identification's signals need equal lengths of at least 2",
+        ));
     }
     let root = white_svg(path, (1000, 700))?;
     let root = root
@@ -375,9 +383,9 @@ pub const CAP: f64 = 2.5;
 /// Jrel per band (groups: whole, D1, D2, D3) for each case (one coloured bar each, the seeds'
 /// standard deviation as a whisker), the paper's Jrel as a black diamond where it reports one.
 /// The axis stops at [`CAP`]: a bar cut there carries its value.
-pub fn case_bars(path: &Path, results: &[CaseResult], title: &str) -> Result<(), String> {
+pub fn case_bars(path: &Path, results: &[CaseResult], title: &str) -> Result<(), Error> {
     if results.is_empty() {
-        return Err("no case to draw".into());
+        return Err(Error::input("no case to draw"));
     }
     let cases = results.len();
     let width = 0.8 / cases as f64;
@@ -524,17 +532,17 @@ pub struct TimeSeries {
 
 impl TimeSeries {
     /// From a standard run's table (the first row, the initial values, dropped as the metrics do).
-    pub fn from_table(table: &Table) -> Result<TimeSeries, String> {
+    pub fn from_table(table: &Table) -> Result<TimeSeries, Error> {
         let c = |n: &str| {
             table
                 .column(n)
                 .map(|x| x.get(1..).unwrap_or_default().to_vec())
-                .ok_or_else(|| format!("no column {n}"))
+                .ok_or_else(|| Error::Input(format!("no column {n}")))
         };
         let (time, distance, truth) = (c("time")?, c("vehicle.distance")?, c("vehicle.alignment")?);
         let (ed, e) = (c("estimator.distance")?, c("estimator.alignment")?);
         if ed.len() < 2 {
-            return Err("not enough samples".into());
+            return Err(Error::input("not enough samples"));
         }
         let estimate = resample(&ed, &e, &distance);
         Ok(TimeSeries {
@@ -572,9 +580,8 @@ impl TimeSeries {
         s
     }
 
-    pub fn write_csv(&self, path: &Path) -> Result<(), String> {
-        std::fs::write(path, self.to_csv())
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
+        std::fs::write(path, self.to_csv()).map_err(|e| Error::write(path, e))
     }
 }
 

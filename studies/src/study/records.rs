@@ -91,7 +91,7 @@ pub fn record_table(
     if let Some(name) = roll_rate {
         let col = table
             .column(&format!("vehicle.{name}"))
-            .ok_or_else(|| format!("no column vehicle.{name}"))?;
+            .ok_or_else(|| Error::Input(format!("no column vehicle.{name}")))?;
         rec.samples = Sample::with_roll_rate(rec.samples, &col[1..]);
     }
     Ok((rec, table))
@@ -99,12 +99,12 @@ pub fn record_table(
 
 /// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row
 /// `k` holds the samples at the end of step `k`).
-fn from_table(table: &Table) -> Result<Record, String> {
+fn from_table(table: &Table) -> Result<Record, Error> {
     let c = |n: &str| {
         table
             .column(&format!("vehicle.{n}"))
             .map(|x| x[1..].to_vec())
-            .ok_or_else(|| format!("no column vehicle.{n}"))
+            .ok_or_else(|| Error::Input(format!("no column vehicle.{n}")))
     };
     let (speed, acc, yaw, frame) = (
         c("forward_speed")?,
@@ -143,13 +143,13 @@ pub fn estimate(
     settings: &[(String, String)],
     calibration: Option<&Path>,
     smooth: bool,
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
     let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, calibration)?;
     let out = offline::process(&config, h, samples, smooth)?;
     let est = if smooth {
         out.smoothed
-            .ok_or("the estimator returned no smoothed estimate")?
+            .ok_or_else(|| Error::input("the estimator returned no smoothed estimate"))?
     } else {
         out.filtered
     };
@@ -163,19 +163,21 @@ pub fn estimate_learned(
     h: f64,
     settings: &[(String, String)],
     output: Output,
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+) -> Result<(Vec<f64>, Vec<f64>), Error> {
     let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, None)?;
-    let learned =
-        offline::learned(&values)?.ok_or("the settings do not select the learned filter")?;
+    let learned = offline::learned(&values)?
+        .ok_or_else(|| Error::input("the settings do not select the learned filter"))?;
     let lag = learned.lag();
     let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
-    let est = out.learned.ok_or("no learned estimate")?;
+    let est = out
+        .learned
+        .ok_or_else(|| Error::input("no learned estimate"))?;
     Ok(match output {
         Output::Alignment => (out.distance, est.iter().map(|e| e.alignment).collect()),
         Output::Lagged => {
             if lag <= 0.0 {
-                return Err("the lagged output needs lag > 0".into());
+                return Err(Error::input("the lagged output needs lag > 0"));
             }
             (
                 out.distance.iter().map(|d| d - lag).collect(),

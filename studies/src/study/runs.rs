@@ -55,28 +55,30 @@ impl Fmus {
     /// `estimator.calibration_file` also sets the simplified model's parameters the file holds
     /// (the FMU reads only Q and R from it at run time), and a relative path is made absolute
     /// (the FMU would look for it in its resources).
-    pub fn set(&mut self, component: &str, variable: &str, text: &str) -> Result<(), String> {
+    pub fn set(&mut self, component: &str, variable: &str, text: &str) -> Result<(), Error> {
         let setting = (variable.to_string(), Value::String(text.to_string()));
         if (component, variable) == ("estimator", "calibration_file") {
-            let path =
-                std::path::absolute(text).map_err(|e| format!("calibration file {text}: {e}"))?;
-            for (name, value) in fmu_estimator::calibration::file_parameters(&path)? {
+            let path = std::path::absolute(text)
+                .map_err(|e| Error::Input(format!("calibration file {text}: {e}")))?;
+            for (name, value) in fmu_estimator::calibration::file_parameters(&path)
+                .map_err(fmu_estimator::error::Error::from)?
+            {
                 self.estimator_settings.push((name, Value::Real(value)));
             }
             let path = path
                 .to_str()
-                .ok_or("the calibration file's path is not UTF-8")?;
+                .ok_or_else(|| Error::input("the calibration file's path is not UTF-8"))?;
             self.estimator_settings
                 .push((variable.into(), Value::String(path.into())));
             return Ok(());
         }
         match component {
-            "vehicle" if STUDY_CONTROLLED.contains(&variable) => Err(format!(
+            "vehicle" if STUDY_CONTROLLED.contains(&variable) => Err(Error::Input(format!(
                 "vehicle.{variable} is set by the studies themselves (seeds: --seeds, --seed, --calibration-seed; tracks and conditions: the cases)"
+            ))),
+            "vehicle" if variable == FIXED_SPEED => Err(Error::input(
+                "vehicle.speed: the studies run at the vehicle's default speed, 20 m/s (their cases and the resonance wavelength assume it)",
             )),
-            "vehicle" if variable == FIXED_SPEED => Err(
-                "vehicle.speed: the studies run at the vehicle's default speed, 20 m/s (their cases and the resonance wavelength assume it)".into(),
-            ),
             "vehicle" => {
                 self.vehicle_settings.push(setting);
                 Ok(())
@@ -85,9 +87,9 @@ impl Fmus {
                 self.estimator_settings.push(setting);
                 Ok(())
             }
-            other => Err(format!(
+            other => Err(Error::Input(format!(
                 "no component '{other}' in the studies (vehicle or estimator)"
-            )),
+            ))),
         }
     }
 
@@ -101,9 +103,11 @@ impl Fmus {
     /// with the user's `vehicle.conicity` when positive (the FMU's override of the file's).
     /// The identification takes the simplified model's fixed parameters from it, and the
     /// resonance study its modes.
-    pub fn vehicle_params(&self) -> Result<VehicleParams, String> {
+    pub fn vehicle_params(&self) -> Result<VehicleParams, Error> {
         let mut params = match last(&self.vehicle_settings, "vehicle") {
-            Some(Value::String(name)) => VehicleParams::named(name.trim(), None)?,
+            Some(Value::String(name)) => {
+                VehicleParams::named(name.trim(), None).map_err(Error::Input)?
+            }
             _ => VehicleParams::ml95(),
         };
         if let Some(c) = last(&self.vehicle_settings, "conicity")
@@ -209,7 +213,7 @@ pub fn vehicle_run_driven(
     let speed_vr = cosim.model_descriptions()[0]
         .variable("speed")
         .map(|v| v.value_reference)
-        .ok_or("the vehicle FMU has no 'speed' input")?;
+        .ok_or_else(|| Error::input("the vehicle FMU has no 'speed' input"))?;
     let inputs = |t: f64, out: &mut Vec<ExternalValue>| {
         out.clear();
         out.push((BaseType::Real, speed_vr, speed(t)));

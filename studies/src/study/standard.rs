@@ -3,6 +3,7 @@
 //! beside the paper's Table (docs/references.md section 1).
 
 use super::metrics::{BANDS, BandMetrics, evaluate};
+use crate::Error;
 use orchestrator::master::Table;
 
 /// The paper's standard case, J \[mm\] / Jrel per band (its Tables 3 and 4).
@@ -20,21 +21,22 @@ pub const TRIM: f64 = 10.0;
 /// The band metrics of a standard-case run: the estimator's alignment (against its own
 /// distance) and the vehicle's true alignment (against the vehicle's distance). The first row
 /// (t = start, before any step) is left out.
-pub fn evaluate_results(cols: &Table) -> Result<BandMetrics, String> {
+pub fn evaluate_results(cols: &Table) -> Result<BandMetrics, Error> {
     let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
-    evaluate(
-        &skip(cols.require("estimator.distance")?),
-        &skip(cols.require("estimator.alignment")?),
-        &skip(cols.require("vehicle.distance")?),
-        &skip(cols.require("vehicle.alignment")?),
+    let require = |name: &str| cols.require(name).map_err(Error::Input);
+    Ok(evaluate(
+        &skip(require("estimator.distance")?),
+        &skip(require("estimator.alignment")?),
+        &skip(require("vehicle.distance")?),
+        &skip(require("vehicle.alignment")?),
         DS,
         TRIM,
-    )
+    )?)
 }
 
 /// The band metrics of the estimator's fixed-lag output (`alignment_lagged` against
 /// `distance_lagged`), when the results hold it and the estimator made one (`lag` > 0).
-pub fn evaluate_lagged(cols: &Table) -> Option<Result<BandMetrics, String>> {
+pub fn evaluate_lagged(cols: &Table) -> Option<Result<BandMetrics, Error>> {
     let skip = |x: &[f64]| x[1.min(x.len())..].to_vec();
     let (d, a) = (
         cols.column("estimator.distance_lagged")?,
@@ -45,15 +47,16 @@ pub fn evaluate_lagged(cols: &Table) -> Option<Result<BandMetrics, String>> {
     if d.iter().zip(dist).all(|(a, b)| a == b) {
         return None;
     }
+    let require = |name: &str| cols.require(name).map_err(Error::Input);
     Some((|| {
-        evaluate(
+        Ok(evaluate(
             &skip(d),
             &skip(a),
-            &skip(cols.require("vehicle.distance")?),
-            &skip(cols.require("vehicle.alignment")?),
+            &skip(require("vehicle.distance")?),
+            &skip(require("vehicle.alignment")?),
             DS,
             TRIM,
-        )
+        )?)
     })())
 }
 

@@ -22,6 +22,7 @@ pub use super::records::{
 };
 use super::runs::{Fmus, STEP, seeded};
 use super::standard::{DS, TRIM};
+use crate::Error;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::path::Path;
@@ -193,13 +194,20 @@ pub fn evaluate_variant(
     rec: &Record,
     v: &Variant,
     calibration: Option<&Path>,
-) -> Result<BandMetrics, String> {
+) -> Result<BandMetrics, Error> {
     let (distance, est) = if v.settings.iter().any(|(k, x)| k == "estimator" && x == "2") {
         estimate_learned(&rec.samples, STEP, &v.settings, v.output)?
     } else {
         estimate(&rec.samples, STEP, &v.settings, calibration, v.smooth)?
     };
-    evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)
+    Ok(evaluate(
+        &distance,
+        &est,
+        &rec.distance,
+        &rec.alignment,
+        DS,
+        TRIM,
+    )?)
 }
 
 /// Chooses the virtual measurement's sigma of `model` (2 or 3) by whole-band Jrel on the
@@ -213,10 +221,10 @@ pub fn tune_prior_sigma(
     model: u32,
     base: &[(String, String)],
     calibration: Option<&Path>,
-) -> Result<(f64, f64), String> {
+) -> Result<(f64, f64), Error> {
     const SIGMA_CANDIDATES: [f64; 11] =
         [5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2, 5e-2, 0.1, 0.2, 0.5, 1.0];
-    let scores: Vec<Result<(f64, f64), String>> = SIGMA_CANDIDATES
+    let scores: Vec<Result<(f64, f64), Error>> = SIGMA_CANDIDATES
         .par_iter()
         .map(|&s| {
             let mut v = variant(
@@ -257,11 +265,11 @@ pub struct VariantResult {
 }
 
 /// Evaluates every variant on every record.
-pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantResult>, String> {
+pub fn compare(records: &[Record], variants: &[Variant]) -> Result<Vec<VariantResult>, Error> {
     let jobs: Vec<(usize, usize)> = (0..variants.len())
         .flat_map(|v| (0..records.len()).map(move |r| (v, r)))
         .collect();
-    let metrics: Vec<Result<BandMetrics, String>> = jobs
+    let metrics: Vec<Result<BandMetrics, Error>> = jobs
         .par_iter()
         .map(|&(v, r)| evaluate_variant(&records[r], &variants[v], None))
         .collect();
@@ -306,11 +314,12 @@ pub fn compare_learned(
     records: &[Record],
     smoother: &LearnedSmoother,
     trained: &str,
-) -> Result<Vec<VariantResult>, String> {
+) -> Result<Vec<VariantResult>, Error> {
     let metrics: Vec<(BandMetrics, BandMetrics)> = records
         .par_iter()
         .map(|rec| smoother.evaluate(rec))
-        .collect::<Result<_, String>>()?;
+        .collect::<Result<_, String>>()
+        .map_err(Error::Learned)?;
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
     let grid = metres(smoother.grid());
     let name = match smoother.lookahead {

@@ -8,7 +8,7 @@ use sci_rs::signal::filter::sosfilt_dyn;
 /// Zero-phase high-pass of a signal on a grid of step `ds` \[m\], cut-off wavelength `split` \[m\].
 pub fn highpass(x: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
     let sos = butter(4, vec![1.0 / split], FilterBandType::Highpass, 1.0 / ds)?;
-    filtfilt(x, &sos, "hybrid's high-pass")
+    Ok(filtfilt(x, &sos, "hybrid's high-pass")?)
 }
 
 /// The hybrid estimate `kalman + HP(learned - kalman)` (module docs, step 5).

@@ -207,7 +207,7 @@ fn run(
     ) {
         Ok(r) => r,
         // The vehicle FMU stops a run in which it leaves the track: no running condition.
-        Err(e) if e.to_string().contains(fmu_vehicle::fmu::DERAILED) => return Ok(None),
+        Err(e) if e.is_derailment() => return Ok(None),
         Err(e) => return Err(e),
     };
     let ws_y = table
