@@ -87,12 +87,17 @@ impl<'a> External<'a> {
         })
     }
 
-    /// Sets the inputs for time `t`.
+    /// Sets the inputs for time `t`: nothing, in the stepping loop itself, for a run without.
     #[inline]
     pub fn apply(&mut self, instances: &mut [Instance], t: f64) -> Result<(), FmiError> {
         if self.targets.is_empty() {
             return Ok(());
         }
+        self.set(instances, t)
+    }
+
+    #[inline(never)]
+    fn set(&mut self, instances: &mut [Instance], t: f64) -> Result<(), FmiError> {
         (self.fill)(t, &mut self.values);
         for (a, &x) in self.targets.iter().zip(&self.values) {
             let inst = &mut instances[a.component];
