@@ -15,7 +15,8 @@
 //! - [`StopToken`]: a per-run stop request (Ctrl-C on the command line);
 //! - [`Progress`]: reported to a callback, so that a library run draws nothing (the command
 //!   line draws its bar, a study its own, a thread nothing);
-//! - `run`: the phases of a run, in the order that keeps results safe, behind [`Runner`].
+//! - [`Runner`]: what a run takes besides its options, and the order of its phases that keeps
+//!   results safe; `run`: the phases.
 //!
 //! Reliability: the results file is created (and its header flushed) before any FMU is
 //! instantiated, so an unwritable destination or a full disk stops the run before it starts;
@@ -30,6 +31,7 @@ mod inputs;
 mod observer;
 mod recording;
 mod run;
+mod runner;
 mod stop;
 mod table;
 mod transfer;
@@ -39,7 +41,7 @@ pub use algorithm::Algorithm;
 pub use error::RunError;
 pub use inputs::{InputFn, no_inputs};
 pub use observer::{End, Flow, ObserveError, Observer, Values};
-pub use run::Runner;
+pub use runner::Runner;
 pub use stop::StopToken;
 pub use table::Table;
 

@@ -1,15 +1,13 @@
-//! A run in its phases: check the grid, open the results, instantiate, initialize with values
-//! propagated through the connections, step, and tear down.
+//! A run in its phases: initialize with values propagated through the connections, step, and
+//! tear down ([`super::Runner::run`] calls them in order).
 //!
-//! The phases are kept apart so that the order between them, which is what makes a run
-//! reliable, reads in one short function ([`Runner::run`]): the results file before any
-//! instance (an unwritable destination costs nothing), the last row before the file is closed,
-//! the file closed before an error is returned (so the error can point to it), and the
-//! instances terminated only once the results are safe.
+//! The phases are kept apart so that the order between them is what makes a run reliable: the
+//! last row before the file is closed, the file closed before an error is returned (so the
+//! error can point to it), and the instances terminated only once the results are safe.
 
 use super::algorithm::{Algorithm, Simulators};
 use super::grid::Grid;
-use super::inputs::{External, InputFn, no_inputs};
+use super::inputs::External;
 use super::recording::Results;
 use super::transfer::Transfers;
 use super::{
@@ -17,96 +15,12 @@ use super::{
     RunSummary, StopToken, Values,
 };
 use crate::resolve::Setting;
-use crate::system::{Endpoint, Value};
+use crate::system::Value;
 use fmi_import::{FmiError, Instance, fmi2Status};
 use std::time::Instant;
 
-/// A run being set up: [`Cosimulation::runner`], then what the run takes besides its options,
-/// then [`Runner::run`]. Without them a run has no external inputs, no observer but the
-/// recording its options ask for, no progress reports, and a stop token of its own that
-/// nothing sets.
-pub struct Runner<'a> {
-    cosim: &'a Cosimulation,
-    opts: &'a RunOptions,
-    inputs: &'a [Endpoint],
-    fill: &'a InputFn<'a>,
-    observers: Vec<&'a mut dyn Observer>,
-    progress: Option<&'a mut ProgressFn<'a>>,
-    stop: StopToken,
-}
-
-impl<'a> Runner<'a> {
-    pub(super) fn new(cosim: &'a Cosimulation, opts: &'a RunOptions) -> Runner<'a> {
-        Runner {
-            cosim,
-            opts,
-            inputs: &[],
-            fill: &no_inputs,
-            observers: Vec::new(),
-            progress: None,
-            stop: StopToken::new(),
-        }
-    }
-
-    /// External inputs: before the step from `t` (and once at the start, in initialization
-    /// mode), `fill(t, values)` gives one value per input of `names`, in order, and the master
-    /// sets them. Each name is a `component.variable` input that no connection feeds; the run
-    /// refuses, naming it, an unknown component or variable, or one that is not such an input.
-    pub fn inputs(mut self, names: &'a [Endpoint], fill: &'a InputFn<'a>) -> Runner<'a> {
-        self.inputs = names;
-        self.fill = fill;
-        self
-    }
-
-    /// Adds an observer, called after the recording (so a row is written before an observer
-    /// can stop the run at it) and after the observers added before it.
-    pub fn observe(mut self, observer: &'a mut dyn Observer) -> Runner<'a> {
-        self.observers.push(observer);
-        self
-    }
-
-    /// Reports progress to `progress` when [`RunOptions::progress`] asks for it.
-    pub fn progress(mut self, progress: &'a mut ProgressFn<'a>) -> Runner<'a> {
-        self.progress = Some(progress);
-        self
-    }
-
-    /// Stops the run at the next step boundary once `stop` is set ([`StopToken::stop`]).
-    pub fn stop_on(mut self, stop: &StopToken) -> Runner<'a> {
-        self.stop = stop.clone();
-        self
-    }
-
-    /// Runs the system; see the module docs of [`super`].
-    pub fn run(self) -> Result<RunSummary, RunError> {
-        let started = Instant::now();
-        let (cosim, opts) = (self.cosim, self.opts);
-        let grid = Grid::new(opts)?;
-        let external = External::new(cosim, self.inputs, self.fill)?;
-        let results = Results::new(&cosim.system, &cosim.model_descriptions(), opts, &grid)?;
-        let instances = cosim.instantiate(opts)?;
-        let mut run = Run {
-            grid,
-            order: &cosim.plan.order,
-            values: Transfers::new(instances.len(), &cosim.plan.links),
-            instances,
-            external,
-            observers: Observers {
-                results,
-                others: self.observers,
-            },
-            stop: self.stop,
-        };
-        run.initialize(opts, &cosim.plan.settings).map_err(fmi)?;
-        let flow = run.start()?;
-        let progress = if opts.progress { self.progress } else { None };
-        let (k, outcome) = run.step_all(opts.algorithm, flow, progress);
-        run.finish(k, outcome, started)
-    }
-}
-
 /// How the stepping ended.
-enum Outcome {
+pub(super) enum Outcome {
     /// At the stop time.
     Completed,
     /// An FMU failed, in its step or when read by an observer.
@@ -135,7 +49,7 @@ impl Outcome {
 }
 
 /// An FMU's failure before the stepping: there are no results to point to yet.
-fn fmi(error: FmiError) -> RunError {
+pub(super) fn fmi(error: FmiError) -> RunError {
     RunError::Fmi {
         error,
         results: None,
@@ -169,9 +83,9 @@ impl Point {
 
 /// The recording (when the options ask for one) and the caller's observers, in the order
 /// they are called. A run without observers of its own pays nothing for them.
-struct Observers<'a> {
-    results: Option<Results>,
-    others: Vec<&'a mut dyn Observer>,
+pub(super) struct Observers<'a> {
+    pub results: Option<Results>,
+    pub others: Vec<&'a mut dyn Observer>,
 }
 
 impl Observers<'_> {
@@ -194,15 +108,15 @@ impl Observers<'_> {
 }
 
 /// What the phases of one run share.
-struct Run<'a> {
-    grid: Grid,
+pub(super) struct Run<'a> {
+    pub grid: Grid,
     /// Producers first ([`crate::resolve::Plan::order`]).
-    order: &'a [usize],
-    instances: Vec<Instance>,
-    values: Transfers,
-    external: External<'a>,
-    observers: Observers<'a>,
-    stop: StopToken,
+    pub order: &'a [usize],
+    pub instances: Vec<Instance>,
+    pub values: Transfers,
+    pub external: External<'a>,
+    pub observers: Observers<'a>,
+    pub stop: StopToken,
 }
 
 /// The instances with the connections between them, as an algorithm steps them.
@@ -227,7 +141,7 @@ impl Simulators for Connected<'_> {
 }
 
 impl Cosimulation {
-    fn instantiate(&self, opts: &RunOptions) -> Result<Vec<Instance>, RunError> {
+    pub(super) fn instantiate(&self, opts: &RunOptions) -> Result<Vec<Instance>, RunError> {
         let mut instances = Vec::with_capacity(self.fmus.len());
         for (c, fmu) in self.system.components.iter().zip(&self.fmus) {
             instances.push(fmu.instantiate(&c.name, opts.log.clone())?);
@@ -240,7 +154,11 @@ impl Run<'_> {
     /// Experiment setup, the parameters, the external inputs at the start, then the initial
     /// values through the connections: producers first, repeated once per component so that
     /// values reach the end of any chain.
-    fn initialize(&mut self, opts: &RunOptions, settings: &[Setting]) -> Result<(), FmiError> {
+    pub(super) fn initialize(
+        &mut self,
+        opts: &RunOptions,
+        settings: &[Setting],
+    ) -> Result<(), FmiError> {
         let instances = &mut self.instances;
         for inst in instances.iter_mut() {
             inst.setup_experiment(opts.start, Some(opts.stop), None)?;
@@ -276,7 +194,7 @@ impl Run<'_> {
 
     /// The observers at the start time. An FMU failing to be read here reports no results
     /// file (there is nothing in it yet).
-    fn start(&mut self) -> Result<Flow, RunError> {
+    pub(super) fn start(&mut self) -> Result<Flow, RunError> {
         let t = self.grid.start;
         match self
             .observers
@@ -296,7 +214,7 @@ impl Run<'_> {
     /// Steps until the stop time, a failure, an instance ending the simulation, an observer's
     /// [`Flow::Stop`] or the stop token (checked once per step), with progress around it.
     /// Returns the steps done and how the stepping ended.
-    fn step_all(
+    pub(super) fn step_all(
         &mut self,
         algorithm: Algorithm,
         first: Flow,
@@ -371,7 +289,7 @@ impl Run<'_> {
     /// The last row of a run an instance ended early, the observers told, the results closed,
     /// and the instances terminated; or the error the run ended with, pointing to the results
     /// kept.
-    fn finish(
+    pub(super) fn finish(
         mut self,
         k: u64,
         outcome: Outcome,
