@@ -3,7 +3,9 @@
 //! - [`system`]: components, connections, parameters, experiment (independent of any file format);
 //! - [`ssp`]: SSP 1.0 system descriptions (.ssd / .ssp) read and written;
 //! - [`resolve`]: checks a system against its FMUs (connections, types, parameters, algebraic loops);
-//! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi stepping;
+//! - [`master`]: instantiation, initialization with propagated values, Gauss-Seidel/Jacobi
+//!   stepping; its seams: external inputs by `component.variable`, [`master::Observer`]s (the
+//!   recording is one; an observer can end a run), a per-run [`master::StopToken`];
 //! - [`outdir`], [`outfile`]: what a command may write and replace (one policy for all);
 //! - [`record`]: the results writer;
 //! - [`parquet`]: Parquet tables of numbers (recordings and results), with units and provenance;

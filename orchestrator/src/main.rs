@@ -40,8 +40,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    if matches!(cli.command, Command::Run(_) | Command::Simulate(_)) {
-        run::stop_on_interrupt();
+    match &cli.command {
+        Command::Run(a) => run::stop_on_interrupt(&a.settings.common.interrupt),
+        Command::Simulate(a) => run::stop_on_interrupt(&a.common.interrupt),
+        Command::Info(_) | Command::ExportSsp(_) => {}
     }
     let result = match &cli.command {
         Command::Run(a) => {

@@ -22,9 +22,7 @@
 //! `--replay` reads the signals one step ahead (`t` takes the row of `t + h`), so that a record
 //! replays exactly. A time within 1e-9 (relative) of a row's time takes that row's value.
 
-use crate::master::{
-    Cosimulation, ExternalValue, ProgressFn, RunError, RunOptions, RunSummary, no_inputs,
-};
+use crate::master::{Cosimulation, ProgressFn, RunError, RunOptions, RunSummary, StopToken};
 use crate::system::{Component, Experiment, System};
 use model_description::{BaseType, Variability};
 use std::path::Path;
@@ -148,7 +146,9 @@ pub const RECORDING_ONLY: &[&str] = &["distance"];
 
 /// Runs one FMU with `signals` on its inputs. Implemented as a one-component system whose
 /// inputs are set before every step, so it shares the master's recording and error handling.
-/// Progress goes to `progress` when [`RunOptions::progress`] asks for it.
+/// The component is named after the FMU's file stem (`Feedthrough.fmu`: `Feedthrough`), which
+/// is also the prefix of its results' columns. Progress goes to `progress` when
+/// [`RunOptions::progress`] asks for it; setting `stop` stops the run at the next step.
 pub fn simulate(
     fmu: &Path,
     signals: Option<&Signals>,
@@ -156,6 +156,7 @@ pub fn simulate(
     opts: &RunOptions,
     replay: bool,
     progress: &mut ProgressFn<'_>,
+    stop: &StopToken,
 ) -> Result<RunSummary, RunError> {
     let name = fmu
         .file_stem()
@@ -176,11 +177,13 @@ pub fn simulate(
     for (variable, value) in settings {
         cosim.set(&crate::system::Endpoint::new(&name, variable), value)?;
     }
+    let runner = cosim.runner(opts).progress(progress).stop_on(stop);
     match signals {
-        None => cosim.run_reporting(opts, &no_inputs, progress),
+        None => runner.run(),
         Some(s) => {
             let md = cosim.model_descriptions()[0].clone();
-            let mut inputs = vec![];
+            // The inputs by name, and per input its column and whether it is held.
+            let (mut names, mut columns) = (vec![], vec![]);
             for (c, n) in s.names.iter().enumerate() {
                 // `component.variable` as a results.csv names it: the part after the prefix.
                 let found = md
@@ -223,19 +226,18 @@ pub fn simulate(
                         )));
                     }
                 };
-                inputs.push((c, base, v.value_reference, hold));
+                names.push(crate::system::Endpoint::new(&name, &v.name));
+                columns.push((c, hold));
             }
             // Replaying a record: the value set at t is the row of t + h.
             let lead = if replay { opts.step } else { 0.0 };
-            let external = |t: f64, out: &mut Vec<ExternalValue>| {
-                out.clear();
+            let fill = |t: f64, out: &mut [f64]| {
                 let t = t + lead;
-                for &(c, base, vr, hold) in &inputs {
-                    let x = if hold { s.held(c, t) } else { s.at(c, t) };
-                    out.push((base, vr, x));
+                for (x, &(c, hold)) in out.iter_mut().zip(&columns) {
+                    *x = if hold { s.held(c, t) } else { s.at(c, t) };
                 }
             };
-            cosim.run_reporting(opts, &external, progress)
+            runner.inputs(&names, &fill).run()
         }
     }
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use orchestrator::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions, no_inputs};
+use orchestrator::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System, Value};
 
 fn chain(gain: f64, fail_at: Option<f64>) -> System {
@@ -60,7 +60,7 @@ fn rows(path: &std::path::Path) -> Vec<Vec<f64>> {
 #[test]
 fn gauss_seidel_passes_the_end_of_step_value_and_jacobi_the_start_of_step_value() {
     let cosim = Cosimulation::load(chain(2.0, None)).unwrap();
-    assert_eq!(cosim.plan.order, vec![1, 0], "producer first");
+    assert_eq!(cosim.plan().order, vec![1, 0], "producer first");
     let h = 0.01;
     for (algorithm, lag) in [(Algorithm::GaussSeidel, 0.0), (Algorithm::Jacobi, h)] {
         let dir = tempfile::tempdir().unwrap();
@@ -140,7 +140,7 @@ fn progress_of(fail_at: Option<f64>, progress: bool) -> (Vec<Progress>, Result<u
     let mut opts = options(dir.path(), 2.5, 1.0 / 1024.0, Algorithm::GaussSeidel);
     opts.progress = progress;
     let mut seen = vec![];
-    let summary = cosim.run_reporting(&opts, &no_inputs, &mut |p| seen.push(p));
+    let summary = cosim.runner(&opts).progress(&mut |p| seen.push(p)).run();
     (seen, summary.map(|s| s.steps))
 }
 

@@ -65,7 +65,7 @@ fn execute(command: Command) -> Result<(), Error> {
     let say = |line: &str| println!("{line}");
     let report = match command {
         Command::Run(a) => {
-            orchestrator::cli::run::stop_on_interrupt();
+            orchestrator::cli::run::stop_on_interrupt(&a.settings.common.interrupt);
             // The output directory stays locked until metrics.json is written.
             let done = run::execute(&a)?;
             eprintln!("{}", orchestrator_summary(&done.summary));

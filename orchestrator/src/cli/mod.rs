@@ -11,7 +11,7 @@ pub mod simulate;
 
 pub use report::{progress_bar, summary_text};
 
-use crate::master::{Cosimulation, ResultsFile, RunError, RunOptions};
+use crate::master::{Cosimulation, ResultsFile, RunError, RunOptions, StopToken};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::{Args, ValueEnum};
@@ -65,6 +65,10 @@ pub struct Common {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// The run's stop token, not an option: set by the Ctrl-C handler when the command
+    /// installs one ([`run::stop_on_interrupt`]), never otherwise.
+    #[arg(skip)]
+    pub interrupt: StopToken,
 }
 
 /// A time in s: a finite number, not negative.

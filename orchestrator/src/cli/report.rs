@@ -1,6 +1,6 @@
 //! What the command line shows of a run on stderr: the progress bar and the closing summary.
 
-use crate::master::{Progress, RunSummary};
+use crate::master::{End, Progress, RunSummary};
 
 /// The command line's progress bar, drawn on stderr from the master's [`Progress`] reports for a
 /// run of 10 000 steps or more (the master itself draws nothing).
@@ -34,11 +34,16 @@ pub fn progress_bar() -> impl FnMut(Progress) {
 /// What a finished run prints on stderr: steps, time, cost per step and where the rows are.
 pub fn summary_text(summary: &RunSummary) -> String {
     let mut text = String::new();
-    if let Some(who) = &summary.ended_by {
-        text.push_str(&format!(
+    match &summary.end {
+        End::Instance(who) => text.push_str(&format!(
             "'{who}' ended the simulation at t = {} s (fmi2DoStep returned fmi2Discard with fmi2Terminated): the run stops there\n",
             summary.final_time
-        ));
+        )),
+        End::Observer => text.push_str(&format!(
+            "an observer stopped the run at t = {} s\n",
+            summary.final_time
+        )),
+        End::StopTime | End::Interrupted | End::Failed => {}
     }
     let per_step = summary.wall.as_secs_f64() / summary.steps.max(1) as f64 * 1e6;
     text.push_str(&format!(

@@ -1,7 +1,7 @@
 //! `orchestrator run SYSTEM`: a system described in SSP, through the master.
 
 use super::{Common, fmu_sources, progress_bar, split_assignment};
-use crate::master::{Algorithm, Cosimulation, RunError, RunSummary, no_inputs};
+use crate::master::{Algorithm, Cosimulation, RunError, RunSummary, StopToken};
 use crate::outdir::OutputDir;
 use crate::system::{Endpoint, System};
 use clap::Args;
@@ -76,17 +76,23 @@ pub fn run_system(
     let out = s
         .common
         .hold_output(&mut opts, program, extra, &fmus, &s.set)?;
-    let summary = cosim.run_reporting(&opts, &no_inputs, &mut progress_bar())?;
+    let summary = cosim
+        .runner(&opts)
+        .progress(&mut progress_bar())
+        .stop_on(&s.common.interrupt)
+        .run()?;
     Ok(Finished { summary, out })
 }
 
 /// Ctrl-C (and SIGTERM, SIGHUP) during a run (`run`, `simulate`, `alignment-studies run`): the
-/// first asks the master to stop at the next step boundary and keep the results; a second one
-/// quits at once. The handler runs on ctrlc's own thread, not in signal context, so printing
-/// and exiting there are safe.
-pub fn stop_on_interrupt() {
-    let installed = ctrlc::set_handler(|| {
-        if crate::master::request_stop() {
+/// first sets `stop`, the token of the command's run ([`super::Common::interrupt`]), so that
+/// it stops at the next step boundary and keeps the results; a second one quits at once. The
+/// handler runs on ctrlc's own thread, not in signal context, so printing and exiting there
+/// are safe. A process installs it once.
+pub fn stop_on_interrupt(stop: &StopToken) {
+    let stop = stop.clone();
+    let installed = ctrlc::set_handler(move || {
+        if stop.stop() {
             eprintln!(
                 "interrupted: stopping at the next step boundary and keeping the results (interrupt again to quit at once)"
             );

@@ -83,5 +83,6 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
         &opts,
         args.replay,
         &mut progress_bar(),
+        &c.interrupt,
     )
 }

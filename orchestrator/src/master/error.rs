@@ -29,7 +29,7 @@ pub enum RunError {
     /// The results could not be written (exit 1).
     #[error("{0}")]
     Io(String),
-    /// The run was asked to stop ([`super::request_stop`], e.g. Ctrl-C) and stopped at a step
+    /// The run's [`super::StopToken`] was set (e.g. by Ctrl-C) and the run stopped at a step
     /// boundary (exit 130).
     #[error(
         "interrupted at t = {time} s, after {steps} of {total} steps{}",

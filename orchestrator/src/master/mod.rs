@@ -5,31 +5,44 @@
 //! without the others, and so that nothing here knows what a caller does with a run:
 //! - `grid`: the communication points, `start + k * step` from an integer `k`, so they never
 //!   drift however long the run (Reference-FMUs #507);
-//! - `transfer`: value transfer along the connections and from external inputs, the only work
-//!   the master adds to every step, through flat buffers with nothing allocated;
+//! - `transfer`: value transfer along the connections, the only work the master adds to every
+//!   step, through flat buffers with nothing allocated;
+//! - `inputs`: the caller's external inputs, addressed by `component.variable`;
 //! - [`Algorithm`]: what one communication step is, Gauss-Seidel (the default) or Jacobi;
-//! - `observe`: recording as an observer that owns the results file and the table;
+//! - [`Observer`]: what the master tells an observer at the start, after each step and at the
+//!   end, and how an observer ends a run ([`Flow::Stop`], fmpy's `step_finished` returning
+//!   false); `recording` is the observer that owns the results file and the table;
+//! - [`StopToken`]: a per-run stop request (Ctrl-C on the command line);
 //! - [`Progress`]: reported to a callback, so that a library run draws nothing (the command
 //!   line draws its bar, a study its own, a thread nothing);
-//! - `run`: the phases of a run, in the order that keeps results safe.
+//! - [`Runner`]: what a run takes besides its options, and the order of its phases that keeps
+//!   results safe; `run`: the phases.
 //!
 //! Reliability: the results file is created (and its header flushed) before any FMU is
 //! instantiated, so an unwritable destination or a full disk stops the run before it starts;
-//! an FMU failing mid-run, or [`request_stop`] (Ctrl-C on the command line, checked once per
-//! step), ends the run at a step boundary with every recorded row kept as whole lines in
-//! `results.csv`; a write failing mid-run names the file and the time the run stopped at.
+//! an FMU failing mid-run, or the run's [`StopToken`] (checked once per step), ends the run at
+//! a step boundary with every recorded row kept as whole lines in `results.csv`; a write
+//! failing mid-run names the file and the time the run stopped at.
 
 mod algorithm;
 mod error;
 mod grid;
-mod observe;
+mod inputs;
+mod observer;
+mod recording;
 mod run;
+mod runner;
+mod stop;
 mod table;
 mod transfer;
 
 pub use crate::record::ResultsFile;
 pub use algorithm::Algorithm;
 pub use error::RunError;
+pub use inputs::{InputFn, no_inputs};
+pub use observer::{End, Flow, ObserveError, Observer, Values};
+pub use runner::Runner;
+pub use stop::StopToken;
 pub use table::Table;
 
 /// Checks the options' times and step (finite, a positive step, stop not before start, a
@@ -38,39 +51,20 @@ pub fn check_grid(opts: &RunOptions) -> Result<(), RunError> {
     grid::Grid::new(opts).map(|_| ())
 }
 
-use crate::resolve::{Plan, resolve};
+use crate::resolve::{Plan, ResolveError, resolve};
 use crate::system::{Endpoint, System, Value};
 use fmi_import::{Fmu, LogConfig};
-use model_description::{BaseType, ModelDescription};
+use model_description::{BaseType, ModelDescription, ScalarVariable};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-/// Set by [`request_stop`]; read by the stepping loop once per step.
-static STOP: AtomicBool = AtomicBool::new(false);
-
-/// Asks every run in this process to stop at its next step boundary (what the command line's
-/// Ctrl-C handler calls). The run then flushes and keeps its results and returns
-/// [`RunError::Interrupted`]. Returns whether this is the first request.
-pub fn request_stop() -> bool {
-    !STOP.swap(true, Ordering::SeqCst)
-}
-
-/// Whether [`request_stop`] has been called.
-pub fn stop_requested() -> bool {
-    STOP.load(Ordering::Relaxed)
-}
-
-/// One value for an input of the first component: its type, value reference and value (an
-/// Integer or Enumeration as a whole number, a Boolean as 0 or 1).
-pub type ExternalValue = (BaseType, u32, f64);
-
-/// Fills the buffer with the first component's input values at time `t`.
-pub type ExternalInputs<'a> = dyn Fn(f64, &mut Vec<ExternalValue>) + 'a;
-
-/// The external inputs of a run that has none.
-pub fn no_inputs(_: f64, values: &mut Vec<ExternalValue>) {
-    values.clear();
+/// Where a variable of the system is: its component's index in [`System::components`], its
+/// type and value reference. What [`Values`] reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Address {
+    pub component: usize,
+    pub base: BaseType,
+    pub vr: u32,
 }
 
 /// How far the stepping is, for a caller that shows it: the library draws nothing, so that it
@@ -105,8 +99,8 @@ pub struct RunOptions {
     pub interval: Option<f64>,
     /// Also keep the recorded rows in memory ([`RunSummary::table`]), for the studies.
     pub collect: bool,
-    /// Report progress to the callback of [`Cosimulation::run_reporting`] (`run` and
-    /// `run_with_inputs` have none to report to).
+    /// Report progress to the callback given to [`Runner::progress`] (a run without one
+    /// reports nothing).
     pub progress: bool,
     pub log: LogConfig,
     /// The largest results file (bytes, estimated before the run) written without refusal
@@ -145,19 +139,23 @@ pub struct RunSummary {
     pub table: Option<Table>,
     pub wall: Duration,
     pub final_time: f64,
-    /// The instance that ended the run before the stop time: its fmi2DoStep returned
-    /// fmi2Discard with fmi2GetBooleanStatus(fmi2Terminated) true. The run then ends cleanly,
-    /// as fmpy does: the rows until the last communication point, and one at the instance's
-    /// last successful time (`final_time`) when it reported one past that point.
-    pub ended_by: Option<String>,
+    /// [`End::StopTime`]; or [`End::Instance`], an instance that ended the run before the stop
+    /// time (its fmi2DoStep returned fmi2Discard with fmi2GetBooleanStatus(fmi2Terminated)
+    /// true): the run then ends cleanly, as fmpy does, with the rows until the last
+    /// communication point and one at the instance's last successful time (`final_time`) when
+    /// it reported one past that point; or [`End::Observer`], an observer that stopped the run
+    /// after step `steps` (its row recorded). The other ends are errors.
+    pub end: End,
 }
 
 /// A loaded system: its FMUs opened and the plan resolved against them. Each run instantiates
-/// the FMUs afresh, so one `Cosimulation` can run many times.
+/// the FMUs afresh, so one `Cosimulation` can run many times. The system and the plan are
+/// read through [`Cosimulation::system`] and [`Cosimulation::plan`] and changed only together
+/// ([`Cosimulation::set`]), so the plan is always the system's.
 pub struct Cosimulation {
-    pub system: System,
+    system: System,
     fmus: Vec<Fmu>,
-    pub plan: Plan,
+    plan: Plan,
 }
 
 impl Cosimulation {
@@ -178,12 +176,70 @@ impl Cosimulation {
         Ok(Cosimulation { system, fmus, plan })
     }
 
+    /// The system as loaded, with the settings [`Cosimulation::set`] added to its components'
+    /// parameters.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The system resolved against its FMUs: connections, settings, stepping order.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
     pub fn model_descriptions(&self) -> Vec<&ModelDescription> {
         self.fmus.iter().map(|f| f.model_description()).collect()
     }
 
+    /// The component and variable `e` names, or an error naming what is missing; `context`
+    /// says what named it.
+    pub(crate) fn find(
+        &self,
+        e: &Endpoint,
+        context: &str,
+    ) -> Result<(usize, &ScalarVariable), ResolveError> {
+        let c = self
+            .system
+            .components
+            .iter()
+            .position(|x| x.name == e.component)
+            .ok_or_else(|| ResolveError::UnknownComponent {
+                context: context.to_string(),
+                component: e.component.clone(),
+                known: self
+                    .system
+                    .components
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            })?;
+        let v = self.fmus[c]
+            .model_description()
+            .variable(&e.variable)
+            .ok_or_else(|| ResolveError::UnknownVariable {
+                context: context.to_string(),
+                component: e.component.clone(),
+                variable: e.variable.clone(),
+                fmu: self.system.components[c].source.clone(),
+            })?;
+        Ok((c, v))
+    }
+
+    /// Where the variable `e` is, for an observer to read it ([`Values::value`]); an unknown
+    /// component or variable is an error naming it.
+    pub fn address(&self, e: &Endpoint) -> Result<Address, RunError> {
+        let (component, v) = self.find(e, &format!("variable {e}"))?;
+        Ok(Address {
+            component,
+            base: v.kind.base_type(),
+            vr: v.value_reference,
+        })
+    }
+
     /// Adds `component.variable=value` settings (command-line `--set`), checked like the
-    /// system's own parameters; they are applied after those, so they win.
+    /// system's own parameters; they are applied after those, so they win. The setting goes
+    /// into the plan and into the component's parameters alike.
     pub fn set(&mut self, name: &Endpoint, text: &str) -> Result<(), RunError> {
         let c = self
             .system
@@ -205,25 +261,23 @@ impl Cosimulation {
                 name.variable
             ))
         })?;
-        let s = crate::resolve::setting(c, v, &Value::String(text.to_string()), name.clone())?;
+        let value = Value::String(text.to_string());
+        let s = crate::resolve::setting(c, v, &value, name.clone())?;
         self.plan.settings.push(s);
+        self.system.components[c]
+            .parameters
+            .push((name.variable.clone(), value));
         Ok(())
     }
 
-    /// Runs the system; see the module docs.
-    pub fn run(&self, opts: &RunOptions) -> Result<RunSummary, RunError> {
-        self.run_with_inputs(opts, &no_inputs)
+    /// A run with `opts`, to be given inputs, observers, a progress callback or a stop token
+    /// before [`Runner::run`].
+    pub fn runner<'a>(&'a self, opts: &'a RunOptions) -> Runner<'a> {
+        Runner::new(self, opts)
     }
 
-    /// Runs the system with external inputs of the first component: before the step from
-    /// `t`, `external(t, buffer)` fills the buffer with (type, value reference, value)
-    /// triples, which are set before the component steps (and once at the start, in
-    /// initialization mode).
-    pub fn run_with_inputs(
-        &self,
-        opts: &RunOptions,
-        external: &ExternalInputs<'_>,
-    ) -> Result<RunSummary, RunError> {
-        self.run_reporting(opts, external, &mut |_| {})
+    /// Runs the system with nothing but `opts`; see the module docs.
+    pub fn run(&self, opts: &RunOptions) -> Result<RunSummary, RunError> {
+        self.runner(opts).run()
     }
 }

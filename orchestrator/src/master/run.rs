@@ -1,19 +1,18 @@
-//! A run in its phases: check the grid, open the results, instantiate, initialize with values
-//! propagated through the connections, step, and tear down.
+//! A run in its phases: initialize with values propagated through the connections, step, and
+//! tear down ([`super::Runner::run`] calls them in order).
 //!
-//! The phases are kept apart so that the order between them, which is what makes a run
-//! reliable, reads in one short function ([`Cosimulation::run_reporting`]): the results file
-//! before any instance (an unwritable destination costs nothing), the last row before the file
-//! is closed, the file closed before an error is returned (so the error can point to it), and
-//! the instances terminated only once the results are safe.
+//! The phases are kept apart so that the order between them is what makes a run reliable: the
+//! last row before the file is closed, the file closed before an error is returned (so the
+//! error can point to it), and the instances terminated only once the results are safe.
 
 use super::algorithm::{Algorithm, Simulators};
 use super::grid::Grid;
-use super::observe::{ObserveError, Results};
-use super::transfer::{External, Transfers};
+use super::inputs::External;
+use super::recording::Results;
+use super::transfer::Transfers;
 use super::{
-    Cosimulation, ExternalInputs, Progress, ProgressFn, RunError, RunOptions, RunSummary,
-    stop_requested,
+    Cosimulation, End, Flow, ObserveError, Observer, Progress, ProgressFn, RunError, RunOptions,
+    RunSummary, StopToken, Values,
 };
 use crate::resolve::Setting;
 use crate::system::Value;
@@ -21,35 +20,103 @@ use fmi_import::{FmiError, Instance, fmi2Status};
 use std::time::Instant;
 
 /// How the stepping ended.
-enum Outcome {
+pub(super) enum Outcome {
     /// At the stop time.
     Completed,
-    /// An FMU failed, in its step or when read for recording.
+    /// An FMU failed, in its step or when read by an observer.
     Failed(FmiError),
+    /// An observer failed (the recording: a write); the run stops with its error at once.
+    Aborted(RunError),
     /// An instance ended the simulation (fmi2Discard with fmi2Terminated true), with its last
     /// successful time if past the last communication point.
     Ended { by: String, at: Option<f64> },
-    /// [`super::request_stop`] was called.
+    /// An observer returned [`Flow::Stop`].
+    Stopped,
+    /// The run's [`StopToken`] was set.
     Interrupted,
 }
 
+impl Outcome {
+    fn end(&self) -> End {
+        match self {
+            Outcome::Completed => End::StopTime,
+            Outcome::Failed(_) | Outcome::Aborted(_) => End::Failed,
+            Outcome::Ended { by, .. } => End::Instance(by.clone()),
+            Outcome::Stopped => End::Observer,
+            Outcome::Interrupted => End::Interrupted,
+        }
+    }
+}
+
 /// An FMU's failure before the stepping: there are no results to point to yet.
-fn fmi(error: FmiError) -> RunError {
+pub(super) fn fmi(error: FmiError) -> RunError {
     RunError::Fmi {
         error,
         results: None,
     }
 }
 
+/// A point where the observers are called.
+#[derive(Clone, Copy)]
+enum Point {
+    Initialized(f64),
+    Stepped(u64, f64),
+    EndedAt(f64),
+}
+
+impl Point {
+    /// Calls the observer's method for this point; generic, so that the recording's call is
+    /// static (and inlined in the stepping loop) and only the caller's observers are dynamic.
+    #[inline]
+    fn call<O: Observer + ?Sized>(
+        self,
+        o: &mut O,
+        values: &mut Values<'_>,
+    ) -> Result<Flow, ObserveError> {
+        match self {
+            Point::Initialized(t) => o.initialized(t, values),
+            Point::Stepped(k, t) => o.stepped(k, t, values),
+            Point::EndedAt(t) => o.ended_at(t, values).map(|()| Flow::Continue),
+        }
+    }
+}
+
+/// The recording (when the options ask for one) and the caller's observers, in the order
+/// they are called. A run without observers of its own pays nothing for them.
+pub(super) struct Observers<'a> {
+    pub results: Option<Results>,
+    pub others: Vec<&'a mut dyn Observer>,
+}
+
+impl Observers<'_> {
+    /// Every observer sees the point, even after one asked to stop; the first error ends the
+    /// round.
+    #[inline]
+    fn each(&mut self, instances: &mut [Instance], point: Point) -> Result<Flow, ObserveError> {
+        let mut values = Values::new(instances);
+        let mut flow = Flow::Continue;
+        if let Some(r) = self.results.as_mut() {
+            flow = point.call(r, &mut values)?;
+        }
+        for o in self.others.iter_mut() {
+            if point.call(&mut **o, &mut values)? == Flow::Stop {
+                flow = Flow::Stop;
+            }
+        }
+        Ok(flow)
+    }
+}
+
 /// What the phases of one run share.
-struct Run<'a> {
-    grid: Grid,
+pub(super) struct Run<'a> {
+    pub grid: Grid,
     /// Producers first ([`crate::resolve::Plan::order`]).
-    order: &'a [usize],
-    instances: Vec<Instance>,
-    values: Transfers,
-    external: External<'a>,
-    results: Option<Results>,
+    pub order: &'a [usize],
+    pub instances: Vec<Instance>,
+    pub values: Transfers,
+    pub external: External<'a>,
+    pub observers: Observers<'a>,
+    pub stop: StopToken,
 }
 
 /// The instances with the connections between them, as an algorithm steps them.
@@ -74,33 +141,7 @@ impl Simulators for Connected<'_> {
 }
 
 impl Cosimulation {
-    /// Runs the system with external inputs (see [`Cosimulation::run_with_inputs`]), and
-    /// reports progress to `progress` when [`RunOptions::progress`] asks for it.
-    pub fn run_reporting(
-        &self,
-        opts: &RunOptions,
-        external: &ExternalInputs<'_>,
-        progress: &mut ProgressFn<'_>,
-    ) -> Result<RunSummary, RunError> {
-        let started = Instant::now();
-        let grid = Grid::new(opts)?;
-        let results = Results::new(&self.system, &self.model_descriptions(), opts, &grid)?;
-        let instances = self.instantiate(opts)?;
-        let mut run = Run {
-            grid,
-            order: &self.plan.order,
-            values: Transfers::new(instances.len(), &self.plan.links),
-            instances,
-            external: External::new(external),
-            results,
-        };
-        run.initialize(opts, &self.plan.settings).map_err(fmi)?;
-        run.observe(run.grid.start)?;
-        let (k, outcome) = run.step_all(opts.algorithm, opts.progress.then_some(progress))?;
-        run.finish(k, outcome, started)
-    }
-
-    fn instantiate(&self, opts: &RunOptions) -> Result<Vec<Instance>, RunError> {
+    pub(super) fn instantiate(&self, opts: &RunOptions) -> Result<Vec<Instance>, RunError> {
         let mut instances = Vec::with_capacity(self.fmus.len());
         for (c, fmu) in self.system.components.iter().zip(&self.fmus) {
             instances.push(fmu.instantiate(&c.name, opts.log.clone())?);
@@ -113,7 +154,11 @@ impl Run<'_> {
     /// Experiment setup, the parameters, the external inputs at the start, then the initial
     /// values through the connections: producers first, repeated once per component so that
     /// values reach the end of any chain.
-    fn initialize(&mut self, opts: &RunOptions, settings: &[Setting]) -> Result<(), FmiError> {
+    pub(super) fn initialize(
+        &mut self,
+        opts: &RunOptions,
+        settings: &[Setting],
+    ) -> Result<(), FmiError> {
         let instances = &mut self.instances;
         for inst in instances.iter_mut() {
             inst.setup_experiment(opts.start, Some(opts.stop), None)?;
@@ -130,9 +175,7 @@ impl Run<'_> {
         for inst in instances.iter_mut() {
             inst.enter_initialization_mode()?;
         }
-        if let Some(first) = instances.first_mut() {
-            self.external.apply(first, opts.start)?;
-        }
+        self.external.apply(instances, opts.start)?;
         for _ in 0..instances.len() {
             for &c in self.order {
                 let inst = &mut instances[c];
@@ -149,35 +192,51 @@ impl Run<'_> {
         Ok(())
     }
 
-    /// A row at `t` outside the stepping (the start, or where an instance ended the run).
-    fn observe(&mut self, t: f64) -> Result<(), RunError> {
-        match self.results.as_mut() {
-            Some(r) => r
-                .observe(t, &mut self.instances)
-                .map_err(ObserveError::into_run_error),
-            None => Ok(()),
+    /// The observers at the start time. An FMU failing to be read here reports no results
+    /// file (there is nothing in it yet).
+    pub(super) fn start(&mut self) -> Result<Flow, RunError> {
+        let t = self.grid.start;
+        match self
+            .observers
+            .each(&mut self.instances, Point::Initialized(t))
+        {
+            Ok(flow) => Ok(flow),
+            Err(e) => {
+                self.notify_finished(0, t, &End::Failed);
+                Err(match e {
+                    ObserveError::Fmi(error) => fmi(error),
+                    ObserveError::Run(e) => e,
+                })
+            }
         }
     }
 
-    /// Steps until the stop time, a failure, an instance ending the simulation or a stop
-    /// request (checked once per step), with progress around it. Returns the steps done and
-    /// how the stepping ended; a results write failing is returned at once, as an error.
-    fn step_all(
+    /// Steps until the stop time, a failure, an instance ending the simulation, an observer's
+    /// [`Flow::Stop`] or the stop token (checked once per step), with progress around it.
+    /// Returns the steps done and how the stepping ended.
+    pub(super) fn step_all(
         &mut self,
         algorithm: Algorithm,
+        first: Flow,
         mut progress: Option<&mut ProgressFn<'_>>,
-    ) -> Result<(u64, Outcome), RunError> {
+    ) -> (u64, Outcome) {
         let grid = &self.grid;
         if let Some(p) = progress.as_mut() {
             p(Progress::Start { total: grid.steps });
         }
         let mut k = 0;
+        let mut flow = first;
+        // A run that records nothing and has no observer pays nothing for observing.
+        let observed = self.observers.results.is_some() || !self.observers.others.is_empty();
         let outcome = loop {
             if k >= grid.steps {
-                break Ok(Outcome::Completed);
+                break Outcome::Completed;
             }
-            if stop_requested() {
-                break Ok(Outcome::Interrupted);
+            if flow == Flow::Stop {
+                break Outcome::Stopped;
+            }
+            if self.stop.is_stopped() {
+                break Outcome::Interrupted;
             }
             let t = grid.time(k);
             let mut connected = Connected {
@@ -186,22 +245,23 @@ impl Run<'_> {
             };
             let stepped = self
                 .external
-                .apply(&mut connected.instances[0], t)
+                .apply(connected.instances, t)
                 .and_then(|()| algorithm.step(t, grid.step, self.order, &mut connected));
             if let Err(e) = stepped {
-                break Ok(if e.status == fmi2Status::Discard && e.terminated {
+                break if e.status == fmi2Status::Discard && e.terminated {
                     let at = e.last_successful_time.filter(|a| *a > t && a.is_finite());
                     Outcome::Ended { by: e.instance, at }
                 } else {
                     Outcome::Failed(e)
-                });
+                };
             }
             k += 1;
-            if let Some(r) = self.results.as_mut() {
-                match r.stepped(k, grid, &mut self.instances) {
-                    Ok(()) => {}
-                    Err(ObserveError::Fmi(e)) => break Ok(Outcome::Failed(e)),
-                    Err(ObserveError::Write(e)) => break Err(e),
+            if observed {
+                let point = Point::Stepped(k, grid.time(k));
+                match self.observers.each(&mut self.instances, point) {
+                    Ok(f) => flow = f,
+                    Err(ObserveError::Fmi(e)) => break Outcome::Failed(e),
+                    Err(ObserveError::Run(e)) => break Outcome::Aborted(e),
                 }
             }
             if let Some(p) = progress.as_mut()
@@ -213,12 +273,23 @@ impl Run<'_> {
         if let Some(p) = progress.as_mut() {
             p(Progress::End { done: k });
         }
-        Ok((k, outcome?))
+        (k, outcome)
     }
 
-    /// The last row of a run an instance ended early, the results closed, and the instances
-    /// terminated; or the error the run ended with, pointing to the results kept.
-    fn finish(
+    /// Tells every observer the stepping is over.
+    fn notify_finished(&mut self, k: u64, t: f64, end: &End) {
+        if let Some(r) = self.observers.results.as_mut() {
+            r.finished(k, t, end);
+        }
+        for o in self.observers.others.iter_mut() {
+            o.finished(k, t, end);
+        }
+    }
+
+    /// The last row of a run an instance ended early, the observers told, the results closed,
+    /// and the instances terminated; or the error the run ended with, pointing to the results
+    /// kept.
+    pub(super) fn finish(
         mut self,
         k: u64,
         outcome: Outcome,
@@ -231,23 +302,26 @@ impl Run<'_> {
         if let Outcome::Ended { at: Some(at), .. } = &outcome {
             final_time = *at;
             let at = *at;
-            match self
-                .results
-                .as_mut()
-                .map(|r| r.observe(at, &mut self.instances))
-            {
-                None | Some(Ok(())) => {}
+            let ended = self.observers.each(&mut self.instances, Point::EndedAt(at));
+            match ended {
+                Ok(_) => {}
                 // Reading that row failed: the rows until then are finished and kept, as
                 // when an FMU fails mid-run.
-                Some(Err(ObserveError::Fmi(e))) => outcome = Outcome::Failed(e),
-                Some(Err(ObserveError::Write(e))) => return Err(e),
+                Err(ObserveError::Fmi(e)) => outcome = Outcome::Failed(e),
+                Err(ObserveError::Run(e)) => outcome = Outcome::Aborted(e),
             }
         }
-        let (rows, results, table) = match self.results.take() {
+        self.notify_finished(k, final_time, &outcome.end());
+        let outcome = match outcome {
+            // A write failed: the results are left as they are (the recorder says where).
+            Outcome::Aborted(e) => return Err(e),
+            other => other,
+        };
+        let (rows, results, table) = match self.observers.results.take() {
             Some(r) => r.finish()?,
             None => (0, None, None),
         };
-        let ended_by = match outcome {
+        let end = match outcome {
             Outcome::Failed(error) => return Err(RunError::Fmi { error, results }),
             Outcome::Interrupted => {
                 for inst in self.instances.iter_mut() {
@@ -262,8 +336,7 @@ impl Run<'_> {
                     results,
                 });
             }
-            Outcome::Ended { by, .. } => Some(by),
-            Outcome::Completed => None,
+            other => other.end(),
         };
         for inst in self.instances.iter_mut() {
             inst.terminate().map_err(|error| RunError::Fmi {
@@ -278,7 +351,7 @@ impl Run<'_> {
             table,
             wall: started.elapsed(),
             final_time,
-            ended_by,
+            end,
         })
     }
 }

@@ -1,12 +1,11 @@
-//! Value transfer: moving values along the connections, and from the caller's external inputs
-//! into the first component.
+//! Value transfer: moving values along the connections (the caller's external inputs are
+//! `inputs`).
 //!
 //! Values move through flat buffers: each component's connected outputs of one type occupy a
 //! contiguous range, read with one fmi2GetXxx call per component and type; each component's
 //! inputs are gathered (with their linear transformation) and written with one fmi2SetXxx call.
 //! Nothing is allocated here once a run has started: this is the master's per-step cost.
 
-use super::{ExternalInputs, ExternalValue};
 use crate::resolve::Link;
 use crate::system::Linear;
 use fmi_import::{FmiError, Instance};
@@ -164,40 +163,6 @@ impl Transfers {
         self.real.read_outputs(c, inst)?;
         self.integer.read_outputs(c, inst)?;
         self.boolean.read_outputs(c, inst)
-    }
-}
-
-/// The caller's inputs of the first component, with the buffer they are filled into (reused
-/// from step to step).
-pub(super) struct External<'a> {
-    fill: &'a ExternalInputs<'a>,
-    values: Vec<ExternalValue>,
-}
-
-impl<'a> External<'a> {
-    pub fn new(fill: &'a ExternalInputs<'a>) -> External<'a> {
-        External {
-            fill,
-            values: Vec::new(),
-        }
-    }
-
-    /// Sets the inputs for time `t` (an Integer or Enumeration from its whole number, a
-    /// Boolean from 0 or not 0; String inputs are not driven).
-    #[inline]
-    pub fn apply(&mut self, inst: &mut Instance, t: f64) -> Result<(), FmiError> {
-        (self.fill)(t, &mut self.values);
-        for &(base, vr, x) in self.values.iter() {
-            match base {
-                BaseType::Real => inst.set_real(&[vr], &[x])?,
-                BaseType::Integer | BaseType::Enumeration => {
-                    inst.set_integer(&[vr], &[x as i32])?
-                }
-                BaseType::Boolean => inst.set_boolean(&[vr], &[x != 0.0])?,
-                BaseType::String => {}
-            }
-        }
-        Ok(())
     }
 }
 

@@ -5,8 +5,7 @@
 use crate::Error;
 use fmi_import::LogConfig;
 use fmu_vehicle::params::VehicleParams;
-use model_description::BaseType;
-use orchestrator::master::{Cosimulation, ExternalValue, RunOptions, Table};
+use orchestrator::master::{Cosimulation, RunOptions, Table};
 use orchestrator::system::{Component, Endpoint, Experiment, System, Value};
 use std::path::PathBuf;
 
@@ -210,15 +209,10 @@ pub fn vehicle_run_driven(
         return run(system, stop, record);
     };
     let cosim = Cosimulation::load(system)?;
-    let speed_vr = cosim.model_descriptions()[0]
-        .variable("speed")
-        .map(|v| v.value_reference)
-        .ok_or_else(|| Error::input("the vehicle FMU has no 'speed' input"))?;
-    let inputs = |t: f64, out: &mut Vec<ExternalValue>| {
-        out.clear();
-        out.push((BaseType::Real, speed_vr, speed(t)));
-    };
-    let summary = cosim.run_with_inputs(&options(stop, record), &inputs)?;
+    let inputs = [Endpoint::new("vehicle", "speed")];
+    let fill = |t: f64, out: &mut [f64]| out[0] = speed(t);
+    let opts = options(stop, record);
+    let summary = cosim.runner(&opts).inputs(&inputs, &fill).run()?;
     summary
         .table
         .ok_or_else(|| Error::Input("no table was collected".into()))

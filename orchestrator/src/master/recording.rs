@@ -1,17 +1,17 @@
-//! Recording as an observer of the run (libcosim's observers): the master hands it the
-//! instances at the start, after every step and at the time an FMU ended the run; it owns
-//! what is recorded, the results file and the table in memory, and decides which steps make a
-//! row.
+//! Recording as an observer of the run ([`Observer`], as libcosim's file observer is one): it
+//! reads the values at the start, after every step and at the time an FMU ended the run; it
+//! owns what is recorded, the results file and the table in memory, and decides which steps
+//! make a row.
 //!
 //! It is created before any FMU is instantiated, because creating it creates the results file
 //! (and, for CSV, flushes its header): an unwritable destination stops the run before it
 //! starts, and for CSV a full disk too.
 
 use super::grid::Grid;
-use super::{RunError, RunOptions, Table};
+use super::{Flow, ObserveError, Observer, RunError, RunOptions, Table, Values};
 use crate::record::Recorder;
 use crate::system::{Endpoint, System};
-use fmi_import::{FmiError, Instance};
+use fmi_import::FmiError;
 use model_description::{BaseType, Causality, ModelDescription, VariableKind};
 use std::path::PathBuf;
 
@@ -114,52 +114,31 @@ impl Recording {
         Ok(rec)
     }
 
-    fn sample(&mut self, instances: &mut [Instance]) -> Result<(), FmiError> {
-        for (c, inst) in instances.iter_mut().enumerate() {
+    fn sample(&mut self, values: &mut Values<'_>) -> Result<(), FmiError> {
+        for c in 0..values.len() {
             let (vr, cols) = &self.real[c];
             if !vr.is_empty() {
-                inst.get_real(vr, &mut self.buf_r[..vr.len()])?;
+                values.get_real(c, vr, &mut self.buf_r[..vr.len()])?;
                 for (i, &col) in cols.iter().enumerate() {
                     self.row[col] = self.buf_r[i];
                 }
             }
             let (vr, cols) = &self.integer[c];
             if !vr.is_empty() {
-                inst.get_integer(vr, &mut self.buf_i[..vr.len()])?;
+                values.get_integer(c, vr, &mut self.buf_i[..vr.len()])?;
                 for (i, &col) in cols.iter().enumerate() {
                     self.row[col] = self.buf_i[i] as f64;
                 }
             }
             let (vr, cols) = &self.boolean[c];
             if !vr.is_empty() {
-                inst.get_boolean(vr, &mut self.buf_b[..vr.len()])?;
+                values.get_boolean(c, vr, &mut self.buf_b[..vr.len()])?;
                 for (i, &col) in cols.iter().enumerate() {
                     self.row[col] = if self.buf_b[i] { 1.0 } else { 0.0 };
                 }
             }
         }
         Ok(())
-    }
-}
-
-/// Why an observation failed: reading the FMUs (the run stops as if the FMU had failed in its
-/// step, keeping what was recorded), or writing (the run stops at once, saying where).
-pub(super) enum ObserveError {
-    Fmi(FmiError),
-    Write(RunError),
-}
-
-impl ObserveError {
-    /// The error of an observation outside the stepping (at the start or the end): an FMU's
-    /// failure then reports no results file.
-    pub fn into_run_error(self) -> RunError {
-        match self {
-            ObserveError::Fmi(error) => RunError::Fmi {
-                error,
-                results: None,
-            },
-            ObserveError::Write(e) => e,
-        }
     }
 }
 
@@ -233,25 +212,9 @@ impl Results {
     }
 
     /// Records a row at time `t`.
-    pub fn observe(&mut self, t: f64, instances: &mut [Instance]) -> Result<(), ObserveError> {
-        self.recording
-            .sample(instances)
-            .map_err(ObserveError::Fmi)?;
-        self.keep(t).map_err(ObserveError::Write)
-    }
-
-    /// After step `k`: a row when `k` is a multiple of the recording interval.
-    #[inline]
-    pub fn stepped(
-        &mut self,
-        k: u64,
-        grid: &Grid,
-        instances: &mut [Instance],
-    ) -> Result<(), ObserveError> {
-        if !k.is_multiple_of(self.every) {
-            return Ok(());
-        }
-        self.observe(grid.time(k), instances)
+    fn observe(&mut self, t: f64, values: &mut Values<'_>) -> Result<(), ObserveError> {
+        self.recording.sample(values)?;
+        self.keep(t).map_err(ObserveError::Run)
     }
 
     fn keep(&mut self, t: f64) -> Result<(), RunError> {
@@ -286,5 +249,24 @@ impl Results {
             }
             None => Ok((rows, None, self.table)),
         }
+    }
+}
+
+impl Observer for Results {
+    fn initialized(&mut self, t: f64, values: &mut Values<'_>) -> Result<Flow, ObserveError> {
+        self.observe(t, values).map(|()| Flow::Continue)
+    }
+
+    /// A row when the step count is a multiple of the recording interval.
+    #[inline]
+    fn stepped(&mut self, k: u64, t: f64, values: &mut Values<'_>) -> Result<Flow, ObserveError> {
+        if k.is_multiple_of(self.every) {
+            self.observe(t, values)?;
+        }
+        Ok(Flow::Continue)
+    }
+
+    fn ended_at(&mut self, t: f64, values: &mut Values<'_>) -> Result<(), ObserveError> {
+        self.observe(t, values)
     }
 }
