@@ -4,6 +4,8 @@
 //!
 //! - [`grid`]: the causal block mean onto the distance grid, the Kalman channel's high-pass;
 //! - [`bank`]: the tap bank file (format, provenance, checks);
+//! - [`contract`]: what a bank requires of the runtime (constants, filter designs, the Kalman
+//!   channel), written by the fit and checked at initialization;
 //! - [`window`]: one window of taps and which one a history gets, shared with the tap fit;
 //! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
 //!
@@ -12,6 +14,7 @@
 
 pub mod bank;
 pub mod contact;
+pub mod contract;
 pub mod grid;
 pub mod stream;
 pub mod window;

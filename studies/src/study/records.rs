@@ -166,8 +166,8 @@ pub fn estimate_learned(
 ) -> Result<(Vec<f64>, Vec<f64>), String> {
     let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, None)?;
-    let learned =
-        offline::learned(&values)?.ok_or("the settings do not select the learned filter")?;
+    let learned = offline::learned(&values, &config)?
+        .ok_or("the settings do not select the learned filter")?;
     let lag = learned.lag();
     let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
     let est = out.learned.ok_or("no learned estimate")?;
