@@ -5,7 +5,9 @@ use super::super::bank::tests::sample_bank;
 use super::*;
 
 /// The estimate straight from the taps (file order), for the oracle: channel values of the
-/// cells pushed so far, newest last.
+/// cells pushed so far, newest last. Deliberately not `window::Window`: it is the bank format's
+/// definition in plain sums, so it checks the shared code's tap order and partial sums, which
+/// the fit uses too.
 fn direct(entry: &Entry, window: usize, cells: &[[f64; 5]]) -> f64 {
     let w = &entry.windows[window];
     let len = w.past + w.future + 1;

@@ -7,11 +7,12 @@
 //! | which window | the longest whose `past + future + 1` cells the history covers ([`longest_covered`]): at the start of a run the shorter start windows, then the full one |
 //! | the sum | per channel a dot product with four partial sums (fixed summation order, vectorizable), channels added in the entry's order, each times its speed gain |
 //!
-//! The tap fit (`alignment-studies taps`) judges its choices on estimates made as the FMU makes
-//! them, with its own sequential sums (the shipped banks' reported errors are reproduced byte
-//! for byte from them). `studies/src/study/learned/taps.rs` has the test that holds the two
-//! together: the fit's estimates from a run's start equal this module's, through `Learned`, on
-//! the same samples, to rounding.
+//! The tap fit (`alignment-studies taps`) applies its candidate windows with this module too
+//! (its validation objective, the windows' rms errors, the estimates from a run's start), over
+//! a run's cells held as columns, so the figures it writes into a bank are those of the
+//! estimates the FMU makes. `studies/src/study/learned/taps.rs` has the test that holds the two
+//! together through `Learned` (speed quotients, delay line, blending) on the same samples, to
+//! rounding.
 
 use serde::{Deserialize, Serialize};
 
