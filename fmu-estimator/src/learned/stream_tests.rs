@@ -1,7 +1,9 @@
-//! Tests of the streaming learned filter (`stream.rs`), in a file of their own to keep that one
-//! under 800 lines.
+//! Tests of the streaming learned filter (`stream.rs` and the parts it runs: history,
+//! selection, blend, extrapolation, delay line), through `Learned`.
 
+use super::super::bank::Entry;
 use super::super::bank::tests::sample_bank;
+use super::super::grid::CHANNELS;
 use super::*;
 
 /// The estimate straight from the taps (file order), for the oracle: channel values of the

@@ -14,6 +14,8 @@
 //! together through `Learned` (speed quotients, delay line, blending) on the same samples, to
 //! rounding.
 
+use super::bank::Entry;
+use super::grid::CHANNELS;
 use serde::{Deserialize, Serialize};
 
 /// A history of grid cells, per channel slot ([`super::grid::CHANNELS`]), newest last.
@@ -101,6 +103,37 @@ impl Window {
 /// cells covers; `None` before the shortest is covered.
 pub fn longest_covered(windows: &[Window], filled: usize) -> Option<&Window> {
     windows.iter().rev().find(|w| w.len <= filled)
+}
+
+/// The windows of one bank entry, ready to apply, shortest history first.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Windows(Vec<Window>);
+
+impl Windows {
+    /// The entry's windows (its channel names checked against [`CHANNELS`] by the bank).
+    pub fn of(e: &Entry) -> Windows {
+        let slot = |name: &String| CHANNELS.iter().position(|c| c == name).expect("checked");
+        let slots: Vec<usize> = e.channels.iter().map(slot).collect();
+        let mut w: Vec<Window> = e
+            .windows
+            .iter()
+            .map(|w| Window::from_file_order(w.past, w.future, slots.clone(), &w.taps, w.rms_error))
+            .collect();
+        w.sort_by_key(Window::len);
+        Windows(w)
+    }
+
+    /// The estimate from the longest window the history covers, and its rms error; `gain` per
+    /// channel slot brings the history's speed quotients back to the current speed.
+    pub fn apply(&self, hist: &impl History, gain: &[f64; 5]) -> Option<(f64, f64)> {
+        let w = longest_covered(&self.0, hist.filled())?;
+        Some((w.apply(hist, gain), w.rms_error()))
+    }
+
+    /// The most cells a window reads.
+    pub fn longest(&self) -> usize {
+        self.0.iter().map(Window::len).max().unwrap_or(0)
+    }
 }
 
 /// `sum a_i b_i` with four partial sums: lets the compiler vectorize, and fixes the summation
