@@ -484,14 +484,16 @@ fn rms_error(runs: &[GridRun], w: &window::Window, future: usize) -> f64 {
     (sq / n as f64).sqrt()
 }
 
-/// The entries of one speed: both sensor sets, causal and every lag; per contact condition
-/// with its contact model, or pooled over the conditions.
-fn fit_speed(
+/// The runs of one speed, each with its Kalker-coefficient scale: the training runs on the
+/// training seed and the validation runs on every validation seed, under every contact
+/// condition in which the vehicle is stable at this speed ([`UNSTABLE_WS_Y`]).
+#[allow(clippy::type_complexity)]
+fn speed_runs(
     fmus: &Fmus,
     o: &Options,
     speed: f64,
     progress: &dyn Fn(&str),
-) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
+) -> Result<(Vec<(f64, GridRun)>, Vec<(f64, GridRun)>), Error> {
     let training: Vec<Option<GridRun>> = o
         .kalker_scales
         .par_iter()
@@ -522,8 +524,7 @@ fn fit_speed(
         .zip(training)
         .filter_map(|(k, r)| r.map(|r| (k, r)))
         .collect();
-    let stable: Vec<f64> = training.iter().map(|(k, _)| *k).collect();
-    if stable.is_empty() {
+    if training.is_empty() {
         return Err(format!(
             "at {speed} m/s the vehicle is unstable under every training contact condition"
         )
@@ -533,7 +534,7 @@ fn fit_speed(
     let cases: Vec<(u32, f64)> = o
         .validation_seeds
         .iter()
-        .flat_map(|s| stable.iter().map(move |k| (*s, *k)))
+        .flat_map(|s| training.iter().map(move |(k, _)| (*s, *k)))
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
@@ -548,6 +549,102 @@ fn fit_speed(
     if validation.is_empty() {
         return Err(format!("at {speed} m/s every validation run is unstable").into());
     }
+    Ok((training, validation))
+}
+
+/// The weighting (index into [`BAND_WEIGHTS`]), ridge, plain validation objective and windows
+/// (taps, past) of a lag's best choice.
+type Chosen = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
+
+/// Every band weighting and ridge for the windows `pasts` looking `lag` cells ahead, judged on
+/// the validation runs `valid` from their start: the best.
+fn choose(fits: &[Fit], valid: &[GridRun], pasts: &[usize], lag: usize) -> Result<Chosen, String> {
+    let tried: Vec<Chosen> = (0..fits.len())
+        .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&(f, ridge)| {
+            let windows: Vec<(Vec<f64>, usize)> = pasts
+                .iter()
+                .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
+                .collect::<Result<_, String>>()?;
+            let objective =
+                validate_from_start(valid, &ready(&fits[f].channels, &windows, lag), lag)?;
+            Ok((f, ridge, objective, windows))
+        })
+        .collect::<Result<_, String>>()?;
+    Ok(tried
+        .into_iter()
+        .min_by(|a, b| a.2.total_cmp(&b.2))
+        .expect("ridges"))
+}
+
+/// One group's entries at one speed: a sensor set (`channels`) fitted on the training runs
+/// `train`, chosen and judged on `valid`, causal and at every lag of `lags` (cells);
+/// `condition` and `kalker_scales` as the entries carry them.
+struct Group<'a> {
+    speed: f64,
+    channels: Vec<usize>,
+    condition: Option<f64>,
+    kalker_scales: Vec<f64>,
+    train: &'a [GridRun],
+    valid: &'a [GridRun],
+}
+
+impl Group<'_> {
+    fn entries(&self, lags: &[usize]) -> Result<Vec<Entry>, String> {
+        let past = points(BANK_WINDOW);
+        let span = past + lags.iter().copied().max().unwrap_or(0);
+        let fits: Vec<Fit> = BAND_WEIGHTS
+            .par_iter()
+            .map(|b| Fit::new(self.train, self.channels.clone(), span, b))
+            .collect::<Result<_, _>>()?;
+        let pasts: Vec<usize> = STARTS.iter().map(|s| points(*s)).chain([past]).collect();
+        let mut entries = vec![];
+        for lag in std::iter::once(0).chain(lags.iter().copied()) {
+            let (chosen, ridge, validation_objective, solved) =
+                choose(&fits, self.valid, &pasts, lag)?;
+            let applied = ready(&self.channels, &solved, lag);
+            let windows: Vec<Window> = solved
+                .into_par_iter()
+                .zip(applied)
+                .map(|((taps, past), w)| Window {
+                    past,
+                    future: lag,
+                    rms_error: rms_error(self.valid, &w, lag),
+                    taps,
+                })
+                .collect();
+            entries.push(Entry {
+                speed: self.speed,
+                channels: self
+                    .channels
+                    .iter()
+                    .map(|c| CHANNELS[*c].to_string())
+                    .collect(),
+                lag,
+                ridge,
+                band_weights: Some(BAND_WEIGHTS[chosen]),
+                validation_objective,
+                kalker_scales: self.kalker_scales.clone(),
+                condition: self.condition,
+                windows,
+            });
+        }
+        Ok(entries)
+    }
+}
+
+/// The entries of one speed: both sensor sets, causal and every lag; per contact condition
+/// with its contact model, or pooled over the conditions.
+fn fit_speed(
+    fmus: &Fmus,
+    o: &Options,
+    speed: f64,
+    progress: &dyn Fn(&str),
+) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
+    let (training, validation) = speed_runs(fmus, o, speed, progress)?;
+    let stable: Vec<f64> = training.iter().map(|(k, _)| *k).collect();
     let per_condition = o.per_condition && o.kalker_scales.len() > 1;
     // The groups fitted: each condition alone, or all pooled.
     let groups: Vec<(Option<f64>, Vec<f64>)> = if per_condition {
@@ -556,16 +653,13 @@ fn fit_speed(
         vec![(None, stable.clone())]
     };
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
-    let past = points(BANK_WINDOW);
-    let span = past + lags.iter().copied().max().unwrap_or(0);
-    let sets: Vec<bool> = if o.roll_rate {
-        vec![false, true]
+    let sets: &[bool] = if o.roll_rate {
+        &[false, true]
     } else {
-        vec![false]
+        &[false]
     };
     let mut entries = vec![];
     for roll in sets {
-        let channels = channel_set(roll);
         for (condition, scales) in &groups {
             let of = |runs: &[(f64, GridRun)]| -> Vec<GridRun> {
                 runs.iter()
@@ -577,64 +671,19 @@ fn fit_speed(
             if valid.is_empty() {
                 continue;
             }
-            let fits: Vec<Fit> = BAND_WEIGHTS
-                .par_iter()
-                .map(|b| Fit::new(&train, channels.clone(), span, b))
-                .collect::<Result<_, _>>()?;
-            let pasts: Vec<usize> = STARTS.iter().map(|s| points(*s)).chain([past]).collect();
-            // The weighting, ridge, plain validation objective and windows (taps, past) of the
-            // best choice for a lag.
-            type Choice = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
-            let choose = |lag: usize| -> Result<Choice, String> {
-                let tried: Vec<Choice> = (0..fits.len())
-                    .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
-                    .collect::<Vec<_>>()
-                    .par_iter()
-                    .map(|&(f, ridge)| {
-                        let windows: Vec<(Vec<f64>, usize)> = pasts
-                            .iter()
-                            .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
-                            .collect::<Result<_, String>>()?;
-                        let objective =
-                            validate_from_start(&valid, &ready(&channels, &windows, lag), lag)?;
-                        Ok((f, ridge, objective, windows))
-                    })
-                    .collect::<Result<_, String>>()?;
-                Ok(tried
-                    .into_iter()
-                    .min_by(|a, b| a.2.total_cmp(&b.2))
-                    .expect("ridges"))
+            let group = Group {
+                speed,
+                channels: channel_set(*roll),
+                condition: *condition,
+                kalker_scales: if condition.is_some() || *scales == o.kalker_scales {
+                    vec![]
+                } else {
+                    scales.clone()
+                },
+                train: &train,
+                valid: &valid,
             };
-            let kalker_scales = if condition.is_some() || *scales == o.kalker_scales {
-                vec![]
-            } else {
-                scales.clone()
-            };
-            for lag in std::iter::once(0).chain(lags.iter().copied()) {
-                let (chosen, ridge, validation_objective, solved) = choose(lag)?;
-                let applied = ready(&channels, &solved, lag);
-                let windows: Vec<Window> = solved
-                    .into_par_iter()
-                    .zip(applied)
-                    .map(|((taps, past), w)| Window {
-                        past,
-                        future: lag,
-                        rms_error: rms_error(&valid, &w, lag),
-                        taps,
-                    })
-                    .collect();
-                entries.push(Entry {
-                    speed,
-                    channels: channels.iter().map(|c| CHANNELS[*c].to_string()).collect(),
-                    lag,
-                    ridge,
-                    band_weights: Some(BAND_WEIGHTS[chosen]),
-                    validation_objective,
-                    kalker_scales: kalker_scales.clone(),
-                    condition: *condition,
-                    windows,
-                });
-            }
+            entries.extend(group.entries(&lags)?);
         }
     }
     let model = if per_condition {
