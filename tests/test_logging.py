@@ -63,17 +63,22 @@ def test_an_unobservable_model_is_reported_by_the_pbh_test(make_slave):
     assert s.step(0.0, 1e-3) == OK
 
 
+def shipped_calibration_with(path, old: str, new: str):
+    """The shipped calibration file with its first `old` replaced by `new`, written to `path`."""
+    from project import REPO
+
+    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
+    other = shipped.replace(old, new, 1)
+    assert other != shipped
+    path.write_text(other)
+    return path
+
+
 def test_a_calibration_file_made_for_other_parameters_is_flagged(make_slave, tmp_path):
     """The FMU reads only Q and R from `calibration_file` at run time; when the file's
     [parameters] (the model its Q and R were made with) differ from the FMU's, it must say so,
     and stop saying so once the importer sets them to the file's values."""
-    from project import REPO
-
-    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
-    other = shipped.replace("m = 1.109e3", "m = 1.813e3", 1)
-    assert other != shipped
-    path = tmp_path / "other.toml"
-    path.write_text(other)
+    path = shipped_calibration_with(tmp_path / "other.toml", "m = 1.109e3", "m = 1.813e3")
 
     # The paper's filter alone: with the learned filter another calibration is another Kalman
     # channel than its tap bank's, an error of its own (below).
@@ -90,13 +95,7 @@ def test_a_calibration_file_made_for_other_parameters_is_flagged(make_slave, tmp
 def test_the_learned_filter_with_another_kalman_channel_is_an_error_unless_allowed(make_slave, tmp_path):
     """The tap bank's contract (docs/learned-filter.md): taps fitted with the shipped calibration
     do not run on another one unless allow_other_kalman asks for approximate use."""
-    from project import REPO
-
-    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
-    other = shipped.replace("1.0889672112641672e-6]", "2e-6]", 1)
-    assert other != shipped
-    path = tmp_path / "other-q.toml"
-    path.write_text(other)
+    path = shipped_calibration_with(tmp_path / "other-q.toml", "1.0889672112641672e-6]", "2e-6]")
 
     refused = make_slave("learned-other-calibration")
     assert refused.initialize(strings={"calibration_file": str(path)}) == ERROR

@@ -144,7 +144,7 @@ fn a_bank_made_for_another_runtime_is_refused_naming_the_constant() {
             c.tap_speed_power[0] = 2.0
         }),
         ("EDGE", "1e-6", |c| c.grid_edge = 1e-6),
-        ("CONTACT_SPEED_POWER", "[1, 1, 2]", |c| {
+        ("CONTACT_SPEED_POWER", "[1.0, 1.0, 2.0]", |c| {
             c.contact_speed_power[0] = 1
         }),
         ("MIN_SPEED", "0.5", |c| c.contact_min_speed = 0.5),

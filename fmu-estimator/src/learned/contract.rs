@@ -115,69 +115,53 @@ impl Contract {
     /// Compares a bank's contract (`self`) with the runtime's (`here`): the runtime constants
     /// and designs that differ (each named with both values), then the Kalman channel's.
     pub fn differences(&self, here: &Contract) -> (Vec<String>, Vec<String>) {
-        let mut runtime = vec![];
-        let mut say = |name: &str, bank: String, ours: String| {
-            runtime.push(format!(
-                "{name}: the bank's {bank}, this estimator's {ours}"
-            ))
-        };
-        if !close(&self.tap_speed_power, &here.tap_speed_power) {
-            say(
-                "TAP_SPEED_POWER (learned/stream.rs)",
-                format!("{:?}", self.tap_speed_power),
-                format!("{:?}", here.tap_speed_power),
-            );
-        }
-        if !close(&[self.grid_edge], &[here.grid_edge]) {
-            say(
-                "the grid's EDGE (learned/grid.rs)",
-                format!("{:?}", self.grid_edge),
-                format!("{:?}", here.grid_edge),
-            );
-        }
-        if self.contact_speed_power != here.contact_speed_power {
-            say(
-                "CONTACT_SPEED_POWER (learned/contact.rs)",
-                format!("{:?}", self.contact_speed_power),
-                format!("{:?}", here.contact_speed_power),
-            );
-        }
-        if !close(&[self.contact_min_speed], &[here.contact_min_speed]) {
-            say(
-                "the contact model's MIN_SPEED (learned/contact.rs)",
-                format!("{:?}", self.contact_min_speed),
-                format!("{:?}", here.contact_min_speed),
-            );
-        }
-        if !close(
-            &[self.contact_min_model_error],
-            &[here.contact_min_model_error],
-        ) {
-            say(
-                "the contact model's MIN_MODEL_ERROR (learned/contact.rs)",
-                format!("{:?}", self.contact_min_model_error),
-                format!("{:?}", here.contact_min_model_error),
-            );
-        }
-        if !close(&self.kalman_highpass_design, &here.kalman_highpass_design) {
-            say(
-                "the Kalman channel's high-pass design (coefficients b0 b1 b2 a1 a2)",
-                format!("{:?}", self.kalman_highpass_design),
-                format!("{:?}", here.kalman_highpass_design),
-            );
-        }
-        let same_band = match (&self.contact_band_design, &here.contact_band_design) {
-            (Some(a), Some(b)) => close(&a.concat(), &b.concat()),
-            (a, b) => a == b,
-        };
-        if !same_band {
-            say(
-                "the contact features' band-pass design (high-pass, low-pass coefficients)",
-                format!("{:?}", self.contact_band_design),
-                format!("{:?}", here.contact_band_design),
-            );
-        }
+        let (bank, ours) = (self.runtime_values(), here.runtime_values());
+        let runtime = bank
+            .iter()
+            .zip(&ours)
+            .filter(|((_, a), (_, b))| !close(a, b))
+            .map(|((name, a), (_, b))| {
+                format!(
+                    "{name}: the bank's {}, this estimator's {}",
+                    shown(a),
+                    shown(b)
+                )
+            })
+            .collect();
         (runtime, self.kalman.differences(&here.kalman))
+    }
+
+    /// The runtime constants and designs, each named as the runtime's source names it.
+    fn runtime_values(&self) -> [(&'static str, Vec<f64>); 7] {
+        [
+            (
+                "TAP_SPEED_POWER (learned/stream.rs)",
+                self.tap_speed_power.to_vec(),
+            ),
+            ("the grid's EDGE (learned/grid.rs)", vec![self.grid_edge]),
+            (
+                "CONTACT_SPEED_POWER (learned/contact.rs)",
+                self.contact_speed_power.iter().map(|p| *p as f64).collect(),
+            ),
+            (
+                "the contact model's MIN_SPEED (learned/contact.rs)",
+                vec![self.contact_min_speed],
+            ),
+            (
+                "the contact model's MIN_MODEL_ERROR (learned/contact.rs)",
+                vec![self.contact_min_model_error],
+            ),
+            (
+                "the Kalman channel's high-pass design (coefficients b0 b1 b2 a1 a2)",
+                self.kalman_highpass_design.to_vec(),
+            ),
+            (
+                "the contact features' band-pass design (high-pass, low-pass coefficients)",
+                self.contact_band_design
+                    .map(|d| d.concat())
+                    .unwrap_or_default(),
+            ),
+        ]
     }
 }
 
@@ -286,6 +270,15 @@ fn hash<'a>(values: impl Iterator<Item = &'a f64>) -> String {
         .map(|v| format!("{:.*e};", HASH_DIGITS - 1, v + 0.0))
         .collect();
     format!("{:016x}", super::bank::fnv1a(text.as_bytes()))
+}
+
+/// A constant for a message: a number alone, a list in brackets, `none` for no values.
+fn shown(v: &[f64]) -> String {
+    match v {
+        [] => "none".into(),
+        [x] => format!("{x:?}"),
+        _ => format!("{v:?}"),
+    }
 }
 
 /// Whether `a` and `b` agree within [`SAME`] (relative to the larger magnitude).
