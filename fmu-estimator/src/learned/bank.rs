@@ -255,6 +255,11 @@ impl Header {
         if !(self.grid.is_finite() && self.grid > 0.0) {
             return Err(format!("grid step {} m", self.grid));
         }
+        let step = self.provenance.sample_step;
+        if !(step.is_finite() && step > 0.0) {
+            // The contract's Kalman matrices are discretized for it.
+            return Err(format!("sample step {step} s"));
+        }
         if !(self.kalman_highpass.is_finite() && self.kalman_highpass > 2.0 * self.grid) {
             return Err(format!("Kalman high-pass at {} m", self.kalman_highpass));
         }
@@ -393,6 +398,10 @@ pub(crate) mod tests {
         assert!(e.starts_with("x.taps:") && e.contains("checksum"), "{e}");
         let e = Bank::parse(&bytes[..bytes.len() - 3], p).unwrap_err();
         assert!(e.contains("truncated"), "{e}");
+        let mut no_step = sample_bank();
+        no_step.provenance.sample_step = 0.0;
+        let e = Bank::parse(&no_step.to_bytes(), p).unwrap_err();
+        assert!(e.contains("sample step 0 s"), "{e}");
         let e = Bank::parse(b"hello\n", p).unwrap_err();
         assert!(e.contains("first line"), "{e}");
         let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 7");
