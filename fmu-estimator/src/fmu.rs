@@ -341,14 +341,19 @@ pub fn learned_from_values(
     Ok(Some(learned))
 }
 
-/// The parameters that only the learned filter reads (not its Kalman channel's).
-const LEARNED_ONLY: [&str; 6] = [
+/// The parameters outside the Kalman channel's part of the contract: the learned filter's own,
+/// the gain (the fit's time-varying channel equals the steady-state one after the start-up) and
+/// the initial covariance (a start-up transient the steady-state gain does not have). Any other
+/// parameter not at its default can make the channel differ from the bank's.
+const OUTSIDE_THE_CONTRACT: [&str; 8] = [
     "estimator",
     "lag",
     "use_roll_rate",
     "tap_file",
     "allow_other_kalman",
     "gain",
+    "p0_xi",
+    "p0_stationary",
 ];
 
 /// The bank's contract against this runtime: a runtime constant or design that differs is an
@@ -382,7 +387,7 @@ fn check_contract(
     }
     let changed: Vec<String> = VARIABLES
         .iter()
-        .filter(|s| s.is_parameter() && !LEARNED_ONLY.contains(&s.name))
+        .filter(|s| s.is_parameter() && !OUTSIDE_THE_CONTRACT.contains(&s.name))
         .filter_map(|s| {
             let i = s.vr as usize;
             let (now, start) = match s.start {

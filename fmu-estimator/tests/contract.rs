@@ -244,11 +244,13 @@ fn a_bank_used_with_another_kalman_channel_fails_initialization() {
         allowed.booleans.push((vr::ALLOW_OTHER_KALMAN, true));
         initialize(&allowed).unwrap();
     }
-    // The gain is no part of the contract (the fit's time-varying channel equals the FMU's
-    // steady-state one after the start-up), and the paper's filter alone reads no bank.
+    // The gain and the initial covariance are no part of the contract (the fit's time-varying
+    // channel equals the FMU's steady-state one after the start-up), and the paper's filter
+    // alone reads no bank.
     for set in [
         Set {
             integers: vec![(vr::GAIN, 1)],
+            reals: vec![(vr::P0_XI, 0.02)],
             ..Set::default()
         },
         Set {
