@@ -112,11 +112,18 @@ class Slave:
     # --- the usual sequence -------------------------------------------------------------------
 
     def initialize(self, start_values: dict[str, float] | None = None, strings: dict[str, str] | None = None) -> int:
-        """setupExperiment, parameters, enter and exit initialization; returns the raw status of
-        fmi2ExitInitializationMode (so a test can see an error)."""
+        """setupExperiment, parameters (each set by its type in the model description: a Boolean
+        or Integer parameter takes True or 1), enter and exit initialization; returns the raw status
+        of fmi2ExitInitializationMode (so a test can see an error)."""
         self.fmu.setupExperiment(startTime=0.0)
+        types = {v.name: v.type for v in self.md.modelVariables}
         for name, value in (start_values or {}).items():
-            self.set_real(name, value)
+            if types[name] == "Boolean":
+                self.fmu.setBoolean([self.vr[name]], [bool(value)])
+            elif types[name] == "Integer":
+                self.fmu.setInteger([self.vr[name]], [int(value)])
+            else:
+                self.set_real(name, value)
         for name, value in (strings or {}).items():
             self.fmu.setString([self.vr[name]], [value])
         self.fmu.enterInitializationMode()

@@ -54,7 +54,7 @@ def test_an_unobservable_model_is_reported_by_the_pbh_test(make_slave):
     """Without lateral primary suspension the frame neither moves with the wheelset nor shows in
     any sensor: the PBH test at initialization must say so with a warning (and the FMU still runs)."""
     s = make_slave("unobservable")
-    assert s.initialize({"ky": 0.0, "cy": 0.0}) == OK
+    assert s.initialize({"ky": 0.0, "cy": 0.0, "estimator": 1}) == OK
     warnings = [r.message for r in s.log.records if r.status == WARNING]
     assert any("not observable" in m and "PBH rank" in m for m in warnings), s.log.records
     observable = make_slave("observable")
@@ -63,23 +63,46 @@ def test_an_unobservable_model_is_reported_by_the_pbh_test(make_slave):
     assert s.step(0.0, 1e-3) == OK
 
 
+def shipped_calibration_with(path, old: str, new: str):
+    """The shipped calibration file with its first `old` replaced by `new`, written to `path`."""
+    from project import REPO
+
+    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
+    other = shipped.replace(old, new, 1)
+    assert other != shipped
+    path.write_text(other)
+    return path
+
+
 def test_a_calibration_file_made_for_other_parameters_is_flagged(make_slave, tmp_path):
     """The FMU reads only Q and R from `calibration_file` at run time; when the file's
     [parameters] (the model its Q and R were made with) differ from the FMU's, it must say so,
     and stop saying so once the importer sets them to the file's values."""
-    from project import REPO
+    path = shipped_calibration_with(tmp_path / "other.toml", "m = 1.109e3", "m = 1.813e3")
 
-    shipped = (REPO / "fmu-estimator" / "resources" / "calibration.toml").read_text()
-    other = shipped.replace("m = 1.109e3", "m = 1.813e3", 1)
-    assert other != shipped
-    path = tmp_path / "other.toml"
-    path.write_text(other)
-
+    # The paper's filter alone: with the learned filter another calibration is another Kalman
+    # channel than its tap bank's, an error of its own (below).
     s = make_slave("other-calibration")
-    assert s.initialize(strings={"calibration_file": str(path)}) in (OK, WARNING)
+    assert s.initialize({"estimator": 1}, strings={"calibration_file": str(path)}) in (OK, WARNING)
     flagged = [r.message for r in s.log.records if r.status == WARNING and "other model parameters" in r.message]
     assert len(flagged) == 1 and "m = 1813 (here 1109)" in flagged[0], s.log.records
 
     matched = make_slave("matched-calibration")
-    assert matched.initialize({"m": 1813.0}, strings={"calibration_file": str(path)}) == OK
+    assert matched.initialize({"m": 1813.0, "estimator": 1}, strings={"calibration_file": str(path)}) == OK
     assert not any("other model parameters" in r.message for r in matched.log.records), matched.log.records
+
+
+def test_the_learned_filter_with_another_kalman_channel_is_an_error_unless_allowed(make_slave, tmp_path):
+    """The tap bank's contract (docs/learned-filter.md): taps fitted with the shipped calibration
+    do not run on another one unless allow_other_kalman asks for approximate use."""
+    path = shipped_calibration_with(tmp_path / "other-q.toml", "1.0889672112641672e-6]", "2e-6]")
+
+    refused = make_slave("learned-other-calibration")
+    assert refused.initialize(strings={"calibration_file": str(path)}) == ERROR
+    errors = [r.message for r in refused.log.records if r.status == ERROR]
+    assert any("another Kalman channel" in m and "Q (" in m and "allow_other_kalman" in m for m in errors), errors
+
+    allowed = make_slave("learned-other-calibration-allowed")
+    assert allowed.initialize({"allow_other_kalman": True}, strings={"calibration_file": str(path)}) == OK
+    assert any("another Kalman channel" in r.message for r in allowed.log.records if r.status == WARNING)
+    assert allowed.step(0.0, 1e-3) == OK

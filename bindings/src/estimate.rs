@@ -129,7 +129,7 @@ fn run(
 ) -> Result<(Processed, f64, Option<Resume>), String> {
     let values = offline::settings(overrides)?;
     let (config, _notes) = offline::config(&values, calibration)?;
-    let learned = offline::learned(&values)?;
+    let learned = offline::learned(&values, &config)?;
     let lag = learned.as_ref().map_or(0.0, |l| l.lag());
     if how.smooth {
         let out = if how.check {

@@ -51,6 +51,21 @@ pub enum Error {
     /// The learned filter of `tap_file` could not be built from its bank.
     #[error("tap_file '{tap_file}': {message}")]
     TapFile { tap_file: String, message: String },
+    /// `tap_file`'s contract names runtime constants or filter designs other than this build's:
+    /// no parameter changes those, so the bank was fitted by another build.
+    #[error(
+        "tap_file '{tap_file}' was fitted for another build of the estimator: {differences}; fit it again with this build (alignment-studies taps)"
+    )]
+    OtherBuild {
+        tap_file: String,
+        differences: String,
+    },
+    /// `tap_file` was fitted with another Kalman channel than the one these parameters make, and
+    /// `allow_other_kalman` is false.
+    #[error(
+        "{mismatch}. Set allow_other_kalman = true to run it approximately, use estimator = 1, or fit taps for this channel (alignment-studies taps)"
+    )]
+    OtherKalman { mismatch: String },
 }
 
 /// The learned modules (`learned` here, `study::learned` in the studies) still return text: an

@@ -156,8 +156,8 @@ impl Model for Estimator {
         }
         self.min_speed = config.min_speed;
         self.design_speed = config.design_speed;
-        self.learned =
-            learned_from_values(v, self.resources.as_deref(), log).map_err(|e| e.to_string())?;
+        self.learned = learned_from_values(v, self.resources.as_deref(), &config, log)
+            .map_err(|e| e.to_string())?;
         self.core = Some(core);
         self.holding = false;
         self.outside = false;
@@ -294,10 +294,12 @@ impl Model for Estimator {
 
 /// The learned filter the parameters ask for (`estimator` 2), from `tap_file` (in the resources
 /// directory unless absolute; the bank built into the library when there is no resources
-/// directory, as offline).
+/// directory, as offline), its contract checked against this runtime and the Kalman channel
+/// `config` builds ([`crate::learned::contract`]).
 pub fn learned_from_values(
     v: &Values,
     resources: Option<&std::path::Path>,
+    config: &Config,
     log: &Logger,
 ) -> Result<Option<Learned>, Error> {
     match v.integer[vr::ESTIMATOR as usize] {
@@ -320,6 +322,7 @@ pub fn learned_from_values(
             None => return Err(SettingError::TapFileRelative { name }.into()),
         },
     };
+    check_contract(v, &bank, config, &name, log)?;
     let choice = Choice {
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
         lag,
@@ -328,30 +331,6 @@ pub fn learned_from_values(
         tap_file: name.clone(),
         message,
     })?;
-    // `gain` is not among them: the taps were fitted with the time-varying channel, which the
-    // steady-state one equals once the start-up has passed (Gain::from_fmi).
-    let own = [
-        (
-            v.integer[vr::ALIGNMENT_MODEL as usize] != 1,
-            "alignment_model is not 1",
-        ),
-        (
-            !v.boolean[vr::USE_CALIBRATION_FILE as usize],
-            "use_calibration_file is false",
-        ),
-        (
-            v.real[vr::DESIGN_SPEED as usize] != 0.0,
-            "design_speed is set",
-        ),
-    ];
-    let differ: Vec<&str> = own.iter().filter(|(d, _)| *d).map(|(_, m)| *m).collect();
-    if !differ.is_empty() {
-        log.warning(&format!(
-            "the learned filter's taps were fitted with the Kalman filter at its defaults ({}); here {}: its Kalman channel differs from the one it was fitted on",
-            bank.provenance.partner,
-            differ.join(", ")
-        ));
-    }
     let (lo, hi) = learned.speed_range();
     log.info(&format!(
         "learned filter from {name}: {} sensors, {lo}-{hi} m/s, lag {} m",
@@ -359,6 +338,86 @@ pub fn learned_from_values(
         learned.lag()
     ));
     Ok(Some(learned))
+}
+
+/// The parameters outside the Kalman channel's part of the contract: the learned filter's own,
+/// the gain (the fit's time-varying channel equals the steady-state one after the start-up) and
+/// the initial covariance (a start-up transient the steady-state gain does not have). Any other
+/// parameter not at its default can make the channel differ from the bank's.
+const OUTSIDE_THE_CONTRACT: [&str; 8] = [
+    "estimator",
+    "lag",
+    "use_roll_rate",
+    "tap_file",
+    "allow_other_kalman",
+    "gain",
+    "p0_xi",
+    "p0_stationary",
+];
+
+/// The bank's contract against this runtime: a runtime constant or design that differs is an
+/// error; a Kalman channel that differs is one too, unless `allow_other_kalman` makes it a
+/// warning. The message lists the parameters not at their defaults that feed the Kalman
+/// channel (the bank was fitted with the defaults, `alignment-studies taps`): where the
+/// difference comes from, as far as the FMU can tell.
+fn check_contract(
+    v: &Values,
+    bank: &Bank,
+    config: &Config,
+    name: &str,
+    log: &Logger,
+) -> Result<(), Error> {
+    let here = crate::learned::contract::Contract::expected(
+        config,
+        bank.grid,
+        bank.kalman_highpass,
+        bank.contact.as_ref().map(|c| c.band),
+        bank.provenance.sample_step,
+    );
+    let (runtime, kalman) = bank.contract.differences(&here);
+    if !runtime.is_empty() {
+        return Err(Error::OtherBuild {
+            tap_file: name.to_string(),
+            differences: runtime.join("; "),
+        });
+    }
+    if kalman.is_empty() {
+        return Ok(());
+    }
+    let changed: Vec<String> = VARIABLES
+        .iter()
+        .filter(|s| s.is_parameter() && !OUTSIDE_THE_CONTRACT.contains(&s.name))
+        .filter_map(|s| {
+            let i = s.vr as usize;
+            let (now, start) = match s.start {
+                fmi_abi::variables::Start::Real(x) => (v.real[i].to_string(), x.to_string()),
+                fmi_abi::variables::Start::Integer(x) => (v.integer[i].to_string(), x.to_string()),
+                fmi_abi::variables::Start::Boolean(x) => (v.boolean[i].to_string(), x.to_string()),
+                fmi_abi::variables::Start::String(x) => {
+                    (format!("'{}'", v.string[i]), format!("'{x}'"))
+                }
+            };
+            (now != start).then(|| format!("{} = {now} (default {start})", s.name))
+        })
+        .collect();
+    let message = format!(
+        "tap_file '{name}' was fitted with another Kalman channel than this one ({}): {}; parameters not at their defaults: {}",
+        bank.provenance.partner,
+        kalman.join("; "),
+        if changed.is_empty() {
+            "none".to_string()
+        } else {
+            changed.join(", ")
+        }
+    );
+    if v.boolean[vr::ALLOW_OTHER_KALMAN as usize] {
+        log.warning(&format!(
+            "{message}. allow_other_kalman is true: the learned filter runs on this channel, approximately"
+        ));
+        Ok(())
+    } else {
+        Err(Error::OtherKalman { mismatch: message })
+    }
 }
 
 #[cfg(test)]

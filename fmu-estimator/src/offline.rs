@@ -252,9 +252,10 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
 }
 
 /// The learned filter `values` ask for (`estimator` 2), as the FMU builds it, with the tap bank
-/// built into the library unless `tap_file` is absolute.
-pub fn learned(values: &Values) -> Result<Option<Learned>, Error> {
-    crate::fmu::learned_from_values(values, None, &fmi_abi::Logger::silent())
+/// built into the library unless `tap_file` is absolute, its contract checked against `config`
+/// (the Kalman channel it will run with).
+pub fn learned(values: &Values, config: &Config) -> Result<Option<Learned>, Error> {
+    crate::fmu::learned_from_values(values, None, config, &fmi_abi::Logger::silent())
 }
 
 /// Runs the Kalman filter (and the smoother, if `smooth`) over `samples` taken every `h`
@@ -535,8 +536,13 @@ mod tests {
     /// speed that rises through the taps' lower bound.
     #[test]
     fn offline_learned_filtering_equals_the_fmu() {
-        // Without resources the FMU has no calibration file: the diagonal noise model on both.
-        let values = settings(&[("use_calibration_file".into(), "false".into())]).unwrap();
+        // Without resources the FMU has no calibration file: the diagonal noise model on both,
+        // a Kalman channel other than the bank's (allowed: the two sides are compared here).
+        let values = settings(&[
+            ("use_calibration_file".into(), "false".into()),
+            ("allow_other_kalman".into(), "true".into()),
+        ])
+        .unwrap();
         let (config, _) = config(&values, None).unwrap();
         let speed = |k: usize| 3.0 + 0.002 * k as f64;
         let recorded = samples(6000, speed);
@@ -550,8 +556,14 @@ mod tests {
                 ..*s
             })
             .collect();
-        let offline =
-            process_learned(&config, learned(&values).unwrap(), 1e-3, &with_roll, false).unwrap();
+        let offline = process_learned(
+            &config,
+            learned(&values, &config).unwrap(),
+            1e-3,
+            &with_roll,
+            false,
+        )
+        .unwrap();
         let est = offline.learned.unwrap();
         assert!(
             est.iter()
@@ -565,8 +577,11 @@ mod tests {
         let mut inst = Instance::<crate::Estimator>::new(&ctx, Logger::silent())
             .map_err(|(_, e)| e)
             .unwrap();
-        inst.set_boolean(&[vr::USE_CALIBRATION_FILE], &[false])
-            .unwrap();
+        inst.set_boolean(
+            &[vr::USE_CALIBRATION_FILE, vr::ALLOW_OTHER_KALMAN],
+            &[false, true],
+        )
+        .unwrap();
         inst.setup_experiment(0.0, None).unwrap();
         inst.enter_initialization_mode().unwrap();
         inst.exit_initialization_mode().unwrap();
@@ -635,8 +650,20 @@ mod tests {
             } else {
                 recorded.clone()
             };
-            let want = process_learned(&config, learned(&values).unwrap(), 1e-3, &rows, true);
-            let got = process_columns(&config, learned(&values).unwrap(), 1e-3, &columns, true);
+            let want = process_learned(
+                &config,
+                learned(&values, &config).unwrap(),
+                1e-3,
+                &rows,
+                true,
+            );
+            let got = process_columns(
+                &config,
+                learned(&values, &config).unwrap(),
+                1e-3,
+                &columns,
+                true,
+            );
             assert_eq!(got.unwrap(), want.unwrap());
         }
         let short = Columns {
@@ -670,7 +697,7 @@ mod tests {
                 })
                 .collect();
             let run = |r: &[Sample]| {
-                process_learned(&config, learned(&values).unwrap(), 1e-3, r, false)
+                process_learned(&config, learned(&values, &config).unwrap(), 1e-3, r, false)
                     .unwrap()
                     .learned
                     .unwrap()
@@ -761,9 +788,14 @@ mod tests {
                 ws_roll_rate: None,
             };
             let t = std::time::Instant::now();
-            let out =
-                process_columns_checked(&config, learned(&values).unwrap(), 1e-3, &columns, false)
-                    .unwrap();
+            let out = process_columns_checked(
+                &config,
+                learned(&values, &config).unwrap(),
+                1e-3,
+                &columns,
+                false,
+            )
+            .unwrap();
             println!(
                 "estimator {estimator} gain {gain}: {:?} in {:.1} s",
                 out.covariance.unwrap(),
@@ -808,13 +840,13 @@ mod tests {
             let (config, _) = config(&values, None).unwrap();
             let whole = process_columns_checked(
                 &config,
-                learned(&values).unwrap(),
+                learned(&values, &config).unwrap(),
                 1e-3,
                 &columns(0..6000),
                 false,
             )
             .unwrap();
-            let mut state = Resume::new(&config, learned(&values).unwrap());
+            let mut state = Resume::new(&config, learned(&values, &config).unwrap());
             let mut pieces = Processed::default();
             let mut steps = 0;
             for r in [0..1000, 1000..1001, 1001..4500, 4500..6000] {

@@ -82,6 +82,7 @@ pub mod vr {
     pub const UPDATED: u32 = 1;
     pub const P0_STATIONARY: u32 = 2;
     pub const USE_ROLL_RATE: u32 = 3;
+    pub const ALLOW_OTHER_KALMAN: u32 = 4;
     // String
     pub const CALIBRATION_FILE: u32 = 0;
     pub const TAP_FILE: u32 = 1;
@@ -150,6 +151,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
     VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
+    VarSpec::boolean_parameter(vr::ALLOW_OTHER_KALMAN, "allow_other_kalman", false, "estimator 2: run the learned filter, with a warning, when its Kalman channel differs from the one the tap bank was fitted with (other model parameters, calibration, alignment_model, design_speed or min_speed): approximate; false: that is an error at initialization"),
     VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (alignment-studies taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (taps per contact condition, Kalker 100, 75 and 50 %, blended by the estimated contact_scale), learned-nominal.taps (Kalker 100 % only)"),
     VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; over the first lag + 1 m and outside the taps' speed range the causal output made at distance_lagged, from its first 0.2 m grid point on: the learned estimate, or the Kalman one where none was made)"),
     VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),

@@ -1,11 +1,11 @@
 //! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
-//! sensor set and lag, with where they came from.
+//! sensor set and lag, with where they came from and what they require of the runtime.
 //!
-//! # Format (version 2; version 1, without contact conditions, is still read)
+//! # Format (version 3)
 //! | part | content |
 //! |---|---|
 //! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
-//! | header | TOML, UTF-8: [`Header`] (grid, window, high-pass, provenance, and every entry's windows without their taps) |
+//! | header | TOML, UTF-8: [`Header`] (grid, high-pass, provenance, the contract, the contact model, and every entry's windows without their taps) |
 //! | data | the taps, little-endian `f32`, entry after entry, window after window in header order |
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds `C (past + future
@@ -15,14 +15,21 @@
 //! of alignment per unit of the channel). `f32` keeps 7 significant digits: the estimate's
 //! rounding error is below 1e-6 of its rms, far under the estimator's own error, at half the
 //! size of `f64`.
+//!
+//! The `[contract]` table ([`super::contract`]) holds the runtime constants and filter designs
+//! the taps were fitted with and a hash of the Kalman channel's matrices; the FMU compares it
+//! with its own at initialization. Formats 1 and 2 (before 2026-11-25) had no contract and are
+//! refused: without one, a bank fitted by another build or with another Kalman channel would
+//! run silently wrong, which is what the contract is for; `alignment-studies taps` makes a
+//! format 3 bank.
 
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 pub const MAGIC: &str = "learned-taps";
-pub const FORMAT: u32 = 2;
+pub const FORMAT: u32 = 3;
 /// The formats this reader takes.
-pub const READS: [u32; 2] = [1, 2];
+pub const READS: [u32; 1] = [3];
 
 /// Where the taps came from: enough to regenerate them and to judge where they hold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -41,7 +48,7 @@ pub struct Provenance {
     pub sample_step: f64,
     /// The least-squares objective the taps minimise.
     pub objective: String,
-    /// The Kalman channel: the estimator FMU's filter with these settings.
+    /// The Kalman channel in words (the contract's `[contract.kalman]` is what is checked).
     pub partner: String,
     /// Ridge values tried (relative to the mean diagonal).
     pub ridges: Vec<f64>,
@@ -101,6 +108,8 @@ pub struct Header {
     /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
     pub kalman_highpass: f64,
     pub provenance: Provenance,
+    /// What the taps require of the runtime, checked at initialization.
+    pub contract: super::contract::Contract,
     /// The estimator of the contact condition, in a bank with per-condition entries.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<super::contact::ContactModel>,
@@ -158,8 +167,13 @@ impl Header {
             return Err(bad(format!("the first line is '{first}'")));
         }
         if !READS.iter().any(|r| f[1] == r.to_string()) {
+            let why = if f[1] == "1" || f[1] == "2" {
+                ": it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
+            } else {
+                ""
+            };
             return Err(format!(
-                "{shown}: tap bank format {} (this estimator reads formats {READS:?})",
+                "{shown}: tap bank format {} (this estimator reads formats {READS:?}){why}",
                 f[1]
             ));
         }
@@ -241,6 +255,11 @@ impl Header {
         if !(self.grid.is_finite() && self.grid > 0.0) {
             return Err(format!("grid step {} m", self.grid));
         }
+        let step = self.provenance.sample_step;
+        if !(step.is_finite() && step > 0.0) {
+            // The contract's Kalman matrices are discretized for it.
+            return Err(format!("sample step {step} s"));
+        }
         if !(self.kalman_highpass.is_finite() && self.kalman_highpass > 2.0 * self.grid) {
             return Err(format!("Kalman high-pass at {} m", self.kalman_highpass));
         }
@@ -284,7 +303,7 @@ impl Header {
 }
 
 /// FNV-1a, 64 bits: detects a damaged or edited data block.
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf29ce484222325, |h, b| {
         (h ^ *b as u64).wrapping_mul(0x100000001b3)
     })
@@ -293,6 +312,13 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    /// The contract of this library's defaults at the sample bank's grid and high-pass.
+    pub fn sample_contract() -> crate::learned::contract::Contract {
+        let values = crate::offline::settings(&[]).unwrap();
+        let (config, _) = crate::offline::config(&values, None).unwrap();
+        crate::learned::contract::Contract::expected(&config, 0.2, 500.0, None, 1e-3)
+    }
 
     /// A small bank with recognisable taps.
     pub fn sample_bank() -> Bank {
@@ -333,6 +359,7 @@ pub(crate) mod tests {
                 ridges: vec![1e-6],
                 command: "none".into(),
             },
+            contract: sample_contract(),
             contact: None,
             entries: vec![
                 entry(10.0, 0),
@@ -371,10 +398,18 @@ pub(crate) mod tests {
         assert!(e.starts_with("x.taps:") && e.contains("checksum"), "{e}");
         let e = Bank::parse(&bytes[..bytes.len() - 3], p).unwrap_err();
         assert!(e.contains("truncated"), "{e}");
+        let mut no_step = sample_bank();
+        no_step.provenance.sample_step = 0.0;
+        let e = Bank::parse(&no_step.to_bytes(), p).unwrap_err();
+        assert!(e.contains("sample step 0 s"), "{e}");
         let e = Bank::parse(b"hello\n", p).unwrap_err();
         assert!(e.contains("first line"), "{e}");
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 2", "learned-taps 7");
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 7");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err();
         assert!(e.contains("format 7"), "{e}");
+        // A bank of the formats before the contract says why it is refused.
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 2");
+        let e = Bank::parse(text.as_bytes(), p).unwrap_err();
+        assert!(e.contains("format 2") && e.contains("no contract"), "{e}");
     }
 }

@@ -63,7 +63,7 @@ pub const FEATURES: usize = 5;
 pub const CONTACT_SPEED_POWER: [i32; 3] = [2, 1, 2];
 /// The smallest speed the quotients divide by \[m/s\] (cells below the model's lowest speed
 /// are left out of the moments anyway).
-const MIN_SPEED: f64 = 1.0;
+pub const MIN_SPEED: f64 = 1.0;
 
 /// The fitted estimator of the contact condition, as the tap bank holds it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -81,6 +81,11 @@ impl Biquad {
         }
     }
 
+    /// `[b0, b1, b2, a1, a2]`: the design, as a bank's contract states it.
+    pub fn coefficients(&self) -> [f64; 5] {
+        [self.b[0], self.b[1], self.b[2], self.a[0], self.a[1]]
+    }
+
     pub fn step(&mut self, x: f64) -> f64 {
         let y = self.b[0] * x + self.s[0];
         self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];

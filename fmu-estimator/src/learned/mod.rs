@@ -4,16 +4,27 @@
 //!
 //! - [`grid`]: the causal block mean onto the distance grid, the Kalman channel's high-pass;
 //! - [`bank`]: the tap bank file (format, provenance, checks);
+//! - [`contract`]: what a bank requires of the runtime (constants, filter designs, the Kalman
+//!   channel), written by the fit and checked at initialization;
 //! - [`window`]: one window of taps and which one a history gets, shared with the tap fit;
-//! - [`stream`]: the run-time filter (history, speed blending, fixed lag, start-up windows).
+//! - [`stream`]: the run-time filter, per sample, of the parts below;
+//! - `history`, `selection`, `blend`, `track`, `delay`: the channels' ring buffer, the entries
+//!   the FMU's parameters choose, their blend in speed and contact, the extrapolation between
+//!   grid points, the fixed-lag output's delay line.
 //!
 //! How the taps are fitted (`alignment-studies taps`, `studies/src/study/learned/`) and
 //! what they reach is in `docs/learned-filter.md` and `docs/accuracy.md`.
 
 pub mod bank;
+mod blend;
 pub mod contact;
+pub mod contract;
+mod delay;
 pub mod grid;
+mod history;
+mod selection;
 pub mod stream;
+mod track;
 pub mod window;
 
 pub use bank::Bank;

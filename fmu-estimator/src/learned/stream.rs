@@ -1,5 +1,7 @@
-//! The learned filter at run time: the grid, the channels' history, the taps of the speeds
-//! around the current one, and the estimates between grid points.
+//! The learned filter at run time: what happens when a sample arrives and when an estimate is
+//! asked for. Its parts each have a file: the history (`history.rs`), the entries chosen
+//! (`selection.rs`), their blend (`blend.rs`), the extrapolation between grid
+//! points (`track.rs`) and the delay line of the fixed-lag output (`delay.rs`).
 //!
 //! Per sample: the sample joins its cell ([`Grid`]). When cells close, their values enter the
 //! history and, if the speed lies inside the bank's range, the estimate of the newest cell
@@ -33,44 +35,19 @@
 //! blended linearly, as the speeds are (up to four windows per estimate). Where a condition was
 //! left out at a speed (the vehicle is unstable there), the nearest trained condition stands in.
 
-use super::bank::{Bank, Entry};
-use super::contact::{ContactModel, Moments};
-use super::grid::{CHANNELS, Grid, KALMAN, ROLL_RATE};
-use super::weights;
-use super::window::{self, Window};
+use super::bank::Bank;
+use super::blend::Blend;
+use super::contact::Moments;
+use super::delay::Delay;
+use super::grid::{Grid, KALMAN};
+use super::history::History;
+pub use super::selection::Choice;
+use super::selection::Selection;
+use super::track::{Point, Track};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
-/// The windows of one entry, shortest history first.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct Windows(Vec<Window>);
-
-impl Windows {
-    fn of(e: &Entry) -> Windows {
-        let slot = |name: &String| CHANNELS.iter().position(|c| c == name).expect("checked");
-        let slots: Vec<usize> = e.channels.iter().map(slot).collect();
-        let mut w: Vec<Window> = e
-            .windows
-            .iter()
-            .map(|w| Window::from_file_order(w.past, w.future, slots.clone(), &w.taps, w.rms_error))
-            .collect();
-        w.sort_by_key(Window::len);
-        Windows(w)
-    }
-
-    /// The estimate from the longest window the history covers, and its rms error; `gain` per
-    /// channel slot brings the history's speed quotients back to the current speed.
-    fn apply(&self, hist: &History, gain: &[f64; 5]) -> Option<(f64, f64)> {
-        let w = window::longest_covered(&self.0, hist.filled)?;
-        Some((w.apply(hist, gain), w.rms_error()))
-    }
-
-    fn longest(&self) -> usize {
-        self.0.iter().map(Window::len).max().unwrap_or(0)
-    }
-}
-
-/// The power of the speed each channel ([`CHANNELS`]) is divided by in the history. The taps
+/// The power of the speed each channel ([`super::grid::CHANNELS`]) is divided by in the history. The taps
 /// were fitted at constant speed; while the speed changes, the cells of a window were recorded
 /// at other speeds than the current one, and the quotients rescale each to the current speed
 /// (at constant speed they cancel: the standard case is unchanged to rounding).
@@ -94,150 +71,6 @@ fn speed_factors(v: f64) -> [f64; 5] {
     [v15, v, v15, v, 1.0]
 }
 
-/// The bank's entries for one sensor set and lag, by speed, then by contact condition.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct Selection {
-    speeds: Vec<f64>,
-    /// Contact conditions (Kalker-coefficient scales, ascending); empty without a contact
-    /// model (one set of windows per speed).
-    conditions: Vec<f64>,
-    causal: Vec<Vec<Windows>>,
-    lagged: Vec<Vec<Windows>>,
-    contact: Option<ContactModel>,
-    lag: usize,
-    uses_roll_rate: bool,
-    sample_step: f64,
-}
-
-/// Per channel, the newest `capacity` values, each written twice (at `i` and `i + capacity`)
-/// so the newest `n` are always one contiguous slice.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct History {
-    capacity: usize,
-    data: Vec<Vec<f64>>,
-    /// Position of the next write.
-    pos: usize,
-    filled: usize,
-}
-
-impl History {
-    fn new(capacity: usize) -> History {
-        History {
-            capacity,
-            data: vec![vec![0.0; 2 * capacity]; CHANNELS.len()],
-            pos: 0,
-            filled: 0,
-        }
-    }
-
-    fn push(&mut self, x: &[f64; 5]) {
-        for (d, v) in self.data.iter_mut().zip(x) {
-            d[self.pos] = *v;
-            d[self.pos + self.capacity] = *v;
-        }
-        self.pos = (self.pos + 1) % self.capacity;
-        self.filled = (self.filled + 1).min(self.capacity);
-    }
-}
-
-impl window::History for History {
-    fn filled(&self) -> usize {
-        self.filled
-    }
-
-    fn latest(&self, c: usize, n: usize) -> &[f64] {
-        let end = self.pos + self.capacity;
-        &self.data[c][end - n..end]
-    }
-}
-
-/// An estimate on the grid: its value, rms error, and the distance it was made at.
-#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
-struct Point {
-    value: f64,
-    std: f64,
-    distance: f64,
-}
-
-/// The last two grid estimates, for the linear extrapolation between closings.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-struct Track {
-    points: Vec<Point>,
-}
-
-impl Track {
-    fn push(&mut self, p: Point) {
-        if self.points.len() == 2 {
-            self.points.remove(0);
-        }
-        self.points.push(p);
-    }
-
-    fn clear(&mut self) {
-        self.points.clear();
-    }
-
-    /// The estimate at `distance` (linear extrapolation from the last two points; the last
-    /// point alone when only one exists or they coincide).
-    fn at(&self, distance: f64) -> Option<(f64, f64)> {
-        match self.points.as_slice() {
-            [] => None,
-            [p] => Some((p.value, p.std)),
-            [a, b] => {
-                let span = b.distance - a.distance;
-                let slope = if span > 0.0 {
-                    (b.value - a.value) / span
-                } else {
-                    0.0
-                };
-                // Never further than one cell ahead: a held speed of zero must not extrapolate.
-                let ahead = (distance - b.distance).clamp(0.0, span.max(0.0));
-                Some((b.value + slope * ahead, b.std))
-            }
-            _ => unreachable!("two points at most"),
-        }
-    }
-}
-
-/// The causal output on the grid over the last `lag` metres (and two more points), oldest
-/// first: learned estimates, or the Kalman filter's where none was made. The fixed-lag output
-/// while its own window is not available.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-struct Delay {
-    points: std::collections::VecDeque<Point>,
-    capacity: usize,
-}
-
-impl Delay {
-    /// Keeps `p` (nothing without a lagged output).
-    fn push(&mut self, p: Point) {
-        if self.capacity == 0 {
-            return;
-        }
-        if self.points.len() == self.capacity {
-            self.points.pop_front();
-        }
-        self.points.push_back(p);
-    }
-
-    /// The causal estimate made at `distance` (linear between grid points; the oldest point
-    /// before it, the newest after it).
-    fn at(&self, distance: f64) -> Option<(f64, f64)> {
-        let first = self.points.front()?;
-        if distance <= first.distance {
-            return Some((first.value, first.std));
-        }
-        let i = self.points.partition_point(|p| p.distance < distance);
-        let Some(b) = self.points.get(i) else {
-            let last = self.points.back().expect("non-empty");
-            return Some((last.value, last.std));
-        };
-        let a = &self.points[i - 1];
-        let w = (distance - a.distance) / (b.distance - a.distance);
-        Some((a.value + w * (b.value - a.value), b.std))
-    }
-}
-
 /// The learned filter's run-time state. Cloning it (FMU state) shares the taps.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Learned {
@@ -255,164 +88,21 @@ pub struct Learned {
     contact_scale: f64,
 }
 
-/// The windows of `entries` by ascending speed, and per speed one per condition of
-/// `conditions` (the entry of the nearest condition at that speed), or the single entry of each
-/// speed when `conditions` is empty; `what` names the entries in errors.
-#[allow(clippy::type_complexity)]
-fn by_speed(
-    entries: &[&Entry],
-    conditions: &[f64],
-    what: &str,
-) -> Result<(Vec<f64>, Vec<Vec<Windows>>), String> {
-    let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
-    speeds.sort_by(f64::total_cmp);
-    speeds.dedup();
-    let mut table = vec![];
-    for v in &speeds {
-        let at: Vec<&Entry> = entries.iter().copied().filter(|e| e.speed == *v).collect();
-        if conditions.is_empty() {
-            if at.len() > 1 {
-                return Err(format!(
-                    "the tap bank has two {what} entries for one speed ({v} m/s)"
-                ));
-            }
-            table.push(vec![Windows::of(at[0])]);
-            continue;
-        }
-        let row = conditions
-            .iter()
-            .map(|c| {
-                let nearest = at
-                    .iter()
-                    .min_by(|a, b| {
-                        let d = |e: &Entry| (e.condition.unwrap_or(f64::NAN) - c).abs();
-                        d(a).total_cmp(&d(b))
-                    })
-                    .expect("an entry at this speed");
-                Windows::of(nearest)
-            })
-            .collect();
-        table.push(row);
-    }
-    Ok((speeds, table))
-}
-
-/// What [`Learned::new`] needs to know of the FMU's configuration.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Choice {
-    /// Use the taps fitted with the wheelset roll-rate gyroscope.
-    pub roll_rate: bool,
-    /// The fixed-lag output's lag \[m\] (0: none).
-    pub lag: f64,
-}
-
 impl Learned {
-    /// The learned filter with the bank's entries for `choice`: the sensor set with or without
-    /// the roll-rate channel and, for the fixed-lag output, the lag the bank holds nearest
-    /// `choice.lag` (refused unless within half a grid step of it).
+    /// The learned filter with the bank's entries for `choice` (`selection.rs`), at the
+    /// start of a run.
     pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, String> {
-        let roll = |e: &Entry| e.channels.iter().any(|c| c == CHANNELS[ROLL_RATE]);
-        let of_set = |lag: usize| -> Vec<&Entry> {
-            bank.entries
-                .iter()
-                .filter(|e| roll(e) == choice.roll_rate && e.lag == lag)
-                .collect()
-        };
-        let sensors = if choice.roll_rate {
-            "four sensors (with the roll-rate gyroscope)"
-        } else {
-            "three sensors"
-        };
-        let causal = of_set(0);
-        if causal.is_empty() {
-            return Err(format!("the tap bank has no causal taps for {sensors}"));
-        }
-        let mut conditions: Vec<f64> = match &bank.contact {
-            Some(_) => causal.iter().filter_map(|e| e.condition).collect(),
-            None => vec![],
-        };
-        conditions.sort_by(f64::total_cmp);
-        conditions.dedup();
-        let (speeds, causal) = by_speed(&causal, &conditions, "causal")?;
-        let (lag, lagged) = if choice.lag > 0.0 {
-            let want = choice.lag / bank.grid;
-            let lags: Vec<usize> = {
-                let mut l: Vec<usize> = bank
-                    .entries
-                    .iter()
-                    .filter(|e| roll(e) == choice.roll_rate && e.lag > 0)
-                    .map(|e| e.lag)
-                    .collect();
-                l.sort();
-                l.dedup();
-                l
-            };
-            let best = lags.iter().copied().min_by(|a, b| {
-                (*a as f64 - want)
-                    .abs()
-                    .total_cmp(&(*b as f64 - want).abs())
-            });
-            let shown: Vec<String> = lags
-                .iter()
-                .map(|l| format!("{}", *l as f64 * bank.grid))
-                .collect();
-            match best {
-                Some(l) if (l as f64 - want).abs() <= 0.5 => {
-                    let what = format!("{} m lag", l as f64 * bank.grid);
-                    let (at, windows) = by_speed(&of_set(l), &conditions, &what)?;
-                    if at != speeds {
-                        return Err(format!(
-                            "the tap bank's {what} taps are not at the speeds of its causal taps"
-                        ));
-                    }
-                    (l, windows)
-                }
-                _ => {
-                    return Err(format!(
-                        "lag = {} m: the tap bank holds fixed-lag taps for {} m ({sensors}); 0 switches the lagged output off",
-                        choice.lag,
-                        if shown.is_empty() {
-                            "no lag".into()
-                        } else {
-                            shown.join(", ")
-                        }
-                    ));
-                }
-            }
-        } else {
-            (0, vec![])
-        };
-        let capacity = causal
-            .iter()
-            .chain(&lagged)
-            .flatten()
-            .map(Windows::longest)
-            .max()
-            .unwrap_or(1)
-            .max(1);
-        let contact = bank.contact.clone().filter(|_| !conditions.is_empty());
+        let selection = Selection::new(bank, choice)?;
         Ok(Learned {
-            moments: contact.as_ref().map(|c| c.moments(bank.grid)),
+            moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
-            selection: Arc::new(Selection {
-                speeds,
-                conditions,
-                causal,
-                lagged,
-                contact,
-                lag,
-                uses_roll_rate: choice.roll_rate,
-                sample_step: bank.provenance.sample_step,
-            }),
             grid: Grid::new(bank.grid, bank.kalman_highpass),
-            history: History::new(capacity),
+            history: History::new(selection.longest()),
             causal: Track::default(),
             lagged: Track::default(),
-            delay: Delay {
-                points: Default::default(),
-                capacity: if lag > 0 { lag + 2 } else { 0 },
-            },
+            delay: Delay::new(selection.lag),
             in_range: false,
+            selection: Arc::new(selection),
         })
     }
 
@@ -448,7 +138,7 @@ impl Learned {
     }
 
     /// One sample: `distance` after the step, the speed over it, the channels in
-    /// [`CHANNELS`] order (the Kalman filter's alignment estimate last), and the Kalman
+    /// [`super::grid::CHANNELS`] order (the Kalman filter's alignment estimate last), and the Kalman
     /// estimate's standard deviation `kalman_std` (what the outputs carry where no learned
     /// estimate is made).
     pub fn step(&mut self, distance: f64, speed: f64, x: &[f64; 5], kalman_std: f64) {
@@ -484,26 +174,10 @@ impl Learned {
             self.delay.push(kalman);
             return;
         }
-        let sel = Arc::clone(&self.selection);
-        let by_speed = weights(&sel.speeds, speed);
-        let by_condition = if sel.conditions.is_empty() {
-            vec![(0, 1.0)]
-        } else {
-            weights(&sel.conditions, self.contact_scale)
-        };
-        let blend = |set: &[Vec<Windows>], hist: &History| -> Option<(f64, f64)> {
-            let (mut e, mut r) = (0.0, 0.0);
-            for (s, a) in &by_speed {
-                for (c, b) in &by_condition {
-                    let (ei, ri) = set[*s][*c].apply(hist, &factors)?;
-                    e += a * b * ei;
-                    r += a * b * ri;
-                }
-            }
-            Some((e, r))
-        };
+        let sel = &self.selection;
+        let blend = Blend::at(&sel.speeds, speed, &sel.conditions, self.contact_scale);
         let d = closed.distance;
-        match blend(&sel.causal, &self.history) {
+        match blend.apply(&sel.causal, &self.history, &factors) {
             Some((value, std)) => {
                 let p = Point {
                     value,
@@ -516,7 +190,7 @@ impl Learned {
             None => self.delay.push(kalman),
         }
         if !sel.lagged.is_empty()
-            && let Some((value, std)) = blend(&sel.lagged, &self.history)
+            && let Some((value, std)) = blend.apply(&sel.lagged, &self.history, &factors)
         {
             self.lagged.push(Point {
                 value,

@@ -1,11 +1,15 @@
-//! Tests of the streaming learned filter (`stream.rs`), in a file of their own to keep that one
-//! under 800 lines.
+//! Tests of the streaming learned filter (`stream.rs` and the parts it runs: history,
+//! selection, blend, extrapolation, delay line), through `Learned`.
 
+use super::super::bank::Entry;
 use super::super::bank::tests::sample_bank;
+use super::super::grid::CHANNELS;
 use super::*;
 
 /// The estimate straight from the taps (file order), for the oracle: channel values of the
-/// cells pushed so far, newest last.
+/// cells pushed so far, newest last. Deliberately not `window::Window`: it is the bank format's
+/// definition in plain sums, so it checks the shared code's tap order and partial sums, which
+/// the fit uses too.
 fn direct(entry: &Entry, window: usize, cells: &[[f64; 5]]) -> f64 {
     let w = &entry.windows[window];
     let len = w.past + w.future + 1;

@@ -7,12 +7,15 @@
 //! | which window | the longest whose `past + future + 1` cells the history covers ([`longest_covered`]): at the start of a run the shorter start windows, then the full one |
 //! | the sum | per channel a dot product with four partial sums (fixed summation order, vectorizable), channels added in the entry's order, each times its speed gain |
 //!
-//! The tap fit (`alignment-studies taps`) judges its choices on estimates made as the FMU makes
-//! them, with its own sequential sums (the shipped banks' reported errors are reproduced byte
-//! for byte from them). `studies/src/study/learned/taps.rs` has the test that holds the two
-//! together: the fit's estimates from a run's start equal this module's, through `Learned`, on
-//! the same samples, to rounding.
+//! The tap fit (`alignment-studies taps`) applies its candidate windows with this module too
+//! (its validation objective, the windows' rms errors, the estimates from a run's start), over
+//! a run's cells held as columns, so the figures it writes into a bank are those of the
+//! estimates the FMU makes. `studies/src/study/learned/taps.rs` has the test that holds the two
+//! together through `Learned` (speed quotients, delay line, blending) on the same samples, to
+//! rounding.
 
+use super::bank::Entry;
+use super::grid::CHANNELS;
 use serde::{Deserialize, Serialize};
 
 /// A history of grid cells, per channel slot ([`super::grid::CHANNELS`]), newest last.
@@ -100,6 +103,37 @@ impl Window {
 /// cells covers; `None` before the shortest is covered.
 pub fn longest_covered(windows: &[Window], filled: usize) -> Option<&Window> {
     windows.iter().rev().find(|w| w.len <= filled)
+}
+
+/// The windows of one bank entry, ready to apply, shortest history first.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Windows(Vec<Window>);
+
+impl Windows {
+    /// The entry's windows (its channel names checked against [`CHANNELS`] by the bank).
+    pub fn of(e: &Entry) -> Windows {
+        let slot = |name: &String| CHANNELS.iter().position(|c| c == name).expect("checked");
+        let slots: Vec<usize> = e.channels.iter().map(slot).collect();
+        let mut w: Vec<Window> = e
+            .windows
+            .iter()
+            .map(|w| Window::from_file_order(w.past, w.future, slots.clone(), &w.taps, w.rms_error))
+            .collect();
+        w.sort_by_key(Window::len);
+        Windows(w)
+    }
+
+    /// The estimate from the longest window the history covers, and its rms error; `gain` per
+    /// channel slot brings the history's speed quotients back to the current speed.
+    pub fn apply(&self, hist: &impl History, gain: &[f64; 5]) -> Option<(f64, f64)> {
+        let w = longest_covered(&self.0, hist.filled())?;
+        Some((w.apply(hist, gain), w.rms_error()))
+    }
+
+    /// The most cells a window reads.
+    pub fn longest(&self) -> usize {
+        self.0.iter().map(Window::len).max().unwrap_or(0)
+    }
 }
 
 /// `sum a_i b_i` with four partial sums: lets the compiler vectorize, and fixes the summation

@@ -166,7 +166,7 @@ pub fn estimate_learned(
 ) -> Result<(Vec<f64>, Vec<f64>), Error> {
     let values = offline::settings(settings)?;
     let (config, _) = offline::config(&values, None)?;
-    let learned = offline::learned(&values)?
+    let learned = offline::learned(&values, &config)?
         .ok_or_else(|| Error::input("the settings do not select the learned filter"))?;
     let lag = learned.lag();
     let out = offline::process_learned(&config, Some(learned), h, samples, false)?;

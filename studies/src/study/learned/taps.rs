@@ -45,7 +45,9 @@ use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
 use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
+use fmu_estimator::learned::contract::Contract;
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
+use fmu_estimator::learned::window::{self, History};
 use fmu_estimator::offline;
 use nalgebra::{DMatrix, DVector};
 use orchestrator::system::Value;
@@ -166,12 +168,56 @@ impl Options {
 #[derive(Clone)]
 pub(super) struct GridRun {
     pub(super) cells: GridRecord,
+    /// The cells per channel ([`CHANNELS`] order): the history the shared window code reads.
+    columns: Vec<Vec<f64>>,
     target: Vec<f64>,
     position: Vec<f64>,
     /// The run's truth per sample, for the metric.
     truth_distance: Vec<f64>,
     truth: Vec<f64>,
 }
+
+impl GridRun {
+    fn new(
+        cells: GridRecord,
+        target: Vec<f64>,
+        position: Vec<f64>,
+        truth_distance: Vec<f64>,
+        truth: Vec<f64>,
+    ) -> GridRun {
+        let columns = (0..CHANNELS.len())
+            .map(|c| cells.cells.iter().map(|x| x[c]).collect())
+            .collect();
+        GridRun {
+            cells,
+            columns,
+            target,
+            position,
+            truth_distance,
+            truth,
+        }
+    }
+}
+
+/// A run's cells up to (not including) `end`, as the run-time filter's history holds them.
+struct Upto<'a> {
+    run: &'a GridRun,
+    end: usize,
+}
+
+impl History for Upto<'_> {
+    fn filled(&self) -> usize {
+        self.end
+    }
+
+    fn latest(&self, slot: usize, n: usize) -> &[f64] {
+        &self.run.columns[slot][self.end - n..self.end]
+    }
+}
+
+/// The gains of a history of raw cells (the FMU's holds speed quotients; the fit's runs are at
+/// one constant speed).
+const RAW: [f64; 5] = [1.0; 5];
 
 /// The vehicle variables the runs record beyond a [`Record`]'s.
 const ROLL: &str = "ws_roll_rate";
@@ -224,8 +270,7 @@ fn run(
 /// its own gain), as the shipped taps were fitted; the FMU's scheduled steady-state channel
 /// equals it at the training's constant speeds once the start-up has passed.
 fn on_grid(rec: &Record) -> Result<GridRun, String> {
-    let values = offline::settings(&[])?;
-    let (config, _) = offline::config(&values, None)?;
+    let config = kalman_config()?;
     let out = offline::process(&config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
         .samples
@@ -236,13 +281,20 @@ fn on_grid(rec: &Record) -> Result<GridRun, String> {
     let cells = decimate(&out.distance, &x, BANK_GRID, KALMAN_HIGHPASS);
     let target = cells.closed_by.iter().map(|k| rec.alignment[*k]).collect();
     let position = cells.closed_by.iter().map(|k| out.distance[*k]).collect();
-    Ok(GridRun {
+    Ok(GridRun::new(
         cells,
         target,
         position,
-        truth_distance: rec.distance.clone(),
-        truth: rec.alignment.clone(),
-    })
+        rec.distance.clone(),
+        rec.alignment.clone(),
+    ))
+}
+
+/// The Kalman channel the taps are fitted with: the estimator's defaults and its built-in
+/// calibration, as the bank's contract states ([`Contract::expected`]).
+fn kalman_config() -> Result<fmu_estimator::config::Config, String> {
+    let values = offline::settings(&[])?;
+    Ok(offline::config(&values, None)?.0)
 }
 
 /// The channel indices ([`CHANNELS`]) of a sensor set.
@@ -354,30 +406,23 @@ impl Fit {
     }
 }
 
-/// A window's estimate from the `len` cells up to cell `newest`.
-fn window_at(run: &GridRun, channels: &[usize], taps: &[f64], len: usize, newest: usize) -> f64 {
-    let mut e = 0.0;
-    for (ci, c) in channels.iter().enumerate() {
-        for j in 0..len {
-            e += taps[ci * len + j] * run.cells.cells[newest - j][*c];
-        }
-    }
-    e
+/// Solved windows (taps in file order, past), shortest first, ready to apply with the
+/// run-time filter's code ([`window`]) over the channels `channels`.
+fn ready(channels: &[usize], solved: &[(Vec<f64>, usize)], future: usize) -> Vec<window::Window> {
+    solved
+        .iter()
+        .map(|(taps, past)| {
+            window::Window::from_file_order(*past, future, channels.to_vec(), taps, 0.0)
+        })
+        .collect()
 }
 
 /// The estimates of a window on a run's grid (where its history exists), and their errors.
-fn apply(
-    run: &GridRun,
-    channels: &[usize],
-    taps: &[f64],
-    past: usize,
-    future: usize,
-) -> (Vec<f64>, Vec<f64>) {
-    let len = past + future + 1;
+fn apply(run: &GridRun, w: &window::Window, future: usize) -> (Vec<f64>, Vec<f64>) {
     let n = run.cells.cells.len();
     let (mut est, mut err) = (vec![], vec![]);
-    for m in (len - 1)..n {
-        let e = window_at(run, channels, taps, len, m);
+    for m in (w.len() - 1)..n {
+        let e = w.apply(&Upto { run, end: m + 1 }, &RAW);
         est.push(e);
         err.push(e - run.target[m - future]);
     }
@@ -385,27 +430,24 @@ fn apply(
 }
 
 /// The estimates of a run from its start, as the FMU makes them: for each cell `t` with
-/// `future` cells after it, the longest of `windows` (taps and past, shortest first, all
-/// looking `future` cells ahead) whose past the history before `t` covers.
+/// `future` cells after it, the longest of `windows` (shortest first, all looking `future`
+/// cells ahead) the history up to `t + future` covers ([`window::longest_covered`]).
 fn apply_from_start(
     run: &GridRun,
-    channels: &[usize],
-    windows: &[(Vec<f64>, usize)],
+    windows: &[window::Window],
     future: usize,
 ) -> (Vec<f64>, Vec<f64>) {
     let (mut pos, mut est) = (vec![], vec![]);
     for t in 0..run.cells.cells.len().saturating_sub(future) {
-        let Some((taps, past)) = windows.iter().rev().find(|(_, p)| *p <= t) else {
+        let history = Upto {
+            run,
+            end: t + future + 1,
+        };
+        let Some(w) = window::longest_covered(windows, history.filled()) else {
             continue;
         };
         pos.push(run.position[t]);
-        est.push(window_at(
-            run,
-            channels,
-            taps,
-            past + future + 1,
-            t + future,
-        ));
+        est.push(w.apply(&history, &RAW));
     }
     (pos, est)
 }
@@ -415,13 +457,12 @@ fn apply_from_start(
 /// ridge and the band weights are chosen by.
 fn validate_from_start(
     runs: &[GridRun],
-    channels: &[usize],
-    windows: &[(Vec<f64>, usize)],
+    windows: &[window::Window],
     future: usize,
 ) -> Result<f64, String> {
     let mut obj = 0.0;
     for r in runs {
-        let (pos, est) = apply_from_start(r, channels, windows, future);
+        let (pos, est) = apply_from_start(r, windows, future);
         let m = evaluate(&pos, &est, &r.truth_distance, &r.truth, DS, TRIM)?;
         obj += [m.whole, m.d1, m.d2, m.d3]
             .iter()
@@ -433,30 +474,26 @@ fn validate_from_start(
 
 /// A window's rms error against the true alignment on the validation runs (where its history
 /// exists): the standard deviation the FMU reports with its estimate.
-fn rms_error(
-    runs: &[GridRun],
-    channels: &[usize],
-    taps: &[f64],
-    past: usize,
-    future: usize,
-) -> f64 {
+fn rms_error(runs: &[GridRun], w: &window::Window, future: usize) -> f64 {
     let (mut sq, mut n) = (0.0, 0usize);
     for r in runs {
-        let (_, err) = apply(r, channels, taps, past, future);
+        let (_, err) = apply(r, w, future);
         sq += err.iter().map(|e| e * e).sum::<f64>();
         n += err.len();
     }
     (sq / n as f64).sqrt()
 }
 
-/// The entries of one speed: both sensor sets, causal and every lag; per contact condition
-/// with its contact model, or pooled over the conditions.
-fn fit_speed(
+/// The runs of one speed, each with its Kalker-coefficient scale: the training runs on the
+/// training seed and the validation runs on every validation seed, under every contact
+/// condition in which the vehicle is stable at this speed ([`UNSTABLE_WS_Y`]).
+#[allow(clippy::type_complexity)]
+fn speed_runs(
     fmus: &Fmus,
     o: &Options,
     speed: f64,
     progress: &dyn Fn(&str),
-) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
+) -> Result<(Vec<(f64, GridRun)>, Vec<(f64, GridRun)>), Error> {
     let training: Vec<Option<GridRun>> = o
         .kalker_scales
         .par_iter()
@@ -487,8 +524,7 @@ fn fit_speed(
         .zip(training)
         .filter_map(|(k, r)| r.map(|r| (k, r)))
         .collect();
-    let stable: Vec<f64> = training.iter().map(|(k, _)| *k).collect();
-    if stable.is_empty() {
+    if training.is_empty() {
         return Err(format!(
             "at {speed} m/s the vehicle is unstable under every training contact condition"
         )
@@ -498,7 +534,7 @@ fn fit_speed(
     let cases: Vec<(u32, f64)> = o
         .validation_seeds
         .iter()
-        .flat_map(|s| stable.iter().map(move |k| (*s, *k)))
+        .flat_map(|s| training.iter().map(move |(k, _)| (*s, *k)))
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
@@ -513,6 +549,102 @@ fn fit_speed(
     if validation.is_empty() {
         return Err(format!("at {speed} m/s every validation run is unstable").into());
     }
+    Ok((training, validation))
+}
+
+/// The weighting (index into [`BAND_WEIGHTS`]), ridge, plain validation objective and windows
+/// (taps, past) of a lag's best choice.
+type Chosen = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
+
+/// Every band weighting and ridge for the windows `pasts` looking `lag` cells ahead, judged on
+/// the validation runs `valid` from their start: the best.
+fn choose(fits: &[Fit], valid: &[GridRun], pasts: &[usize], lag: usize) -> Result<Chosen, String> {
+    let tried: Vec<Chosen> = (0..fits.len())
+        .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&(f, ridge)| {
+            let windows: Vec<(Vec<f64>, usize)> = pasts
+                .iter()
+                .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
+                .collect::<Result<_, String>>()?;
+            let objective =
+                validate_from_start(valid, &ready(&fits[f].channels, &windows, lag), lag)?;
+            Ok((f, ridge, objective, windows))
+        })
+        .collect::<Result<_, String>>()?;
+    Ok(tried
+        .into_iter()
+        .min_by(|a, b| a.2.total_cmp(&b.2))
+        .expect("ridges"))
+}
+
+/// One group's entries at one speed: a sensor set (`channels`) fitted on the training runs
+/// `train`, chosen and judged on `valid`, causal and at every lag of `lags` (cells);
+/// `condition` and `kalker_scales` as the entries carry them.
+struct Group<'a> {
+    speed: f64,
+    channels: Vec<usize>,
+    condition: Option<f64>,
+    kalker_scales: Vec<f64>,
+    train: &'a [GridRun],
+    valid: &'a [GridRun],
+}
+
+impl Group<'_> {
+    fn entries(&self, lags: &[usize]) -> Result<Vec<Entry>, String> {
+        let past = points(BANK_WINDOW);
+        let span = past + lags.iter().copied().max().unwrap_or(0);
+        let fits: Vec<Fit> = BAND_WEIGHTS
+            .par_iter()
+            .map(|b| Fit::new(self.train, self.channels.clone(), span, b))
+            .collect::<Result<_, _>>()?;
+        let pasts: Vec<usize> = STARTS.iter().map(|s| points(*s)).chain([past]).collect();
+        let mut entries = vec![];
+        for lag in std::iter::once(0).chain(lags.iter().copied()) {
+            let (chosen, ridge, validation_objective, solved) =
+                choose(&fits, self.valid, &pasts, lag)?;
+            let applied = ready(&self.channels, &solved, lag);
+            let windows: Vec<Window> = solved
+                .into_par_iter()
+                .zip(applied)
+                .map(|((taps, past), w)| Window {
+                    past,
+                    future: lag,
+                    rms_error: rms_error(self.valid, &w, lag),
+                    taps,
+                })
+                .collect();
+            entries.push(Entry {
+                speed: self.speed,
+                channels: self
+                    .channels
+                    .iter()
+                    .map(|c| CHANNELS[*c].to_string())
+                    .collect(),
+                lag,
+                ridge,
+                band_weights: Some(BAND_WEIGHTS[chosen]),
+                validation_objective,
+                kalker_scales: self.kalker_scales.clone(),
+                condition: self.condition,
+                windows,
+            });
+        }
+        Ok(entries)
+    }
+}
+
+/// The entries of one speed: both sensor sets, causal and every lag; per contact condition
+/// with its contact model, or pooled over the conditions.
+fn fit_speed(
+    fmus: &Fmus,
+    o: &Options,
+    speed: f64,
+    progress: &dyn Fn(&str),
+) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
+    let (training, validation) = speed_runs(fmus, o, speed, progress)?;
+    let stable: Vec<f64> = training.iter().map(|(k, _)| *k).collect();
     let per_condition = o.per_condition && o.kalker_scales.len() > 1;
     // The groups fitted: each condition alone, or all pooled.
     let groups: Vec<(Option<f64>, Vec<f64>)> = if per_condition {
@@ -521,16 +653,13 @@ fn fit_speed(
         vec![(None, stable.clone())]
     };
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
-    let past = points(BANK_WINDOW);
-    let span = past + lags.iter().copied().max().unwrap_or(0);
-    let sets: Vec<bool> = if o.roll_rate {
-        vec![false, true]
+    let sets: &[bool] = if o.roll_rate {
+        &[false, true]
     } else {
-        vec![false]
+        &[false]
     };
     let mut entries = vec![];
     for roll in sets {
-        let channels = channel_set(roll);
         for (condition, scales) in &groups {
             let of = |runs: &[(f64, GridRun)]| -> Vec<GridRun> {
                 runs.iter()
@@ -542,61 +671,19 @@ fn fit_speed(
             if valid.is_empty() {
                 continue;
             }
-            let fits: Vec<Fit> = BAND_WEIGHTS
-                .par_iter()
-                .map(|b| Fit::new(&train, channels.clone(), span, b))
-                .collect::<Result<_, _>>()?;
-            let pasts: Vec<usize> = STARTS.iter().map(|s| points(*s)).chain([past]).collect();
-            // The weighting, ridge, plain validation objective and windows (taps, past) of the
-            // best choice for a lag.
-            type Choice = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
-            let choose = |lag: usize| -> Result<Choice, String> {
-                let tried: Vec<Choice> = (0..fits.len())
-                    .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
-                    .collect::<Vec<_>>()
-                    .par_iter()
-                    .map(|&(f, ridge)| {
-                        let windows: Vec<(Vec<f64>, usize)> = pasts
-                            .iter()
-                            .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
-                            .collect::<Result<_, String>>()?;
-                        let objective = validate_from_start(&valid, &channels, &windows, lag)?;
-                        Ok((f, ridge, objective, windows))
-                    })
-                    .collect::<Result<_, String>>()?;
-                Ok(tried
-                    .into_iter()
-                    .min_by(|a, b| a.2.total_cmp(&b.2))
-                    .expect("ridges"))
+            let group = Group {
+                speed,
+                channels: channel_set(*roll),
+                condition: *condition,
+                kalker_scales: if condition.is_some() || *scales == o.kalker_scales {
+                    vec![]
+                } else {
+                    scales.clone()
+                },
+                train: &train,
+                valid: &valid,
             };
-            let kalker_scales = if condition.is_some() || *scales == o.kalker_scales {
-                vec![]
-            } else {
-                scales.clone()
-            };
-            for lag in std::iter::once(0).chain(lags.iter().copied()) {
-                let (chosen, ridge, validation_objective, solved) = choose(lag)?;
-                let windows: Vec<Window> = solved
-                    .into_par_iter()
-                    .map(|(taps, past)| Window {
-                        past,
-                        future: lag,
-                        rms_error: rms_error(&valid, &channels, &taps, past, lag),
-                        taps,
-                    })
-                    .collect();
-                entries.push(Entry {
-                    speed,
-                    channels: channels.iter().map(|c| CHANNELS[*c].to_string()).collect(),
-                    lag,
-                    ridge,
-                    band_weights: Some(BAND_WEIGHTS[chosen]),
-                    validation_objective,
-                    kalker_scales: kalker_scales.clone(),
-                    condition: *condition,
-                    windows,
-                });
-            }
+            entries.extend(group.entries(&lags)?);
         }
     }
     let model = if per_condition {
@@ -657,8 +744,16 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         .iter()
         .map(|k| format!("{}", k * 100.0))
         .collect();
+    let contract = Contract::expected(
+        &kalman_config()?,
+        BANK_GRID,
+        KALMAN_HIGHPASS,
+        contact.as_ref().map(|c| c.band),
+        STEP,
+    );
     Ok(Header {
         format: fmu_estimator::learned::bank::FORMAT,
+        contract,
         grid: BANK_GRID,
         kalman_highpass: KALMAN_HIGHPASS,
         provenance: Provenance {
@@ -696,20 +791,21 @@ mod tests {
         let cells: Vec<[f64; 5]> = (0..n)
             .map(|m| std::array::from_fn(|c| ((m * 7 + c * 3) % 11) as f64 - 5.0 + 0.1 * c as f64))
             .collect();
-        GridRun {
-            cells: GridRecord {
+        GridRun::new(
+            GridRecord {
                 cells,
                 closed_by: (0..n).collect(),
             },
-            target: vec![0.0; n],
-            position: (0..n).map(|m| m as f64 * BANK_GRID).collect(),
-            truth_distance: vec![],
-            truth: vec![],
-        }
+            vec![0.0; n],
+            (0..n).map(|m| m as f64 * BANK_GRID).collect(),
+            vec![],
+            vec![],
+        )
     }
 
     /// A window's estimate written out: tap `j` of channel `c` times that channel `j` cells
-    /// before `newest`.
+    /// before `newest`. An independent oracle on purpose: the bank format's definition of a
+    /// window in plain sums, against the shared window code's partial sums and tap order.
     fn by_hand(run: &GridRun, channels: &[usize], taps: &[f64], len: usize, newest: usize) -> f64 {
         let mut e = 0.0;
         for (ci, c) in channels.iter().enumerate() {
@@ -726,20 +822,24 @@ mod tests {
         let channels = [0, 2];
         let short: Vec<f64> = (0..2 * 3).map(|i| 0.5 + i as f64).collect();
         let full: Vec<f64> = (0..2 * 6).map(|i| 1.0 - 0.25 * i as f64).collect();
-        let (pos, est) =
-            apply_from_start(&run, &channels, &[(short.clone(), 2), (full.clone(), 5)], 0);
+        let (pos, est) = apply_from_start(
+            &run,
+            &ready(&channels, &[(short.clone(), 2), (full.clone(), 5)], 0),
+            0,
+        );
         // No window fits before two cells of history; from five the full one, as `apply`.
         assert_eq!(pos.len(), 12 - 2);
         assert_eq!(pos[0], 2.0 * BANK_GRID);
         for m in 2..5 {
-            assert_eq!(
-                est[m - 2],
-                by_hand(&run, &channels, &short, 3, m),
-                "cell {m}"
-            );
+            let want = by_hand(&run, &channels, &short, 3, m);
+            assert!((est[m - 2] - want).abs() < 1e-12, "cell {m}");
         }
-        let (full_est, _) = apply(&run, &channels, &full, 5, 0);
+        let (full_est, _) = apply(&run, &ready(&channels, &[(full.clone(), 5)], 0)[0], 0);
         assert_eq!(&est[3..], &full_est[..]);
+        for (m, e) in (5..12).zip(&full_est) {
+            let want = by_hand(&run, &channels, &full, 6, m);
+            assert!((e - want).abs() < 1e-12, "cell {m}");
+        }
     }
 
     /// The fit judges its choices on estimates made "as the FMU makes them": this holds only if
@@ -770,13 +870,13 @@ mod tests {
             })
             .collect();
         let cells = decimate(&distance, &samples, bank.grid, bank.kalman_highpass);
-        let run = GridRun {
-            position: cells.closed_by.iter().map(|k| distance[*k]).collect(),
-            target: vec![0.0; cells.cells.len()],
-            truth_distance: vec![],
-            truth: vec![],
-            cells,
-        };
+        let run = GridRun::new(
+            cells.clone(),
+            vec![0.0; cells.cells.len()],
+            cells.closed_by.iter().map(|k| distance[*k]).collect(),
+            vec![],
+            vec![],
+        );
         let three = |e: &&Entry| e.speed == speed && !e.channels.iter().any(|c| c == ROLL);
         for lag_m in [0.0, 10.0] {
             let entry = bank
@@ -795,7 +895,8 @@ mod tests {
                 .iter()
                 .map(|w| (w.taps.clone(), w.past))
                 .collect();
-            let (_, fit) = apply_from_start(&run, &channels, &windows, entry.lag);
+            let (_, fit) =
+                apply_from_start(&run, &ready(&channels, &windows, entry.lag), entry.lag);
             let mut fmu = Learned::new(
                 &bank,
                 Choice {
@@ -854,8 +955,11 @@ mod tests {
         // Windows of past 1 and 4 cells, both looking 2 cells ahead (len past + 3).
         let short: Vec<f64> = (0..2 * 4).map(|i| 0.3 * i as f64 - 1.0).collect();
         let full: Vec<f64> = (0..2 * 7).map(|i| 0.7 - 0.1 * i as f64).collect();
-        let (pos, est) =
-            apply_from_start(&run, &channels, &[(short.clone(), 1), (full.clone(), 4)], 2);
+        let (pos, est) = apply_from_start(
+            &run,
+            &ready(&channels, &[(short.clone(), 1), (full.clone(), 4)], 2),
+            2,
+        );
         // Positions 1..=9: one cell of history behind at least, two cells ahead at most.
         assert_eq!(
             pos,
@@ -867,7 +971,7 @@ mod tests {
             } else {
                 by_hand(&run, &channels, &full, 7, t + 2)
             };
-            assert_eq!(est[t - 1], want, "position {t}");
+            assert!((est[t - 1] - want).abs() < 1e-12, "position {t}");
         }
     }
 }

@@ -1,0 +1,198 @@
+//! Which of a bank's entries the learned filter runs: the sensor set and lag the FMU's
+//! parameters choose, by speed and by contact condition.
+
+use super::bank::{Bank, Entry};
+use super::contact::ContactModel;
+use super::grid::{CHANNELS, ROLL_RATE};
+use super::window::Windows;
+use serde::{Deserialize, Serialize};
+
+/// What [`super::Learned::new`] needs to know of the FMU's configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Choice {
+    /// Use the taps fitted with the wheelset roll-rate gyroscope.
+    pub roll_rate: bool,
+    /// The fixed-lag output's lag \[m\] (0: none).
+    pub lag: f64,
+}
+
+/// The bank's entries for one sensor set and lag, by speed, then by contact condition.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub(super) struct Selection {
+    pub(super) speeds: Vec<f64>,
+    /// Contact conditions (Kalker-coefficient scales, ascending); empty without a contact
+    /// model (one set of windows per speed).
+    pub(super) conditions: Vec<f64>,
+    pub(super) causal: Vec<Vec<Windows>>,
+    pub(super) lagged: Vec<Vec<Windows>>,
+    pub(super) contact: Option<ContactModel>,
+    /// The fixed-lag output's lag in grid points (0: none).
+    pub(super) lag: usize,
+    pub(super) uses_roll_rate: bool,
+    pub(super) sample_step: f64,
+}
+
+impl Selection {
+    /// The bank's entries for `choice`: the sensor set with or without the roll-rate channel
+    /// and, for the fixed-lag output, the lag the bank holds nearest `choice.lag` (refused
+    /// unless within half a grid step of it).
+    pub(super) fn new(bank: &Bank, choice: Choice) -> Result<Selection, String> {
+        let causal = of_set(bank, choice.roll_rate, 0);
+        if causal.is_empty() {
+            return Err(format!(
+                "the tap bank has no causal taps for {}",
+                sensors(choice.roll_rate)
+            ));
+        }
+        let conditions = conditions(bank, &causal);
+        let (speeds, causal) = by_speed(&causal, &conditions, "causal")?;
+        let (lag, lagged) = if choice.lag > 0.0 {
+            let l = nearest_lag(bank, choice)?;
+            let what = format!("{} m lag", l as f64 * bank.grid);
+            let (at, windows) = by_speed(&of_set(bank, choice.roll_rate, l), &conditions, &what)?;
+            if at != speeds {
+                return Err(format!(
+                    "the tap bank's {what} taps are not at the speeds of its causal taps"
+                ));
+            }
+            (l, windows)
+        } else {
+            (0, vec![])
+        };
+        let contact = bank.contact.clone().filter(|_| !conditions.is_empty());
+        Ok(Selection {
+            speeds,
+            conditions,
+            causal,
+            lagged,
+            contact,
+            lag,
+            uses_roll_rate: choice.roll_rate,
+            sample_step: bank.provenance.sample_step,
+        })
+    }
+
+    /// The most cells of history any selected window reads (at least 1).
+    pub(super) fn longest(&self) -> usize {
+        self.causal
+            .iter()
+            .chain(&self.lagged)
+            .flatten()
+            .map(Windows::longest)
+            .max()
+            .unwrap_or(1)
+            .max(1)
+    }
+}
+
+/// Whether an entry reads the roll-rate channel.
+fn uses_roll(e: &Entry) -> bool {
+    e.channels.iter().any(|c| c == CHANNELS[ROLL_RATE])
+}
+
+/// The sensor set, for messages.
+fn sensors(roll_rate: bool) -> &'static str {
+    if roll_rate {
+        "four sensors (with the roll-rate gyroscope)"
+    } else {
+        "three sensors"
+    }
+}
+
+/// The entries of one sensor set and lag (grid points).
+fn of_set(bank: &Bank, roll_rate: bool, lag: usize) -> Vec<&Entry> {
+    bank.entries
+        .iter()
+        .filter(|e| uses_roll(e) == roll_rate && e.lag == lag)
+        .collect()
+}
+
+/// The contact conditions of the causal entries, ascending; none without a contact model.
+fn conditions(bank: &Bank, causal: &[&Entry]) -> Vec<f64> {
+    if bank.contact.is_none() {
+        return vec![];
+    }
+    let mut c: Vec<f64> = causal.iter().filter_map(|e| e.condition).collect();
+    c.sort_by(f64::total_cmp);
+    c.dedup();
+    c
+}
+
+/// The bank's fixed lag (grid points) nearest `choice.lag`, if within half a grid step.
+fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, String> {
+    let want = choice.lag / bank.grid;
+    let mut lags: Vec<usize> = bank
+        .entries
+        .iter()
+        .filter(|e| uses_roll(e) == choice.roll_rate && e.lag > 0)
+        .map(|e| e.lag)
+        .collect();
+    lags.sort();
+    lags.dedup();
+    let best = lags.iter().copied().min_by(|a, b| {
+        (*a as f64 - want)
+            .abs()
+            .total_cmp(&(*b as f64 - want).abs())
+    });
+    match best {
+        Some(l) if (l as f64 - want).abs() <= 0.5 => Ok(l),
+        _ => {
+            let shown: Vec<String> = lags
+                .iter()
+                .map(|l| format!("{}", *l as f64 * bank.grid))
+                .collect();
+            Err(format!(
+                "lag = {} m: the tap bank holds fixed-lag taps for {} m ({}); 0 switches the lagged output off",
+                choice.lag,
+                if shown.is_empty() {
+                    "no lag".into()
+                } else {
+                    shown.join(", ")
+                },
+                sensors(choice.roll_rate)
+            ))
+        }
+    }
+}
+
+/// The windows of `entries` by ascending speed, and per speed one per condition of
+/// `conditions` (the entry of the nearest condition at that speed), or the single entry of each
+/// speed when `conditions` is empty; `what` names the entries in errors.
+#[allow(clippy::type_complexity)]
+fn by_speed(
+    entries: &[&Entry],
+    conditions: &[f64],
+    what: &str,
+) -> Result<(Vec<f64>, Vec<Vec<Windows>>), String> {
+    let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    let mut table = vec![];
+    for v in &speeds {
+        let at: Vec<&Entry> = entries.iter().copied().filter(|e| e.speed == *v).collect();
+        if conditions.is_empty() {
+            if at.len() > 1 {
+                return Err(format!(
+                    "the tap bank has two {what} entries for one speed ({v} m/s)"
+                ));
+            }
+            table.push(vec![Windows::of(at[0])]);
+            continue;
+        }
+        let row = conditions
+            .iter()
+            .map(|c| {
+                let nearest = at
+                    .iter()
+                    .min_by(|a, b| {
+                        let d = |e: &Entry| (e.condition.unwrap_or(f64::NAN) - c).abs();
+                        d(a).total_cmp(&d(b))
+                    })
+                    .expect("an entry at this speed");
+                Windows::of(nearest)
+            })
+            .collect();
+        table.push(row);
+    }
+    Ok((speeds, table))
+}
