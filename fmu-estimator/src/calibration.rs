@@ -46,9 +46,17 @@ use std::path::Path;
 /// Matrices read from a calibration file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
+    /// The file's free-text `status` line ("unspecified" when absent), logged so a run says
+    /// which calibration it used.
     pub status: String,
+    /// The step Q was computed for \[s\], positive: Q is scaled by `h / step_size` for a
+    /// run with step `h`.
     pub step_size: f64,
+    /// The discrete process noise covariance of the paper's 7 states at `step_size`
+    /// (symmetric, non-negative diagonal), as the paper's section 4.2 estimates it.
     pub q: Mat7,
+    /// The measurement noise covariance of the four measurements (the three sensors and the
+    /// virtual alignment measurement), positive definite.
     pub r: Mat4,
     /// The file's `[parameters]`: the simplified model Q and R were computed with (the FMU's
     /// defaults at build time; at run time only compared with the FMU's parameters).

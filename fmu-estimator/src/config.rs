@@ -22,15 +22,26 @@ use std::path::{Path, PathBuf};
 /// A message for the FMU's logger (or the offline caller).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Note {
+    /// What the configuration chose (e.g. the calibration file used), logged at fmi2OK.
     Info(String),
+    /// A fallback the user may not expect (e.g. no calibration file found: the diagonal noise
+    /// model), logged at fmi2Warning.
     Warning(String),
 }
 
+/// The Kalman filter's configuration, checked, from the FMI parameters and the calibration
+/// file: everything [`Config::core`] needs to build the filter, so that the FMU and the offline
+/// path build the same one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Config {
+    /// The simplified model's parameters (Table 2 defaults, the FMI parameters over them).
     pub params: Params,
+    /// The discretization (`discretization`).
     pub scheme: Scheme,
+    /// The alignment prior (`alignment_model`), which sets the state dimension (7 or 8).
     pub model: AlignmentModel,
+    /// The gain of the Kalman filter when it is the learned filter's channel (`gain` 0 resolved
+    /// for that use).
     pub gain: Gain,
     /// The gain when the Kalman filter is the estimate itself, not the learned filter's
     /// channel (`gain` 0 resolves differently: [`Gain::from_fmi`]); what
@@ -38,14 +49,20 @@ pub struct Config {
     /// ([`crate::offline::process_learned`], the FMU) the Kalman filter, its fallback output and
     /// a smoother over it run `gain`.
     pub gain_alone: Gain,
+    /// The process noise on the bodies: the calibration file's Q, or the diagonal model's
+    /// intensities.
     pub body_noise: BodyNoise,
     /// Measurement noise of the three sensors and of the virtual measurement (paper's model).
     pub r: Mat4,
     /// Sigma of the virtual measurement for the 8-state priors; `<= 0`: none.
     pub prior_sigma_xi: f64,
+    /// Initial standard deviation of the alignment estimate \[m\] (`p0_xi`), where the filter
+    /// does not start from the stationary covariance.
     pub p0_xi: f64,
     /// Start from the stationary covariance (`p0_stationary`).
     pub p0_stationary: bool,
+    /// Below this speed \[m/s\] the estimate is held (`min_speed`): the creep terms divide by
+    /// the speed.
     pub min_speed: f64,
     /// `> 0`: build the matrices once for this speed (the paper's constant-speed filter).
     pub design_speed: f64,

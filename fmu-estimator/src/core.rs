@@ -11,6 +11,8 @@ use serde::{Deserialize, Serialize};
 
 // Both variants are a few kilobytes (matrices by value, as the step needs them); the enum is
 // held once per FMU instance, so boxing would only add an indirection per step.
+/// The Kalman filter of the chosen alignment prior: 7 states (the paper's random walk) or 8
+/// (the alignment's rate too), behind one set of methods.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub enum Core {
@@ -30,6 +32,10 @@ macro_rules! each {
 }
 
 impl Core {
+    /// One step of `h` \[s\] at `speed` \[m/s\] with the samples `z` (ws_acc_y, ws_yaw_rate,
+    /// frame_acc_y, and 0 for the virtual measurement): the NIS of the update, or why the
+    /// update was skipped (the prediction kept, [`StepError::Skipped`]) or the gain failed.
+    /// The caller holds the filter below `min_speed`; this does not check it.
     pub fn step(&mut self, speed: f64, h: f64, z: &Vec4) -> Result<f64, StepError> {
         each!(self, e => e.step(speed, h, z))
     }
@@ -79,14 +85,19 @@ impl Core {
         })
     }
 
+    /// Steps whose measurement update was skipped so far (the FMU's `skipped_updates`).
     pub fn skipped(&self) -> i32 {
         each!(self, e => e.skipped)
     }
 
+    /// How many times F, H and Q were rebuilt, on a change of speed or step (the FMU's
+    /// `rebuilds`).
     pub fn rebuilds(&self) -> i32 {
         each!(self, e => e.rebuilds)
     }
 
+    /// Keeps every step's predicted and filtered estimates from now on, for the RTS smoother
+    /// ([`Core::smoothed_alignment`]); memory grows with the run, so only offline runs do it.
     pub fn record_history(&mut self) {
         each!(self, e => e.record_history())
     }

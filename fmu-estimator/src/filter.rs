@@ -20,18 +20,26 @@
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
+/// A state of the paper's model, `[y, psi, y_f, ydot, psidot, y_fdot, xi]` (SI units).
 pub type Vec7 = SVector<f64, 7>;
+/// The four measurements: ws_acc_y \[m/s2\], ws_yaw_rate \[rad/s\], frame_acc_y \[m/s2\] and
+/// the virtual alignment measurement \[m\] (always 0).
 pub type Vec4 = SVector<f64, 4>;
+/// A covariance of the four measurements (R, the innovation covariance).
 pub type Mat4 = SMatrix<f64, 4, 4>;
 
 /// The filter's estimate: mean `x` and covariance `p`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Kalman<const N: usize> {
+    /// The state estimate, ordered as the model's state.
     pub x: SVector<f64, N>,
+    /// Its covariance, kept symmetric (and positive definite by the guarded update).
     pub p: SMatrix<f64, N, N>,
 }
 
 impl<const N: usize> Kalman<N> {
+    /// A filter starting from `x` with covariance `p` (symmetric positive definite; not
+    /// checked).
     pub fn new(x: SVector<f64, N>, p: SMatrix<f64, N, N>) -> Kalman<N> {
         Kalman { x, p }
     }

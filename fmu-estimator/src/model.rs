@@ -64,14 +64,22 @@
 use crate::params::Params;
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
+/// A matrix over the paper's 7 states (`F_c`, `F`, `Q`, `P`).
 pub type Mat7 = SMatrix<f64, 7, 7>;
+/// The measurement matrix `H` of the 7-state model: 4 measurements by 7 states.
 pub type Mat4x7 = SMatrix<f64, 4, 7>;
 
 /// The second-order matrices of the SM at speed `v`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SecondOrder {
+    /// `M = diag(m, I, m_f)` \[kg, kg m2, kg\], over `q = [y, psi, y_f]` (the paper's
+    /// section 3.3).
     pub mass: Matrix3<f64>,
+    /// `K_s + K_c`: suspension, creep and gravitational stiffness (the creep terms independent
+    /// of the speed; the gravitational stiffness `W alpha / l` derived in the module docs, not
+    /// the paper's printed one, docs/references.md section 4).
     pub stiffness: Matrix3<f64>,
+    /// `C_s + C_c`: suspension and creep damping (the creep terms divided by the speed).
     pub damping: Matrix3<f64>,
     /// Generalized force per unit alignment, `K_d`.
     pub k_d: Vector3<f64>,

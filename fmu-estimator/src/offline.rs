@@ -21,9 +21,13 @@ use std::path::Path;
 /// One recorded step: the speed and the sensor samples at its end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
+    /// Forward speed \[m/s\] (the FMU's `speed` input): not negative.
     pub speed: f64,
+    /// Wheelset lateral acceleration \[m/s2\] (`ws_acc_y`).
     pub ws_acc_y: f64,
+    /// Wheelset yaw rate \[rad/s\] (`ws_yaw_rate`).
     pub ws_yaw_rate: f64,
+    /// Bogie frame lateral acceleration \[m/s2\] (`frame_acc_y`).
     pub frame_acc_y: f64,
     /// The wheelset roll-rate gyroscope (0 when the record has none; only the learned filter's
     /// four-sensor taps read it).
@@ -146,9 +150,13 @@ impl CovarianceCheck {
 /// over without a copy, and a fleet's recordings are large.
 #[derive(Debug, Clone, Copy)]
 pub struct Columns<'a> {
+    /// Forward speed \[m/s\], one per step; every other column has its length.
     pub speed: &'a [f64],
+    /// Wheelset lateral acceleration \[m/s2\].
     pub ws_acc_y: &'a [f64],
+    /// Wheelset yaw rate \[rad/s\].
     pub ws_yaw_rate: &'a [f64],
+    /// Bogie frame lateral acceleration \[m/s2\].
     pub frame_acc_y: &'a [f64],
     /// The roll-rate gyroscope, when the record has one (0 otherwise, as in [`Sample`]).
     pub ws_roll_rate: Option<&'a [f64]>,
@@ -340,8 +348,11 @@ fn run(
 /// would: a recording longer than memory, or a day-long soak, goes through in pieces.
 #[derive(Debug, Clone)]
 pub struct Resume {
+    /// The Kalman filter as the last step left it.
     pub core: Core,
+    /// The learned filter's windows and delay line (none with `estimator` 1).
     pub learned: Option<Learned>,
+    /// Distance travelled \[m\], integrated from the speed as the FMU's `distance` output.
     pub distance: f64,
 }
 

@@ -92,6 +92,8 @@ impl Spectrum {
         self.a * c2 / ((o2 + r2) * (o2 + c2))
     }
 
+    /// Refuses constants the priors cannot use: `a` and `omega_c` must be positive and finite,
+    /// `omega_r` finite and not negative (0 is the integrated random walk's limit).
     pub fn check(&self) -> Result<(), SettingError> {
         let ok = |x: f64| x.is_finite() && x > 0.0;
         if !(ok(self.a) && ok(self.omega_c) && self.omega_r.is_finite() && self.omega_r >= 0.0) {
@@ -106,6 +108,8 @@ impl Spectrum {
 }
 
 impl AlignmentModel {
+    /// The prior of the FMI parameter `alignment_model` (1, 2 or 3); the 8-state priors take
+    /// `spectrum` (the `prior_*` parameters), checked. Another code is refused.
     pub fn from_fmi(code: i32, spectrum: Spectrum) -> Result<AlignmentModel, SettingError> {
         match code {
             1 => Ok(AlignmentModel::RandomWalk),

@@ -25,9 +25,13 @@ use serde::{Deserialize, Serialize};
 /// What the filter kept for the smoother: one entry per filter step.
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct History<const N: usize> {
+    /// The predicted state of each step, before its update.
     pub x_pred: Vec<SVector<f64, N>>,
+    /// Its covariance (under a steady-state gain: the DARE's predicted covariance).
     pub p_pred: Vec<SMatrix<f64, N, N>>,
+    /// The filtered state of each step, after its update (the prediction when it was skipped).
     pub x_filt: Vec<SVector<f64, N>>,
+    /// Its covariance.
     pub p_filt: Vec<SMatrix<f64, N, N>>,
     /// Index into `transitions` of the `F` that predicted into each step.
     pub transition: Vec<usize>,
@@ -36,6 +40,8 @@ pub struct History<const N: usize> {
 }
 
 impl<const N: usize> History<N> {
+    /// Appends one step; `transition` indexes [`History::transitions`]. Every vector grows by
+    /// one, so they stay of equal length.
     pub fn push(
         &mut self,
         x_pred: SVector<f64, N>,
@@ -51,10 +57,12 @@ impl<const N: usize> History<N> {
         self.transition.push(transition);
     }
 
+    /// Steps recorded.
     pub fn len(&self) -> usize {
         self.x_filt.len()
     }
 
+    /// Whether no step was recorded (the smoother then returns nothing).
     pub fn is_empty(&self) -> bool {
         self.x_filt.is_empty()
     }

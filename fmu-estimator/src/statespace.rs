@@ -44,7 +44,9 @@ pub enum BodyNoise {
     Rate(SMatrix<f64, 7, 7>),
     /// A discrete `Q` computed for `step_size`: `Q = q h / step_size`.
     Calibrated {
+        /// The calibration file's Q over the paper's 7 states.
         q: SMatrix<f64, 7, 7>,
+        /// The step it was computed for \[s\].
         step_size: f64,
     },
 }
@@ -74,10 +76,16 @@ pub struct StateSpace<const N: usize> {
 /// Discrete matrices for one (speed, step).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Discrete<const N: usize> {
+    /// The speed they were built for \[m/s\] (compared exactly to decide a rebuild).
     pub speed: f64,
+    /// The step they were built for \[s\].
     pub h: f64,
+    /// The transition matrix `F` over one step.
     pub f: SMatrix<f64, N, N>,
+    /// The measurement matrix `H` (the accelerometer rows taken from `F_c`, so they depend on
+    /// the speed).
     pub hm: SMatrix<f64, 4, N>,
+    /// The discrete process noise `Q` over one step.
     pub q: SMatrix<f64, N, N>,
 }
 

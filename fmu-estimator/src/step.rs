@@ -22,6 +22,7 @@ use crate::learned::Learned;
 /// One sample's inputs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Input {
+    /// Forward speed \[m/s\]: negative is an error, NaN or below `min_speed` holds the filter.
     pub speed: f64,
     /// `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`, `ws_roll_rate`.
     pub sensors: [f64; 4],
@@ -31,11 +32,17 @@ pub struct Input {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Stepped {
     /// The filter held its estimate: the speed is below `min_speed`, or not finite.
-    Held { finite_speed: bool },
+    Held {
+        /// Whether the speed was finite (then the distance advanced).
+        finite_speed: bool,
+    },
     /// The filter stepped: the update's normalized innovation squared, or why it was skipped,
     /// and the sensors replaced as implausible (their names and values).
     Filtered {
+        /// The NIS of the measurement update, or why it was skipped (the prediction kept).
         update: Result<f64, Skip>,
+        /// Each sensor replaced by NaN as implausible, as `name = value (|x| > limit)` for the
+        /// log.
         implausible: Vec<String>,
     },
 }
@@ -43,6 +50,7 @@ pub enum Stepped {
 /// The estimator's settings a step reads.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Settings {
+    /// Below this speed \[m/s\] the filter holds (`min_speed`).
     pub min_speed: f64,
     /// 0: the matrices follow the speed; above 0: built for this speed.
     pub design_speed: f64,

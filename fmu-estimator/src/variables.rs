@@ -14,77 +14,145 @@ pub const DEFAULT_CALIBRATION_FILE: &str = "calibration.toml";
 /// trusted and the estimate is held.
 pub const MIN_SPEED_DEFAULT: f64 = 0.5;
 
-/// Real value references.
+/// Value references, dense from 0 within each base type (so a Real and an Integer may share a
+/// number). Each names its FMI variable; what the variable means and its start value are in
+/// [`VARIABLES`].
 pub mod vr {
+    /// `ws_acc_y` (Real input, m/s2).
     pub const WS_ACC_Y: u32 = 0;
+    /// `ws_yaw_rate` (Real input, rad/s).
     pub const WS_YAW_RATE: u32 = 1;
+    /// `frame_acc_y` (Real input, m/s2).
     pub const FRAME_ACC_Y: u32 = 2;
+    /// `speed` (Real input, m/s).
     pub const SPEED: u32 = 3;
+    /// `alignment` (Real output, m).
     pub const ALIGNMENT: u32 = 4;
+    /// `alignment_std` (Real output, calculated at initialization, m).
     pub const ALIGNMENT_STD: u32 = 5;
+    /// `distance` (Real output, m).
     pub const DISTANCE: u32 = 6;
+    /// `est_y` (Real output, m).
     pub const EST_Y: u32 = 7;
+    /// `est_psi` (Real output, rad).
     pub const EST_PSI: u32 = 8;
+    /// `est_y_f` (Real output, m).
     pub const EST_Y_F: u32 = 9;
+    /// `est_vy` (Real output, m/s).
     pub const EST_VY: u32 = 10;
+    /// `est_psi_rate` (Real output, rad/s).
     pub const EST_PSI_RATE: u32 = 11;
+    /// `est_vy_f` (Real output, m/s).
     pub const EST_VY_F: u32 = 12;
+    /// `nis` (Real output, dimensionless).
     pub const NIS: u32 = 13;
+    /// `m` (Real parameter, kg).
     pub const M: u32 = 14;
+    /// `I` (Real parameter, kg.m2).
     pub const I: u32 = 15;
+    /// `l` (Real parameter, m).
     pub const L: u32 = 16;
+    /// `l_s` (Real parameter, m).
     pub const L_S: u32 = 17;
+    /// `alpha` (Real parameter, dimensionless).
     pub const ALPHA: u32 = 18;
+    /// `r_0` (Real parameter, m).
     pub const R_0: u32 = 19;
+    /// `m_f` (Real parameter, kg).
     pub const M_F: u32 = 20;
+    /// `f11` (Real parameter, N).
     pub const F11: u32 = 21;
+    /// `f22` (Real parameter, N).
     pub const F22: u32 = 22;
+    /// `f23` (Real parameter, N.m).
     pub const F23: u32 = 23;
+    /// `f33` (Real parameter, N.m2).
     pub const F33: u32 = 24;
+    /// `kx` (Real parameter, N/m).
     pub const KX: u32 = 25;
+    /// `cx` (Real parameter, N.s/m).
     pub const CX: u32 = 26;
+    /// `ky` (Real parameter, N/m).
     pub const KY: u32 = 27;
+    /// `cy` (Real parameter, N.s/m).
     pub const CY: u32 = 28;
+    /// `g` (Real parameter, m/s2).
     pub const G: u32 = 29;
+    /// `sigma_acc_ws` (Real parameter, m/s2).
     pub const SIGMA_ACC_WS: u32 = 30;
+    /// `sigma_yaw_rate` (Real parameter, rad/s).
     pub const SIGMA_YAW_RATE: u32 = 31;
+    /// `sigma_acc_frame` (Real parameter, m/s2).
     pub const SIGMA_ACC_FRAME: u32 = 32;
+    /// `sigma_xi` (Real parameter, m).
     pub const SIGMA_XI: u32 = 33;
+    /// `q_acc_ws` (Real parameter, m2/s3).
     pub const Q_ACC_WS: u32 = 34;
+    /// `q_yaw_acc` (Real parameter, rad2/s3).
     pub const Q_YAW_ACC: u32 = 35;
+    /// `q_acc_frame` (Real parameter, m2/s3).
     pub const Q_ACC_FRAME: u32 = 36;
+    /// `q_xi` (Real parameter, m2/s).
     pub const Q_XI: u32 = 37;
+    /// `p0_xi` (Real parameter, m).
     pub const P0_XI: u32 = 38;
+    /// `min_speed` (Real parameter, m/s).
     pub const MIN_SPEED: u32 = 39;
+    /// `prior_a` (Real parameter, m.rad).
     pub const PRIOR_A: u32 = 40;
+    /// `prior_omega_r` (Real parameter, rad/m).
     pub const PRIOR_OMEGA_R: u32 = 41;
+    /// `prior_omega_c` (Real parameter, rad/m).
     pub const PRIOR_OMEGA_C: u32 = 42;
+    /// `prior_sigma_xi` (Real parameter, m).
     pub const PRIOR_SIGMA_XI: u32 = 43;
+    /// `est_xi_rate` (Real output, m/s).
     pub const EST_XI_RATE: u32 = 44;
+    /// `design_speed` (Real parameter, m/s).
     pub const DESIGN_SPEED: u32 = 45;
+    /// `ws_roll_rate` (Real input, rad/s).
     pub const WS_ROLL_RATE: u32 = 46;
+    /// `lag` (Real parameter, m).
     pub const LAG: u32 = 47;
+    /// `alignment_lagged` (Real output, m).
     pub const ALIGNMENT_LAGGED: u32 = 48;
+    /// `alignment_lagged_std` (Real output, calculated at initialization, m).
     pub const ALIGNMENT_LAGGED_STD: u32 = 49;
+    /// `distance_lagged` (Real output, calculated at initialization, m).
     pub const DISTANCE_LAGGED: u32 = 50;
+    /// `alignment_kalman` (Real output, m).
     pub const ALIGNMENT_KALMAN: u32 = 51;
+    /// `contact_scale` (Real output, dimensionless).
     pub const CONTACT_SCALE: u32 = 52;
     // Integer
+    /// `discretization` (Integer parameter).
     pub const DISCRETIZATION: u32 = 0;
+    /// `skipped_updates` (Integer output).
     pub const SKIPPED_UPDATES: u32 = 1;
+    /// `rebuilds` (Integer output).
     pub const REBUILDS: u32 = 2;
+    /// `alignment_model` (Integer parameter).
     pub const ALIGNMENT_MODEL: u32 = 3;
+    /// `gain` (Integer parameter).
     pub const GAIN: u32 = 4;
+    /// `estimator` (Integer parameter).
     pub const ESTIMATOR: u32 = 5;
+    /// `active_estimator` (Integer output).
     pub const ACTIVE_ESTIMATOR: u32 = 6;
     // Boolean
+    /// `use_calibration_file` (Boolean parameter).
     pub const USE_CALIBRATION_FILE: u32 = 0;
+    /// `updated` (Boolean output).
     pub const UPDATED: u32 = 1;
+    /// `p0_stationary` (Boolean parameter).
     pub const P0_STATIONARY: u32 = 2;
+    /// `use_roll_rate` (Boolean parameter).
     pub const USE_ROLL_RATE: u32 = 3;
     pub const ALLOW_OTHER_KALMAN: u32 = 4;
     // String
+    /// `calibration_file` (String parameter).
     pub const CALIBRATION_FILE: u32 = 0;
+    /// `tap_file` (String parameter).
     pub const TAP_FILE: u32 = 1;
 }
 

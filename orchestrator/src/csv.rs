@@ -18,7 +18,9 @@ use std::path::Path;
 /// A CSV file's columns as numbers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Csv {
+    /// The header's column names, trimmed, unique.
     pub names: Vec<String>,
+    /// One vector per column, in the order of `names`, one value per data row.
     pub columns: Vec<Vec<f64>>,
     /// The file line of each data row (1-based), for messages about a row.
     pub lines: Vec<usize>,
@@ -55,6 +57,8 @@ impl Csv {
         })
     }
 
+    /// Parses CSV text by the rules of the module docs; an error names the line (and column)
+    /// but not the file, which the caller knows.
     pub fn parse(text: &str) -> Result<Csv, String> {
         Csv::parse_finite(text, &[])
     }

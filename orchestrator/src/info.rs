@@ -9,10 +9,15 @@ use std::path::Path;
 /// read, nothing is unpacked or loaded, so an FMU without a binary for this platform (or one
 /// that cannot load here) can still be described.
 pub struct Archive {
+    /// The parsed modelDescription.xml.
     pub model_description: ModelDescription,
+    /// The archive's entry names as stored (those that cannot be read are left out), to tell
+    /// which platforms' binaries it carries.
     pub entries: Vec<String>,
 }
 
+/// Reads the FMU's entry names and its modelDescription.xml (at most fmi-import's
+/// model-description limit); an error names the file and what is wrong with it.
 pub fn read_archive(path: &Path) -> Result<Archive, String> {
     let file =
         std::fs::File::open(path).map_err(|e| format!("cannot open {}: {e}", path.display()))?;
@@ -60,6 +65,8 @@ fn start(kind: &VariableKind) -> String {
     }
 }
 
+/// The text `info` prints: identity, co-simulation capabilities, whether the archive has a
+/// binary for this platform, the default experiment and the variables.
 pub fn describe(path: &Path, archive: &Archive) -> String {
     let md = &archive.model_description;
     let mut s = String::new();

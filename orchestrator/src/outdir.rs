@@ -57,18 +57,26 @@ impl Drop for OutputDir {
 /// One FMU a result was made with.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct FmuRecord {
+    /// The component the FMU ran as (`fmu` for `simulate`).
     pub component: String,
+    /// The FMU file's path as the command was given it (not made absolute).
     pub path: String,
+    /// The model description's GUID; empty when it cannot be read.
     pub guid: String,
+    /// SHA-256 of the .fmu file, lower-case hex: what tells two builds of an FMU apart.
     pub sha256: String,
 }
 
 /// `manifest.json`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {
+    /// The writer and its version, e.g. `orchestrator 0.1.0`.
     pub program: String,
+    /// This process's command line, program name first.
     pub command: Vec<String>,
+    /// The `--set NAME=VALUE` settings, as given.
     pub settings: Vec<String>,
+    /// The FMUs the results were made with.
     pub fmus: Vec<FmuRecord>,
     /// When the run started, UTC, RFC 3339.
     pub time_utc: String,
@@ -128,6 +136,7 @@ impl OutputDir {
         Ok(out)
     }
 
+    /// The directory, as given to [`OutputDir::open`].
     pub fn path(&self) -> &Path {
         &self.dir
     }

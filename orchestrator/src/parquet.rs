@@ -28,7 +28,10 @@ use std::sync::Arc;
 
 /// Rows per row group: 64 Ki rows of a few dozen columns is a few MB in memory.
 pub const ROW_GROUP: usize = 65_536;
+/// The file metadata key holding the units, a JSON object `{column: unit}`; the Python
+/// package's recordings use the same key, so units survive between the two.
 pub const UNITS_KEY: &str = "units";
+/// The file metadata key holding the producing run's manifest, as JSON.
 pub const PROVENANCE_KEY: &str = "provenance";
 
 /// Whether `path` names a Parquet file (by its extension, case-insensitive).
@@ -40,9 +43,13 @@ pub fn is_parquet(path: &Path) -> bool {
 /// A table read back: names, units ("" where none) and columns, with the file's metadata.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ParquetTable {
+    /// Column names, in the schema's order.
     pub names: Vec<String>,
+    /// One unit per column, "" where the `units` key gives none (or the file has no such key).
     pub units: Vec<String>,
+    /// One vector per column (integers and floats widened to `f64`), all of the same length.
     pub columns: Vec<Vec<f64>>,
+    /// The file's key-value metadata, every key (a key without a value maps to "").
     pub metadata: BTreeMap<String, String>,
 }
 

@@ -12,66 +12,116 @@ use std::path::PathBuf;
 /// A connection resolved to value references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Link {
+    /// The producing component's index in [`System::components`].
     pub from: usize,
+    /// The output's value reference in the producer's FMU.
     pub from_vr: u32,
+    /// The consuming component's index.
     pub to: usize,
+    /// The input's value reference in the consumer's FMU.
     pub to_vr: u32,
+    /// The type both ends share, which says which fmi2Get/SetXxx carry the value: Real,
+    /// Integer (an Enumeration is carried as one) or Boolean, never String.
     pub base: BaseType,
+    /// The connection's linear transformation (Real links only).
     pub transform: Option<Linear>,
+    /// The output's name, for messages.
     pub from_name: Endpoint,
+    /// The input's name, for messages.
     pub to_name: Endpoint,
 }
 
 /// A parameter or start value resolved to a value reference.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Setting {
+    /// The component's index in [`System::components`].
     pub component: usize,
+    /// The variable's value reference in its FMU.
     pub vr: u32,
+    /// The value, already of the variable's type (an Integer given for a Real converted, a
+    /// text parsed), so that applying it cannot fail on the type.
     pub value: Value,
+    /// The variable's name, for messages.
     pub name: Endpoint,
 }
 
 /// The resolved system.
 #[derive(Debug, Clone)]
 pub struct Plan {
+    /// One per connection, in the system's order.
     pub links: Vec<Link>,
+    /// Applied before initialization in this order, so a later one for the same variable wins:
+    /// the components' parameters in the system's order, then `--set` settings.
     pub settings: Vec<Setting>,
     /// Components in the Gauss-Seidel order: producers before consumers, otherwise in the
     /// order of the system description.
     pub order: Vec<usize>,
 }
 
+/// Why a system does not fit its FMUs; each names the connection, parameter or variable to fix.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum ResolveError {
+    /// A name refers to a component the system does not have.
     #[error("{context}: component '{component}' does not exist (components: {known})")]
     UnknownComponent {
+        /// What named it: `connection A.x -> B.y`, `parameter c.v`, `variable c.v`,
+        /// `external input c.v`.
         context: String,
+        /// The component name as given.
         component: String,
+        /// The system's components, comma-separated.
         known: String,
     },
+    /// A name refers to a variable the component's FMU does not declare.
     #[error("{context}: component '{component}' ({fmu}) has no variable '{variable}'")]
     UnknownVariable {
+        /// What named it: `connection A.x -> B.y`, `parameter c.v`, `variable c.v`,
+        /// `external input c.v`.
         context: String,
+        /// The component, which exists.
         component: String,
+        /// The variable name as given.
         variable: String,
+        /// The component's FMU file.
         fmu: PathBuf,
     },
+    /// A connection that cannot carry a value: not output to input, types that differ, a
+    /// String, a transformation of a non-Real, a component feeding itself.
     #[error("connection {from} -> {to}: {problem}")]
     BadConnection {
+        /// The connection's output end.
         from: Endpoint,
+        /// The connection's input end.
         to: Endpoint,
+        /// What is wrong, with the causalities or types concerned.
         problem: String,
     },
+    /// Two connections end at the same input.
     #[error("input {to} is fed by two connections, from {first} and from {second}")]
     InputFedTwice {
+        /// The input.
         to: Endpoint,
+        /// The output of the first connection to it.
         first: Endpoint,
+        /// The output of the second.
         second: Endpoint,
     },
+    /// A parameter or start value that cannot be applied: the variable is not a parameter or
+    /// input, is a constant, or the value does not fit its type.
     #[error("parameter {name}: {problem}")]
-    BadSetting { name: Endpoint, problem: String },
+    BadSetting {
+        /// The variable set.
+        name: Endpoint,
+        /// Why it cannot be set, or why the value does not fit.
+        problem: String,
+    },
+    /// Connections that form a cycle in which every component passes its input straight to
+    /// its output (direct feedthrough), which a fixed-step master cannot solve.
     #[error("algebraic loop through {}: each of these outputs depends directly on an input fed by the next; break the loop or give the FMUs' outputs dependencies=\"\" where there is no direct feedthrough", .variables.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" -> "))]
-    AlgebraicLoop { variables: Vec<Endpoint> },
+    AlgebraicLoop {
+        /// The loop's outputs, each depending directly on the input the next one feeds.
+        variables: Vec<Endpoint>,
+    },
 }
 
 fn type_name(b: BaseType) -> &'static str {

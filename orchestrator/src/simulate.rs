@@ -30,8 +30,12 @@ use std::path::Path;
 /// Input signals: a time column and one column per input.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Signals {
+    /// Sample times \[s\], at least one: finite, never decreasing (at equal times the last
+    /// row wins).
     pub time: Vec<f64>,
+    /// The input columns' names, `time` left out (a `component.` prefix is kept as written).
     pub names: Vec<String>,
+    /// One vector per name, one value per time; any `f64`, NaN and infinities included.
     pub columns: Vec<Vec<f64>>,
 }
 
@@ -78,6 +82,8 @@ impl Signals {
         self.columns[c][i.saturating_sub(1)]
     }
 
+    /// Parses CSV text (the rules of [`crate::csv`], `time` first and finite); an error names
+    /// the line and column, not the file.
     pub fn parse(text: &str) -> Result<Signals, String> {
         Self::from_csv(crate::csv::Csv::parse_finite(text, &["time"])?)
     }

@@ -7,9 +7,14 @@ use std::path::PathBuf;
 /// A value for a parameter or a start value.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Value {
+    /// For a Real variable (an Integer value is accepted there too, converted when resolved).
     Real(f64),
+    /// For an Integer or Enumeration variable (an enumeration's item number).
     Integer(i32),
+    /// For a Boolean variable.
     Boolean(bool),
+    /// For a String variable; also the raw text of a value whose type is not known until the
+    /// FMU's model description is read (`--set`), parsed then by [`Value::parse`].
     String(String),
 }
 
@@ -51,11 +56,14 @@ pub struct Component {
 /// `component.variable`.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Endpoint {
+    /// A [`Component::name`] of the system.
     pub component: String,
+    /// The FMI variable's name in that component's model description (may contain dots).
     pub variable: String,
 }
 
 impl Endpoint {
+    /// Joins the two names as given; nothing is checked until the system is resolved.
     pub fn new(component: &str, variable: &str) -> Endpoint {
         Endpoint {
             component: component.into(),
@@ -81,20 +89,34 @@ impl std::fmt::Display for Endpoint {
 /// `to = factor * from + offset` (SSP's LinearTransformation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Linear {
+    /// Multiplies the output's value (unit conversion or sign change).
     pub factor: f64,
+    /// Added after the factor, in the input's unit.
     pub offset: f64,
 }
 
+/// One output feeding one input: the master copies the value at every communication step.
+/// Checked only when resolved ([`crate::resolve`]): output to input, same base type, no input
+/// fed twice.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Connection {
+    /// The output read (causality output).
     pub from: Endpoint,
+    /// The input written (causality input).
     pub to: Endpoint,
+    /// Applied on the way; only between Real variables.
     pub transform: Option<Linear>,
 }
 
+/// The system description's default experiment: what a run uses where the command line gives
+/// nothing (see [`crate::cli::Common::options`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Experiment {
+    /// Start time \[s\] (SSP `startTime`, 0 when absent). Written back by `export-ssp`; a run
+    /// starts at `--start` (default 0), not here.
     pub start: f64,
+    /// Stop time \[s\] (SSP `stopTime`), not before `start`; none when the description gives
+    /// none.
     pub stop: Option<f64>,
     /// The communication step, when the description gives one.
     pub step: Option<f64>,
@@ -110,16 +132,24 @@ impl Default for Experiment {
     }
 }
 
+/// A co-simulation as described (an SSP file, command-line options, a program), before it is
+/// checked against the FMUs ([`crate::resolve::resolve`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct System {
+    /// The system's name (SSP `System name`), carried into an exported SSP.
     pub name: String,
+    /// The FMUs, in the order of the description: component indices elsewhere (a resolved
+    /// plan, the master's instances) count in this order.
     pub components: Vec<Component>,
     /// In the order the Gauss-Seidel master follows.
     pub connections: Vec<Connection>,
+    /// Start, stop and step, where the description gives them.
     pub experiment: Experiment,
 }
 
 impl System {
+    /// The component named `name`, if any (the first, should a program have built a system
+    /// with two; the SSP reader refuses that).
     pub fn component(&self, name: &str) -> Option<&Component> {
         self.components.iter().find(|c| c.name == name)
     }

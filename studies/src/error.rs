@@ -7,6 +7,8 @@
 use orchestrator::master::RunError;
 use std::path::PathBuf;
 
+/// Why a study, a run or a command of `alignment-studies` failed; [`Error::exit_code`] maps
+/// it to the process's exit code.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A run through the master failed: the FMU, the system or the options.
@@ -41,11 +43,18 @@ pub enum Error {
     Io(String),
     /// A figure cannot be drawn or written.
     #[error("cannot draw {}: {message}", path.display())]
-    Draw { path: PathBuf, message: String },
+    Draw {
+        /// The figure's file.
+        path: PathBuf,
+        /// The plotting library's or the file system's error.
+        message: String,
+    },
     /// `source`, about `context` (the option, case or file it concerns); exits as `source`.
     #[error("{context}: {source}")]
     Context {
+        /// What the error concerns, e.g. `--set vehicle.x=1` or a case's name.
         context: String,
+        /// The error itself.
         #[source]
         source: Box<Error>,
     },

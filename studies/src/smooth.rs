@@ -32,19 +32,37 @@ pub enum RecordingError {
     Read(String),
     /// A column the estimator needs is missing or unreadable.
     #[error("{}: {message}", file.display())]
-    Column { file: PathBuf, message: String },
+    Column {
+        /// The recording.
+        file: PathBuf,
+        /// The column look-up's message, naming the column.
+        message: String,
+    },
+    /// Fewer than two rows: the step cannot be read from the time column.
     #[error("{}: fewer than 2 rows (the step is read from the time column)", file.display())]
-    FewRows { file: PathBuf },
+    FewRows {
+        /// The recording.
+        file: PathBuf,
+    },
+    /// The first two times do not increase (the step would be zero or negative).
     #[error("{}: time does not increase at line 3", file.display())]
-    TimeNotIncreasing { file: PathBuf },
+    TimeNotIncreasing {
+        /// The recording.
+        file: PathBuf,
+    },
+    /// A time step differs from the first by more than 1e-6 of it: the filter needs one step.
     #[error(
         "{}: the time step changes at line {line} ({step} s instead of {expected} s): the filter needs a constant step",
         file.display()
     )]
     StepChanges {
+        /// The recording.
         file: PathBuf,
+        /// The file line of the later row, counting the header as line 1.
         line: usize,
+        /// That row's step \[s\].
         step: f64,
+        /// The first step \[s\].
         expected: f64,
     },
 }

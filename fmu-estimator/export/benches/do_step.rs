@@ -62,6 +62,10 @@ fn instance_with(
         env!("CARGO_MANIFEST_DIR")
     ))
     .unwrap();
+    // SAFETY: the three strings are NUL-terminated and live through the calls (the layer copies
+    // what it keeps); NULL callbacks are allowed by the layer (fmi-abi's crate docs). `c` is
+    // checked non-NULL before use; every reference and value pointer is to one element, as
+    // n = 1 says, and `more` gets the live instance.
     unsafe {
         let c = fmi2Instantiate(
             name.as_ptr(),
@@ -92,6 +96,7 @@ fn bench(c: &mut Criterion) {
         let mut t = 0.0;
         c.bench_function(&format!("fmi2DoStep ({label})"), |b| {
             b.iter(|| {
+                // SAFETY: `comp` is a live, initialized instance (freed only after the benchmark).
                 let s = unsafe { fmi2DoStep(comp, t, h, 1) };
                 t += h;
                 black_box(s)
@@ -108,6 +113,8 @@ fn bench(c: &mut Criterion) {
                     let x = (k as f64 * 1e-3).sin();
                     let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0];
                     let mut out = [0.0; 2];
+                    // SAFETY: `comp` is live; `inputs` and `vals` hold the 4 elements passed,
+                    // `outputs` and `out` the 2.
                     unsafe {
                         fmi2SetReal(comp, inputs.as_ptr(), 4, vals.as_ptr());
                         fmi2DoStep(comp, t, h, 1);
@@ -118,6 +125,7 @@ fn bench(c: &mut Criterion) {
                 })
             },
         );
+        // SAFETY: `comp` came from fmi2Instantiate, is freed once and not used after.
         unsafe { fmi2FreeInstance(comp) };
     }
 }
@@ -177,11 +185,13 @@ fn bench_options(c: &mut Criterion) {
     let mut t = 0.0;
     c.bench_function("fmi2DoStep (paper, steady-state gain)", |b| {
         b.iter(|| {
+            // SAFETY: `comp` is a live, initialized instance (freed only after the benchmark).
             let s = unsafe { fmi2DoStep(comp, t, h, 1) };
             t += h;
             black_box(s)
         })
     });
+    // SAFETY: `comp` came from fmi2Instantiate, is freed once and not used after.
     unsafe { fmi2FreeInstance(comp) };
 }
 
@@ -196,6 +206,8 @@ fn bench_learned(c: &mut Criterion) {
     ] {
         // gain 0, the default: the learned filter's Kalman channel takes the scheduled
         // steady-state gain.
+        // SAFETY: `instance_with` passes its live instance; each reference and value is one
+        // element, as n = 1 says.
         let comp = instance_with(1, 1, 0, |c| unsafe {
             fmi2SetInteger(c, &vr::ESTIMATOR, 1, &2);
             fmi2SetReal(c, &vr::LAG, 1, &lag);
@@ -218,6 +230,8 @@ fn bench_learned(c: &mut Criterion) {
                     let x = (k as f64 * 1e-3).sin();
                     let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0, 0.001 * x];
                     let mut out = [0.0; 2];
+                    // SAFETY: `comp` is live; `inputs` and `vals` hold the 5 elements passed,
+                    // `outputs` and `out` the 2.
                     unsafe {
                         fmi2SetReal(comp, inputs.as_ptr(), 5, vals.as_ptr());
                         fmi2DoStep(comp, t, h, 1);
@@ -231,11 +245,13 @@ fn bench_learned(c: &mut Criterion) {
         // Checked where the benchmark ran (a name filter on the command line skips it: then
         // the FMU never stepped).
         let mut active = 0;
+        // SAFETY: `comp` is live; one reference and one value, as n = 1 says.
         unsafe { fmi2GetInteger(comp, &vr::ACTIVE_ESTIMATOR, 1, &mut active) };
         assert!(
             k == 0 || active == 2,
             "{label}: the learned filter must be the active one"
         );
+        // SAFETY: `comp` came from fmi2Instantiate, is freed once and not used after.
         unsafe { fmi2FreeInstance(comp) };
     }
 }

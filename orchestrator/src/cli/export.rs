@@ -5,6 +5,7 @@ use crate::master::RunError;
 use clap::Args;
 use std::path::{Path, PathBuf};
 
+/// `export-ssp`'s options.
 #[derive(Args, Debug)]
 pub struct ExportArgs {
     /// The .ssp file to write.

@@ -89,6 +89,12 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--log-level`: the lowest status of the FMU log messages shown. `Info`: every message, with
+/// the FMUs' debug logging switched on; `Warning` (the default): warnings and worse; `Error`:
+/// errors and worse.
+// The variants are documented here, not one by one: clap makes a variant's doc comment its
+// possible value's help, which would reflow the `--help` of every run command.
+#[allow(missing_docs)]
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum LogLevel {
     Info,
@@ -97,6 +103,7 @@ pub enum LogLevel {
 }
 
 impl Common {
+    /// The FMU logging `--log-level` and `--log-categories` ask for.
     pub fn log_config(&self) -> LogConfig {
         let min_status = match self.log_level {
             LogLevel::Info => fmi2Status::OK,

@@ -7,6 +7,7 @@ use crate::system::{Endpoint, System};
 use clap::Args;
 use std::path::{Path, PathBuf};
 
+/// `run`'s options.
 #[derive(Args, Debug)]
 pub struct RunArgs {
     /// An SSP system (.ssd or .ssp), e.g. studies/standard.ssd (the vehicle -> estimator case).
@@ -14,6 +15,7 @@ pub struct RunArgs {
     /// Run a component with this FMU instead of the system's source: COMPONENT=PATH (repeatable).
     #[arg(long = "fmu", value_name = "COMPONENT=PATH")]
     pub fmus: Vec<String>,
+    /// What the run takes besides the system.
     #[command(flatten)]
     pub settings: Settings,
 }
@@ -21,6 +23,7 @@ pub struct RunArgs {
 /// What a run of a given system takes from the command line.
 #[derive(Args, Clone, Debug)]
 pub struct Settings {
+    /// The options every run shares.
     #[command(flatten)]
     pub common: Common,
     /// Set a parameter before initialization: component.variable=value (repeatable).
@@ -34,7 +37,9 @@ pub struct Settings {
 /// A finished run and its output directory, still locked (a caller may add files the
 /// manifest lists, as `alignment-studies run` adds metrics.json).
 pub struct Finished {
+    /// What the run did.
     pub summary: RunSummary,
+    /// The output directory, locked until this is dropped; none with `--no-record`.
     pub out: Option<OutputDir>,
 }
 

@@ -6,6 +6,7 @@ use crate::system::Endpoint;
 use clap::Args;
 use std::path::PathBuf;
 
+/// `simulate`'s options.
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
     /// The .fmu file.
@@ -20,6 +21,7 @@ pub struct SimulateArgs {
     /// inputs are the rows at t, one step later than in the recorded run.
     #[arg(long, requires = "input")]
     pub replay: bool,
+    /// The options every run shares.
     #[command(flatten)]
     pub common: Common,
     /// Set a parameter before initialization: variable=value (repeatable).

@@ -10,9 +10,15 @@
 
 use fmi_import::FmiError;
 
+/// How one communication step orders the components' input writes, steps and output reads
+/// (see the module docs); chosen per run ([`super::RunOptions::algorithm`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Algorithm {
+    /// Each component in turn: inputs, step, outputs. A consumer sees its producers' outputs
+    /// at `t + h`. The default.
     GaussSeidel,
+    /// Every input from the outputs at `t`, then every step, then every output: a consumer
+    /// lags its producers by one step.
     Jacobi,
 }
 

@@ -23,7 +23,10 @@ pub enum RunError {
     /// are, if any were written.
     #[error("{error}{}", .results.as_ref().map(|p| format!("\nthe results recorded until then are in {}", p.display())).unwrap_or_default())]
     Fmi {
+        /// The failing call: instance, FMU, function, status, time and the FMU's log messages.
         error: FmiError,
+        /// The results file holding the rows recorded before the failure (whole lines), if one
+        /// was written.
         results: Option<PathBuf>,
     },
     /// The results could not be written (exit 1).
@@ -39,10 +42,15 @@ pub enum RunError {
         }
     )]
     Interrupted {
+        /// The communication point the run stopped at \[s\] (the last step done ended there).
         time: f64,
+        /// Communication steps done.
         steps: u64,
+        /// Communication steps the run would have done to its stop time.
         total: u64,
+        /// Rows in the results file (the start row included).
         rows: u64,
+        /// The results file holding those rows, if the run recorded any.
         results: Option<PathBuf>,
     },
 }

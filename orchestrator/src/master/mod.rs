@@ -62,8 +62,12 @@ use std::time::Duration;
 /// type and value reference. What [`Values`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Address {
+    /// Index of the component in [`System::components`] (and of its instance in a run).
     pub component: usize,
+    /// The variable's base type, which says which fmi2GetXxx reads it (an Enumeration is
+    /// read as an Integer).
     pub base: BaseType,
+    /// The variable's value reference in its FMU.
     pub vr: u32,
 }
 
@@ -72,22 +76,39 @@ pub struct Address {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Progress {
     /// The stepping starts, `total` communication steps to go.
-    Start { total: u64 },
+    Start {
+        /// Communication steps from start to stop.
+        total: u64,
+    },
     /// `done` steps are done (reported every 1000 steps).
-    Step { done: u64 },
+    Step {
+        /// Communication steps done so far.
+        done: u64,
+    },
     /// The stepping ended after `done` steps: at the stop time, or earlier (a failure, an
     /// interrupt, an FMU ending the simulation). Always reported after `Start`.
-    End { done: u64 },
+    End {
+        /// Communication steps done in all.
+        done: u64,
+    },
 }
 
 /// Receives [`Progress`] reports.
 pub type ProgressFn<'a> = dyn FnMut(Progress) + 'a;
 
+/// What one run does: its time grid, algorithm, what it records and where, and the FMUs'
+/// logging. Build it with [`RunOptions::new`] and struct update syntax; the times are checked
+/// when the run starts, or before with [`check_grid`].
 #[derive(Clone)]
 pub struct RunOptions {
+    /// Start time \[s\], given to every FMU's fmi2SetupExperiment; finite.
     pub start: f64,
+    /// Stop time \[s\], not before `start`, a whole number of steps after it (within 1e-9
+    /// relative); also given to fmi2SetupExperiment as the FMUs' stop time.
     pub stop: f64,
+    /// Communication step \[s\], finite and above zero.
     pub step: f64,
+    /// The co-simulation algorithm.
     pub algorithm: Algorithm,
     /// Where the results file goes; `None` records nothing.
     pub out_dir: Option<PathBuf>,
@@ -102,6 +123,7 @@ pub struct RunOptions {
     /// Report progress to the callback given to [`Runner::progress`] (a run without one
     /// reports nothing).
     pub progress: bool,
+    /// Which of the FMUs' log messages are shown and which categories are switched on.
     pub log: LogConfig,
     /// The largest results file (bytes, estimated before the run) written without refusal
     /// ([`crate::record::size`]).
@@ -130,14 +152,22 @@ impl RunOptions {
     }
 }
 
+/// What a run that ended without an error did.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
+    /// Communication steps done.
     pub steps: u64,
+    /// Rows recorded (the start row, one per recording interval, and a last one when an
+    /// instance ended the run between two communication points); 0 when nothing was recorded.
     pub rows: u64,
+    /// The results file, when the run wrote one.
     pub results: Option<PathBuf>,
     /// The recorded rows, when [`RunOptions::collect`] asked for them.
     pub table: Option<Table>,
+    /// Wall-clock time the run took, from checking its grid to closing its results.
     pub wall: Duration,
+    /// The simulation time the run ended at \[s\]: the stop time, the last communication
+    /// point reached, or the last successful time of an instance that ended the run.
     pub final_time: f64,
     /// [`End::StopTime`]; or [`End::Instance`], an instance that ended the run before the stop
     /// time (its fmi2DoStep returned fmi2Discard with fmi2GetBooleanStatus(fmi2Terminated)
@@ -187,6 +217,7 @@ impl Cosimulation {
         &self.plan
     }
 
+    /// The components' model descriptions, in the order of [`System::components`].
     pub fn model_descriptions(&self) -> Vec<&ModelDescription> {
         self.fmus.iter().map(|f| f.model_description()).collect()
     }

@@ -13,6 +13,8 @@ use model_description::BaseType;
 /// Whether the run goes on after an observer has seen a communication point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Flow {
+    /// Go on to the next communication step (the run still ends at the stop time, a failure
+    /// or the stop token).
     Continue,
     /// End the run here, cleanly: the steps until now are kept, the instances terminated, and
     /// the summary says [`End::Observer`].
@@ -74,20 +76,26 @@ impl<'a> Values<'a> {
         self.instances.len()
     }
 
+    /// Whether the system has no components (never, for a loaded system: it needs one).
     pub fn is_empty(&self) -> bool {
         self.instances.is_empty()
     }
 
+    /// Component `c`'s Real variables `vr` into `out` (same length, else an error), with one
+    /// fmi2GetReal: the way to read many values of one component per step.
     #[inline]
     pub fn get_real(&mut self, c: usize, vr: &[u32], out: &mut [f64]) -> Result<(), FmiError> {
         self.instances[c].get_real(vr, out)
     }
 
+    /// Component `c`'s Integer (or Enumeration) variables `vr` into `out`, with one
+    /// fmi2GetInteger.
     #[inline]
     pub fn get_integer(&mut self, c: usize, vr: &[u32], out: &mut [i32]) -> Result<(), FmiError> {
         self.instances[c].get_integer(vr, out)
     }
 
+    /// Component `c`'s Boolean variables `vr` into `out`, with one fmi2GetBoolean.
     #[inline]
     pub fn get_boolean(&mut self, c: usize, vr: &[u32], out: &mut [bool]) -> Result<(), FmiError> {
         self.instances[c].get_boolean(vr, out)

@@ -16,6 +16,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 pub struct StopToken(Arc<AtomicBool>);
 
 impl StopToken {
+    /// A token not set, to hand to the runs it is to stop (the same as `default()`).
     pub fn new() -> StopToken {
         StopToken::default()
     }

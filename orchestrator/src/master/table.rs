@@ -4,11 +4,14 @@
 /// Recorded columns kept in memory: `time` first, then `component.variable`.
 #[derive(Debug, Clone, Default)]
 pub struct Table {
+    /// The column names: `time`, then `component.variable` in the results' order.
     pub columns: Vec<String>,
+    /// One vector per column, in the order of `columns`, each one value per recorded row.
     pub data: Vec<Vec<f64>>,
 }
 
 impl Table {
+    /// The column `name` (e.g. `vehicle.speed`), if recorded.
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         self.columns
             .iter()

@@ -23,6 +23,8 @@ fn naming(path: &Path, action: &str) -> impl FnOnce(io::Error) -> io::Error {
     move |e| io::Error::new(e.kind(), format!("{prefix}: {e}"))
 }
 
+/// An open CSV results file: created with its header by [`CsvRecorder::create`], a row per
+/// [`CsvRecorder::row`], renamed into place by [`CsvRecorder::finish`].
 pub struct CsvRecorder {
     out: BufWriter<File>,
     line: Vec<u8>,
@@ -32,6 +34,7 @@ pub struct CsvRecorder {
     columns: usize,
     /// Columns of Integer, Enumeration or Boolean variables: written as whole numbers.
     integral: Vec<bool>,
+    /// Rows written so far (not counting the header).
     pub rows: u64,
     finished: bool,
 }

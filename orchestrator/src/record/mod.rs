@@ -24,6 +24,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq)]
 pub struct ResultsFile {
     name: String,
+    /// The JSON a Parquet results file carries under `provenance` (the run's manifest, set
+    /// when the output directory is held); `{}` until then. Unused for CSV.
     pub provenance: String,
 }
 
@@ -58,10 +60,12 @@ impl ResultsFile {
         }
     }
 
+    /// The plain file name, as checked by [`ResultsFile::new`].
     pub fn name(&self) -> &str {
         &self.name
     }
 
+    /// Whether the results are written as Parquet (by the `.parquet` extension), else CSV.
     pub fn is_parquet(&self) -> bool {
         crate::parquet::is_parquet(Path::new(&self.name))
     }
@@ -108,7 +112,9 @@ pub(crate) fn rename_into_place(partial: &Path, path: &Path) -> io::Result<()> {
 
 /// A results writer of either format.
 pub enum Recorder {
+    /// `NAME.csv` with `NAME.units.csv` beside it.
     Csv(CsvRecorder),
+    /// `NAME.parquet`, units and provenance in its metadata.
     Parquet(ParquetRecorder),
 }
 
@@ -151,6 +157,7 @@ impl Recorder {
         }
     }
 
+    /// Rows taken so far.
     pub fn rows(&self) -> u64 {
         match self {
             Recorder::Csv(r) => r.rows,

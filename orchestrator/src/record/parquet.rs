@@ -15,6 +15,9 @@ use std::path::{Path, PathBuf};
 /// The most memory a row group's values take before they are written.
 pub const GROUP_BYTES: usize = 16 << 20;
 
+/// An open Parquet results file: created by [`ParquetRecorder::create`], rows gathered by
+/// [`ParquetRecorder::row`] and written a row group at a time, the footer written and the file
+/// renamed into place by [`ParquetRecorder::finish`].
 pub struct ParquetRecorder {
     /// `None` once finished.
     writer: Option<ParquetWriter>,
@@ -24,6 +27,7 @@ pub struct ParquetRecorder {
     group_rows: usize,
     partial: PathBuf,
     path: PathBuf,
+    /// Rows taken so far, written or still pending.
     pub rows: u64,
 }
 
@@ -73,6 +77,8 @@ impl ParquetRecorder {
         })
     }
 
+    /// Takes one row: time, then `values` (as many as columns); writes a row group when one
+    /// is full, so an I/O error shows here, naming the file.
     #[inline]
     pub fn row(&mut self, time: f64, values: &[f64]) -> io::Result<()> {
         debug_assert_eq!(values.len() + 1, self.pending.len());

@@ -73,6 +73,7 @@ const PARAMETER_SET_MIME_TYPE: &str = "application/x-ssp-parameter-set";
 /// in use.
 #[derive(Debug)]
 pub struct LoadedSystem {
+    /// The system, its components' `source` paths absolute.
     pub system: System,
     extracted: Option<tempfile::TempDir>,
 }

@@ -10,8 +10,10 @@ use std::path::PathBuf;
 /// The calibration the estimator's build reads.
 const SHIPPED: &str = "fmu-estimator/resources/calibration.toml";
 
+/// `calibrate`'s options.
 #[derive(Args, Clone, Debug)]
 pub struct CalibrateArgs {
+    /// The FMUs and the user's settings (another vehicle's, for its own calibration).
     #[command(flatten)]
     pub fmus: StudyFmus,
     /// The calibration file to write (default: the shipped one,

@@ -24,6 +24,8 @@ use std::path::PathBuf;
 /// The track seed the shipped estimator is identified and calibrated on.
 pub const CALIBRATION_SEED: u32 = 101;
 
+/// `--vehicle` and `--estimator`: the two FMUs of the standard case, as built by
+/// `cargo xtask fmu` by default.
 #[derive(Args, Clone, Debug)]
 pub struct StandardFmus {
     /// The vehicle FMU of the standard case.
@@ -35,6 +37,7 @@ pub struct StandardFmus {
 }
 
 impl StandardFmus {
+    /// The two FMUs, with no settings.
     pub fn fmus(&self) -> Fmus {
         Fmus::new(self.vehicle.clone(), self.estimator.clone())
     }
@@ -43,6 +46,7 @@ impl StandardFmus {
 /// The studies' FMUs and the user's settings for them.
 #[derive(Args, Clone, Debug)]
 pub struct StudyFmus {
+    /// The vehicle and estimator FMUs.
     #[command(flatten)]
     pub fmus: StandardFmus,
     /// Set a parameter of the vehicle or the estimator in every run of the study:
@@ -67,8 +71,10 @@ impl StudyFmus {
     }
 }
 
+/// The options of the paper's studies (`standard`, `robustness`, `resonance`, `all`).
 #[derive(Args, Clone, Debug)]
 pub struct StudyArgs {
+    /// The FMUs and the user's settings for every run.
     #[command(flatten)]
     pub fmus: StudyFmus,
     /// Held-out track seeds (never the calibration seed).

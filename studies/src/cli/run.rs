@@ -7,10 +7,13 @@ use crate::report::standard::StandardRun;
 use clap::Args;
 use orchestrator::cli::run::Settings;
 
+/// `run`'s options.
 #[derive(Args, Clone, Debug)]
 pub struct RunArgs {
+    /// The vehicle and estimator FMUs.
     #[command(flatten)]
     pub fmus: StandardFmus,
+    /// The master's run settings, as `orchestrator run` takes them.
     #[command(flatten)]
     pub settings: Settings,
 }

@@ -6,6 +6,7 @@ use crate::Error;
 use clap::Args;
 use std::path::PathBuf;
 
+/// `smooth`'s options.
 #[derive(Args, Clone, Debug)]
 pub struct SmoothArgs {
     /// The recorded signals: CSV, or Parquet by the .parquet extension.

@@ -10,6 +10,7 @@ use std::path::PathBuf;
 /// `taps`' options.
 #[derive(Args, Clone, Debug)]
 pub struct TapsArgs {
+    /// The vehicle and estimator FMUs.
     #[command(flatten)]
     pub fmus: StandardFmus,
     /// Speeds of the bank in m/s.

@@ -22,12 +22,16 @@ pub enum Progress {
 /// The groups of cases a command runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Group {
+    /// The standard case (20 s at 20 m/s), with the paper's figures beside ours.
     Standard,
+    /// The paper's Table 5: the filter's model parameters off the vehicle's.
     Robustness,
+    /// The paper's Table 6: speeds around the vehicle's first lateral mode.
     Resonance,
 }
 
 impl Group {
+    /// Every group, in the order `all` runs and reports them.
     pub const ALL: [Group; 3] = [Group::Standard, Group::Robustness, Group::Resonance];
 
     fn title(self) -> &'static str {

@@ -40,9 +40,12 @@ pub struct Report {
 /// A file the command line named, with what may be replaced there.
 #[derive(Debug, Clone)]
 pub struct Guard {
+    /// The file the command writes.
     pub path: PathBuf,
     /// The command's inputs: never replaced.
     pub inputs: Vec<PathBuf>,
+    /// Whether an existing file there may be replaced: `--force`, or the mark of a file this
+    /// command wrote.
     pub replace: Replace<'static>,
 }
 

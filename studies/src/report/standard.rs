@@ -12,6 +12,7 @@ use std::path::Path;
 
 /// A finished run of the standard case and its report.
 pub struct StandardRun {
+    /// What the master's run did (steps, rows, results file).
     pub summary: RunSummary,
     /// `metrics.json` and the tables, when results were written and could be evaluated; in the
     /// note, why there are none (or none for the lagged output).

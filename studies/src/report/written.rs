@@ -55,6 +55,7 @@ impl StudyDir {
         Ok(d)
     }
 
+    /// The directory, as given.
     pub fn path(&self) -> &Path {
         &self.dir
     }

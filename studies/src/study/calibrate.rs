@@ -18,6 +18,8 @@ use fmu_estimator::filter::{Mat4, Vec4, Vec7};
 use fmu_estimator::model::{Mat7, measurement_matrix, state_matrix};
 use fmu_estimator::params::Params;
 
+/// The vehicle FMU's outputs that give the paper's 7 true states, in the state's order
+/// `[y, psi, y_f, ydot, psidot, y_fdot, xi]`.
 pub const TRUTH: [&str; 7] = [
     "ws_y",
     "ws_yaw",
@@ -27,25 +29,37 @@ pub const TRUTH: [&str; 7] = [
     "frame_vy",
     "alignment",
 ];
+/// The vehicle FMU's sensor outputs, the first three measurements (the fourth, the virtual
+/// measurement, is 0).
 pub const SENSORS: [&str; 3] = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y"];
 
+/// The noise covariances of one calibration run, with what they were computed for: what the
+/// estimator's calibration file records.
 #[derive(Debug, Clone)]
 pub struct Calibration {
+    /// The simplified model's parameters F and H were built with (the identified ones).
     pub params: Params,
+    /// The process noise covariance `mean(e_x e_x^T)` at `step`, untuned.
     pub q: Mat7,
+    /// The measurement noise covariance `mean(e_z e_z^T)`, untuned.
     pub r: Mat4,
+    /// The track seed of the run.
     pub seed: u32,
+    /// The run's speed \[m/s\].
     pub speed: f64,
+    /// The run's step \[s\]: the step Q holds for.
     pub step: f64,
     /// Factors applied to the virtual measurement's variance R\[4,4\] and the alignment's
     /// process noise Q\[7,7\] (1 and 1: the paper's calibration; see [`tune`]).
     pub virtual_scale: f64,
+    /// The factor on Q\[7,7\], the alignment's process noise (see `virtual_scale`).
     pub xi_scale: f64,
     /// Whole-band Jrel on the calibration seed with the chosen factors, when tuned.
     pub tuned_jrel: Option<f64>,
     /// The 8-state priors' virtual-measurement sigma \[m\] and the whole-band Jrel it gave on the
     /// calibration seed (integrated random walk), when tuned ([`tune_prior`]).
     pub prior_sigma_xi: Option<f64>,
+    /// The whole-band Jrel `prior_sigma_xi` gave (see there).
     pub prior_jrel: Option<f64>,
 }
 
@@ -264,6 +278,8 @@ pub fn parameter_settings(p: &Params) -> super::runs::Settings {
 
 /// The factors tried for the virtual measurement's variance and the alignment's process noise.
 pub const VIRTUAL_SCALES: [f64; 8] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7];
+/// The factors tried for the alignment's process noise Q\[7,7\], with each of
+/// [`VIRTUAL_SCALES`].
 pub const XI_SCALES: [f64; 5] = [1.0, 1e1, 1e2, 1e3, 1e4];
 
 /// Chooses the two factors that weigh the alignment's prior, by the whole-band Jrel of the

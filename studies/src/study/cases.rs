@@ -17,10 +17,14 @@ use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
 
+/// One evaluation case: the standard system with these settings, run on every seed.
 #[derive(Debug, Clone)]
 pub struct Case {
+    /// The name the reports and JSON results use.
     pub name: String,
+    /// The vehicle FMU's parameters for this case (over the user's `--set` ones).
     pub vehicle: Settings,
+    /// The estimator FMU's parameters for this case (over the user's `--set` ones).
     pub estimator: Settings,
     /// The paper's figures for this case (J \[mm\], Jrel per band), when it reports them.
     pub paper: Option<[(f64, f64); 4]>,
@@ -30,9 +34,11 @@ fn set(name: &str, value: Value) -> (String, Value) {
     (name.to_string(), value)
 }
 
+/// The paper's standard-case figures, (J \[mm\], Jrel) for the whole band, D1, D2 and D3.
 pub const PAPER_STANDARD: [(f64, f64); 4] =
     [(0.36, 0.25), (0.21, 0.48), (0.22, 0.26), (0.18, 0.15)];
 
+/// The standard case: the system as `standard.ssd` describes it, nothing changed.
 pub fn standard() -> Case {
     Case {
         name: "standard".into(),
@@ -153,23 +159,32 @@ pub fn with_learned(cases: Vec<Case>) -> Vec<Case> {
 /// Mean and sample standard deviation over the seeds, per band.
 #[derive(Debug, Clone, Serialize)]
 pub struct Spread {
+    /// Mean rms error J \[mm\].
     #[serde(rename = "J_mm_mean")]
     pub j_mean: f64,
+    /// Its sample standard deviation over the seeds \[mm\] (0 for one seed).
     #[serde(rename = "J_mm_std")]
     pub j_std: f64,
+    /// Mean Jrel (rms error / rms truth).
     #[serde(rename = "Jrel_mean")]
     pub jrel_mean: f64,
+    /// Its sample standard deviation over the seeds.
     #[serde(rename = "Jrel_std")]
     pub jrel_std: f64,
 }
 
+/// One case's results on every seed, as the JSON results hold them.
 #[derive(Debug, Clone, Serialize)]
 pub struct CaseResult {
+    /// The case's name.
     pub name: String,
+    /// The held-out seeds it ran on, in the order of `per_seed`.
     pub seeds: Vec<u32>,
+    /// The band metrics of each seed's run.
     pub per_seed: Vec<BandMetrics>,
     /// whole, D1, D2, D3
     pub bands: Vec<(String, Spread)>,
+    /// The paper's (band, J \[mm\], Jrel), when it reports this case.
     pub paper: Option<Vec<(String, f64, f64)>>,
 }
 

@@ -113,14 +113,23 @@ pub fn fit(
 /// The result, with the time series of the fit for the report's plot.
 #[derive(Debug, Clone)]
 pub struct Identification {
+    /// `p_fix` with the identified `(kx, cx, ky, cy)`.
     pub params: Params,
+    /// The misfit `J_ls` at the optimum (with the bound's penalty, 0 inside the bounds).
     pub cost: f64,
+    /// The misfit with the paper's Table 2 suspension values, for comparison.
     pub cost_table_2: f64,
+    /// Cost evaluations Nelder-Mead used.
     pub evaluations: usize,
+    /// Times of the compared samples \[s\] (the run's rows after the first).
     pub time: Vec<f64>,
+    /// The vehicle's leading wheelset lateral displacement \[m\].
     pub y_vehicle: Vec<f64>,
+    /// The vehicle's leading wheelset yaw \[rad\].
     pub psi_vehicle: Vec<f64>,
+    /// The identified simplified model's `y` \[m\], driven by the same alignment.
     pub y_model: Vec<f64>,
+    /// The identified simplified model's `psi` \[rad\].
     pub psi_model: Vec<f64>,
 }
 

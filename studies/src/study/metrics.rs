@@ -20,14 +20,19 @@ use sci_rs::signal::filter::design::{
 use sci_rs::signal::filter::sosfiltfilt_dyn;
 use serde::Serialize;
 
+/// An EN 13848 wavelength band the accuracy is measured in.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Band {
+    /// The band's name in reports and JSON: `whole`, `D1`, `D2`, `D3`.
     pub name: &'static str,
     /// Shortest and longest wavelength \[m\].
     pub short: f64,
+    /// The longest wavelength \[m\] (see `short`).
     pub long: f64,
 }
 
+/// The bands, in the order every table and JSON result lists them: the whole range 3-200 m,
+/// then EN 13848's D1, D2 and D3. Python reads them through the bindings' `BANDS`.
 pub const BANDS: [Band; 4] = [
     Band {
         name: "whole",
@@ -63,13 +68,16 @@ pub fn band_labels() -> String {
     BANDS.map(|b| b.label()).join(", ")
 }
 
+/// The Butterworth band-pass's order (8 poles: 4 per band edge), applied forward and backward.
 pub const ORDER: usize = 4;
 
+/// The paper's accuracy indices in one band.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Accuracy {
     /// rms of the error \[mm\].
     #[serde(rename = "J_mm")]
     pub j_mm: f64,
+    /// `J / rms(truth)`: 0 is perfect, 1 is no better than estimating 0.
     #[serde(rename = "Jrel")]
     pub jrel: f64,
     /// rms of the band-passed truth \[mm\].
@@ -107,19 +115,37 @@ pub fn common_grid(a: &[f64], b: &[f64], ds: f64) -> Vec<f64> {
 /// grid) does not suffice. Bad input to a study (exit 2).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MetricError {
+    /// The filter design returned another form than second-order sections (a library fault,
+    /// not an input's).
     #[error("the Butterworth design did not return second-order sections")]
     NotSos,
+    /// The grid is shorter than the forward-backward filter's padding needs.
     #[error("{samples} samples are too few for the {filter} (at least {needed})")]
     TooShort {
+        /// The signal's samples.
         samples: usize,
         /// The filter, e.g. "D1 band-pass".
         filter: String,
+        /// The fewest the filter takes.
         needed: usize,
     },
+    /// The grid step cannot resolve the band's shortest wavelength (Nyquist: `2 ds`).
     #[error("band {band} needs wavelengths above {} m: the grid step {ds} m is too coarse", 2.0 * ds)]
-    CoarseGrid { band: &'static str, ds: f64 },
+    CoarseGrid {
+        /// The band's name.
+        band: &'static str,
+        /// The grid step \[m\].
+        ds: f64,
+    },
+    /// The trim at both ends removes the whole record.
     #[error("trimming {trim} m at each end leaves nothing of {length} m")]
-    Trim { trim: f64, length: f64 },
+    Trim {
+        /// The trim at each end \[m\].
+        trim: f64,
+        /// The record's length on the grid \[m\].
+        length: f64,
+    },
+    /// Estimate or truth has fewer than two samples.
     #[error("not enough samples to evaluate")]
     NotEnoughSamples,
 }
@@ -216,16 +242,21 @@ pub fn accuracy(
 /// All four bands, from estimate and truth each with its own distance signal.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct BandMetrics {
+    /// 3-200 m.
     pub whole: Accuracy,
+    /// D1, 3-25 m.
     #[serde(rename = "D1")]
     pub d1: Accuracy,
+    /// D2, 25-70 m.
     #[serde(rename = "D2")]
     pub d2: Accuracy,
+    /// D3, 70-200 m.
     #[serde(rename = "D3")]
     pub d3: Accuracy,
 }
 
 impl BandMetrics {
+    /// The band named as in [`BANDS`] (`whole`, `D1`, `D2`, `D3`); another name gives `None`.
     pub fn get(&self, name: &str) -> Option<&Accuracy> {
         match name {
             "whole" => Some(&self.whole),
@@ -237,6 +268,9 @@ impl BandMetrics {
     }
 }
 
+/// The accuracy in every band of `estimate` against `truth`, each against its own distance
+/// signal \[m\] (increasing, of its values' length), by the module's procedure on a grid of
+/// `ds` \[m\] with `trim` \[m\] dropped at each end. The caller checks the lengths match.
 pub fn evaluate(
     estimate_distance: &[f64],
     estimate: &[f64],

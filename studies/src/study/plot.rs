@@ -521,6 +521,7 @@ pub fn case_bars(path: &Path, results: &[CaseResult], title: &str) -> Result<(),
 /// signal (as the metrics compare them: at the same track position).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TimeSeries {
+    /// Time of each row \[s\].
     pub time: Vec<f64>,
     /// \[m\]
     pub distance: Vec<f64>,
@@ -553,8 +554,11 @@ impl TimeSeries {
         })
     }
 
+    /// The CSV header [`TimeSeries::to_csv`] writes, units in the names.
     pub const HEADER: &'static str = "time_s,distance_m,alignment_true_m,alignment_estimate_m";
 
+    /// The series as CSV: [`TimeSeries::HEADER`], then one row per sample in shortest
+    /// round-trip form.
     pub fn to_csv(&self) -> String {
         let mut s = String::with_capacity(64 * self.time.len() + 64);
         s.push_str(Self::HEADER);
@@ -580,6 +584,8 @@ impl TimeSeries {
         s
     }
 
+    /// Writes [`TimeSeries::to_csv`] to `path`, replacing it (the caller has checked that it
+    /// may); an error names the file.
     pub fn write_csv(&self, path: &Path) -> Result<(), Error> {
         std::fs::write(path, self.to_csv()).map_err(|e| Error::write(path, e))
     }

@@ -22,8 +22,12 @@ const RECORDED: [&str; 6] = [
 /// One vehicle run: the estimator's inputs and the truth.
 #[derive(Debug, Clone)]
 pub struct Record {
+    /// The estimator's inputs, one per communication step (the run's first row, the initial
+    /// values, left out).
     pub samples: Vec<Sample>,
+    /// The vehicle's distance travelled at each sample \[m\].
     pub distance: Vec<f64>,
+    /// The true alignment the leading wheelset meets at each sample \[m\].
     pub alignment: Vec<f64>,
 }
 

@@ -13,9 +13,14 @@ use std::path::PathBuf;
 /// the study's own (so a study's seeds and conditions hold; [`STUDY_CONTROLLED`] are refused).
 #[derive(Debug, Clone, Default)]
 pub struct Fmus {
+    /// The vehicle FMU (RailVehicle.fmu).
     pub vehicle: PathBuf,
+    /// The estimator FMU (AlignmentEstimator.fmu).
     pub estimator: PathBuf,
+    /// The user's vehicle settings, checked against [`STUDY_CONTROLLED`].
     pub vehicle_settings: Settings,
+    /// The user's estimator settings (a `calibration_file` brings its file's `[parameters]`
+    /// along).
     pub estimator_settings: Settings,
 }
 
@@ -142,6 +147,7 @@ pub type Settings = Vec<(String, Value)>;
 
 /// The run length and step of the paper's standard case: 20 s at 1 ms, 20 m/s.
 pub const STOP: f64 = 20.0;
+/// The communication step \[s\] of every study run (1 kHz, the sensors' rate).
 pub const STEP: f64 = 1e-3;
 
 fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {

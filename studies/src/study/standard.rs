@@ -16,6 +16,7 @@ pub const PAPER_STANDARD: [(&str, f64, f64); 4] = [
 
 /// Grid step and trim of the evaluation (see `metrics`).
 pub const DS: f64 = 0.05;
+/// Metres dropped at each end after the band-pass \[m\] (see `metrics`).
 pub const TRIM: f64 = 10.0;
 
 /// The band metrics of a standard-case run: the estimator's alignment (against its own

@@ -47,6 +47,7 @@ pub const PROFILE_DISTANCE: f64 = 640.0;
 /// One way of running the estimator.
 #[derive(Debug, Clone, Serialize)]
 pub struct Variant {
+    /// The row's name in the report (prose; the settings are the stable key).
     pub name: String,
     /// Estimator parameters (FMI name, value).
     pub settings: Vec<(String, String)>,
@@ -133,7 +134,9 @@ pub fn learned_variants() -> Vec<Variant> {
 /// The prior's virtual-measurement sigma for the 8-state models, chosen on the calibration seed.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Tuned {
+    /// For the integrated random walk (`alignment_model` 2) \[m\].
     pub irw_sigma_xi: f64,
+    /// For the shaping filter (`alignment_model` 3) \[m\].
     pub shaping_sigma_xi: f64,
 }
 
@@ -252,8 +255,11 @@ pub fn tune_prior_sigma(
 /// One variant's Jrel per band over the seeds.
 #[derive(Debug, Clone, Serialize)]
 pub struct VariantResult {
+    /// The variant's name.
     pub name: String,
+    /// The variant's estimator parameters (FMI name, value).
     pub settings: Vec<(String, String)>,
+    /// Whether the smoothed estimate was judged.
     pub smooth: bool,
     /// Which FMU output was judged: with the settings, the row's stable key (the demo's
     /// headline picks its rows by them; the name is prose).
@@ -261,6 +267,7 @@ pub struct VariantResult {
     pub output: Output,
     /// (band, mean Jrel, standard deviation, mean J \[mm\]).
     pub bands: Vec<(String, f64, f64, f64)>,
+    /// The band metrics on each record, in the records' order.
     pub per_seed: Vec<BandMetrics>,
 }
 
