@@ -242,13 +242,14 @@ fn bench_learned(c: &mut Criterion) {
                 })
             },
         );
-        // Checked where the benchmark ran (a name filter on the command line skips it: then
-        // the FMU never stepped).
+        // Checked where the benchmark ran past the learned filter's first metre (1000 steps
+        // are 20 m): a name filter on the command line skips it, and `cargo test --benches`
+        // runs one iteration, before the learned filter can be active.
         let mut active = 0;
         // SAFETY: `comp` is live; one reference and one value, as n = 1 says.
         unsafe { fmi2GetInteger(comp, &vr::ACTIVE_ESTIMATOR, 1, &mut active) };
         assert!(
-            k == 0 || active == 2,
+            k < 1000 || active == 2,
             "{label}: the learned filter must be the active one"
         );
         // SAFETY: `comp` came from fmi2Instantiate, is freed once and not used after.
