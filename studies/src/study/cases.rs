@@ -53,7 +53,13 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
     let no_noise = set("sensor_noise", Value::Boolean(false));
     let no_vertical = set("vertical_irregularity", Value::Boolean(false));
     let kalker = set("kalker_scale", Value::Real(0.5));
-    let conicity = set("alpha", Value::Real(0.9 * alpha));
+    // The filter told a conicity 10 % low: a Kalman channel other than the one the learned
+    // filter's taps were fitted with, which is the point of the case (how a mis-specified model
+    // degrades the estimate), so the learned filter is allowed to run on it approximately.
+    let conicity = vec![
+        set("alpha", Value::Real(0.9 * alpha)),
+        set("allow_other_kalman", Value::Boolean(true)),
+    ];
     vec![
         standard(),
         Case {
@@ -71,7 +77,7 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
         Case {
             name: "conicity -10 % in the filter".into(),
             vehicle: vec![],
-            estimator: vec![conicity.clone()],
+            estimator: conicity.clone(),
             paper: Some([(0.38, 0.27), (0.22, 0.51), (0.23, 0.29), (0.18, 0.16)]),
         },
         Case {
@@ -85,7 +91,7 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
             // The paper's worst case keeps noise and vertical irregularities and combines the two
             // parameter errors.
             vehicle: vec![kalker.clone()],
-            estimator: vec![conicity.clone()],
+            estimator: conicity.clone(),
             paper: Some([(0.47, 0.32), (0.30, 0.68), (0.27, 0.32), (0.21, 0.18)]),
         },
         // Not in the paper: the two parameter errors on the track without vertical
@@ -94,7 +100,7 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
         Case {
             name: "conicity -10 % in the filter, no vertical irregularity".into(),
             vehicle: vec![no_vertical.clone()],
-            estimator: vec![conicity],
+            estimator: conicity,
             paper: None,
         },
         Case {
