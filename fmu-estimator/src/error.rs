@@ -11,9 +11,11 @@
 //! | [`GainError`] | the steady-state gain's Riccati solution |
 //! | [`StepError`] | one filter step: the update skipped ([`Skip`]), or the gain failed |
 //! | [`SampleError`] | one sample through [`crate::step`]: a negative speed, or the filter failed |
-//! | [`Error`] | any of these, a recording's columns, and the learned filter's own messages |
+//! | [`BankError`], [`LearnedError`] | the learned filter's tap bank, and its taps for the chosen sensors and lag (`learned::error`) |
+//! | [`Error`] | any of these, and a recording's columns |
 
 use crate::engine::Skip;
+use crate::learned::error::{BankError, LearnedError};
 use std::path::PathBuf;
 
 /// Any error of the estimator.
@@ -44,13 +46,16 @@ pub enum Error {
     /// An offline run's sample step is not a positive number.
     #[error("step {0} s must be a positive number")]
     SampleStep(f64),
-    /// The learned filter's bank or filter refused, in `learned`'s own words (that module has
-    /// no typed errors yet).
-    #[error("{0}")]
-    Learned(String),
+    /// The learned filter's tap bank cannot be read or used.
+    #[error(transparent)]
+    Bank(#[from] BankError),
     /// The learned filter of `tap_file` could not be built from its bank.
-    #[error("tap_file '{tap_file}': {message}")]
-    TapFile { tap_file: String, message: String },
+    #[error("tap_file '{tap_file}': {source}")]
+    TapFile {
+        tap_file: String,
+        #[source]
+        source: LearnedError,
+    },
     /// `tap_file`'s contract names runtime constants or filter designs other than this build's:
     /// no parameter changes those, so the bank was fitted by another build.
     #[error(
@@ -66,14 +71,6 @@ pub enum Error {
         "{mismatch}. Set allow_other_kalman = true to run it approximately, use estimator = 1, or fit taps for this channel (alignment-studies taps)"
     )]
     OtherKalman { mismatch: String },
-}
-
-/// The learned modules (`learned` here, `study::learned` in the studies) still return text: an
-/// [`Error`] reaching one of them becomes its message, until they have typed errors too.
-impl From<Error> for String {
-    fn from(e: Error) -> String {
-        e.to_string()
-    }
 }
 
 /// A setting (FMI parameter, or an offline override by FMI name) the estimator refuses.

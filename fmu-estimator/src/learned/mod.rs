@@ -20,6 +20,7 @@ mod blend;
 pub mod contact;
 pub mod contract;
 mod delay;
+pub mod error;
 pub mod grid;
 mod history;
 mod selection;
@@ -28,6 +29,7 @@ mod track;
 pub mod window;
 
 pub use bank::Bank;
+pub use error::{BankError, LearnedError};
 pub use stream::{Choice, Learned};
 
 /// The tap banks shipped in the FMU's resources, by file name:
@@ -55,16 +57,14 @@ pub(crate) fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
 
 /// A tap bank shipped in the FMU's resources ([`SHIPPED`]), as built into this library
 /// (offline processing without an unpacked FMU); `None` for any other name.
-pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
+pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
     let bytes: &[u8] = match name {
         "learned.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps")),
         "learned-nominal.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned-nominal.taps")),
         _ => return None,
     };
     if bytes.is_empty() {
-        return Some(Err(format!(
-            "this build has no tap bank resources/{name}: run `alignment-studies taps`"
-        )));
+        return Some(Err(BankError::NotBuilt(name.to_string())));
     }
     Some(Bank::parse(
         bytes,
@@ -73,7 +73,7 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
 }
 
 /// The default tap bank (`learned.taps`), as built into this library.
-pub fn shipped() -> Result<Bank, String> {
+pub fn shipped() -> Result<Bank, BankError> {
     shipped_named(SHIPPED[0]).expect("a shipped name")
 }
 

@@ -91,7 +91,7 @@ pub struct Learned {
 impl Learned {
     /// The learned filter with the bank's entries for `choice` (`selection.rs`), at the
     /// start of a run.
-    pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, String> {
+    pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, super::error::LearnedError> {
         let selection = Selection::new(bank, choice)?;
         Ok(Learned {
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
