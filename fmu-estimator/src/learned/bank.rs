@@ -27,7 +27,10 @@ use super::error::{BankError, BankProblem, EntryProblem};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The first word of a bank's first line: what tells a bank from any other file before its
+/// sizes are trusted.
 pub const MAGIC: &str = "learned-taps";
+/// The format [`Header::to_bytes`] writes (and the header's `format`).
 pub const FORMAT: u32 = 3;
 /// The formats this reader takes.
 pub const READS: [u32; 1] = [3];
@@ -84,6 +87,8 @@ pub struct Entry {
     /// taps serve every condition (fitted on all of `kalker_scales` at once).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub condition: Option<f64>,
+    /// The windows of this lag, one per history length (the full one and the start's shorter
+    /// ones); the runtime takes the longest the history it holds allows ([`super::window`]).
     pub windows: Vec<Window>,
 }
 
@@ -91,11 +96,15 @@ pub struct Entry {
 /// the full one and shorter ones for the start of a run, when less history exists.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Window {
+    /// Grid points of history behind the newest cell the window reads.
     pub past: usize,
+    /// Grid points the estimate lies behind the newest cell: always the entry's lag.
     pub future: usize,
     /// Root-mean-square error of this window's estimate against the true alignment on the
     /// validation seeds \[m\]: the estimate's standard deviation.
     pub rms_error: f64,
+    /// `channels × (past + future + 1)` taps in the order of the module docs, in physical units;
+    /// kept in the data block (as `f32`), not in the header.
     #[serde(skip)]
     pub taps: Vec<f64>,
 }
@@ -103,17 +112,21 @@ pub struct Window {
 /// The header: everything but the taps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Header {
+    /// The format; a reader refuses any it does not take ([`READS`]).
     pub format: u32,
     /// Grid step along the track \[m\].
     pub grid: f64,
     /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
     pub kalman_highpass: f64,
+    /// Where the taps came from, for regenerating them and judging where they hold; only the
+    /// sample step is relied on (the contract's Kalman matrices are discretized for it).
     pub provenance: Provenance,
     /// What the taps require of the runtime, checked at initialization.
     pub contract: super::contract::Contract,
     /// The estimator of the contact condition, in a bank with per-condition entries.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<super::contact::ContactModel>,
+    /// The taps' entries: per speed, sensor set, lag and (with a contact model) condition.
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
 }

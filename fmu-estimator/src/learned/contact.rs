@@ -80,9 +80,13 @@ pub struct ContactModel {
     pub speeds: Vec<SpeedModel>,
 }
 
+/// One bank speed's linear estimator of the Kalker-coefficient scale from the features.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SpeedModel {
+    /// The constant speed of the runs it was fitted on \[m/s\]: cells count towards it by
+    /// their speed's interpolation share.
     pub speed: f64,
+    /// [`FEATURES`] coefficients in the features' order, then the constant.
     pub coefficients: Vec<f64>,
     /// Root-mean-square error of the estimate on the validation seeds after 200 m.
     pub rms_error: f64,

@@ -275,3 +275,84 @@ fn lags(held: &[f64]) -> String {
     let shown: Vec<String> = held.iter().map(|l| format!("{l}")).collect();
     shown.join(", ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Oracle: the messages these errors had as text before they were typed (2026-11-25),
+    /// which users, the harness and the studies' tests match on, literally.
+    #[test]
+    fn the_messages_are_the_texts_they_replace() {
+        let file = PathBuf::from("x.taps");
+        let format = |f: &str| {
+            BankError::Format {
+                file: file.clone(),
+                format: f.into(),
+            }
+            .to_string()
+        };
+        assert_eq!(
+            format("7"),
+            "x.taps: tap bank format 7 (this estimator reads formats [3])"
+        );
+        assert_eq!(
+            format("2"),
+            "x.taps: tap bank format 2 (this estimator reads formats [3]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
+        );
+        let invalid = |problem: BankProblem| {
+            BankError::Invalid {
+                file: file.clone(),
+                problem,
+            }
+            .to_string()
+        };
+        assert_eq!(
+            invalid(BankProblem::Entry {
+                index: 3,
+                problem: EntryProblem::Window {
+                    past: 5,
+                    future: 2,
+                    lag: 3
+                }
+            }),
+            "x.taps: not a valid tap bank: entry 3: a window of 5 behind and 2 ahead under a lag of 3"
+        );
+        assert_eq!(
+            invalid(
+                ContactProblem::Band {
+                    short: 3.0,
+                    long: 2.5
+                }
+                .into()
+            ),
+            "x.taps: not a valid tap bank: contact band 3-2.5 m"
+        );
+        assert_eq!(
+            LearnedError::Lag {
+                lag: 10.0,
+                held: vec![0.6, 3.0],
+                roll_rate: false
+            }
+            .to_string(),
+            "lag = 10 m: the tap bank holds fixed-lag taps for 0.6, 3 m (three sensors); 0 switches the lagged output off"
+        );
+        assert_eq!(
+            LearnedError::Lag {
+                lag: 1.0,
+                held: vec![],
+                roll_rate: true
+            }
+            .to_string(),
+            "lag = 1 m: the tap bank holds fixed-lag taps for no lag m (four sensors (with the roll-rate gyroscope)); 0 switches the lagged output off"
+        );
+        assert_eq!(
+            LearnedError::TwoEntries {
+                taps: Taps::Lagged(0.6000000000000001),
+                speed: 20.0
+            }
+            .to_string(),
+            "the tap bank has two 0.6000000000000001 m lag entries for one speed (20 m/s)"
+        );
+    }
+}

@@ -128,6 +128,9 @@ impl Learned {
         self.selection.sample_step
     }
 
+    /// Whether the taps read the wheelset roll-rate channel; when they do not, the per-sample
+    /// step ([`crate::step::step`]) zeroes that input, so that an unused (even non-finite)
+    /// column cannot spoil the grid's cells.
     pub fn uses_roll_rate(&self) -> bool {
         self.selection.uses_roll_rate
     }

@@ -112,8 +112,12 @@ pub enum Lookahead {
 /// the RTS smoother's estimate is used (else the causal filter's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Partner {
+    /// The partner in words, for the reports (not read back).
     pub name: String,
+    /// The estimator's parameters by FMI name and value, as `--set` gives them; the rest at
+    /// their defaults.
     pub settings: Vec<(String, String)>,
+    /// The RTS smoother's estimate (offline, two-sided) rather than the causal filter's.
     pub smooth: bool,
 }
 
@@ -125,12 +129,19 @@ pub struct LearnedSmoother {
     pub format: u32,
     /// How it was made (vehicle, seed, run length).
     pub provenance: String,
+    /// The constant speed it was trained at \[m/s\]: records at another speed (by more than
+    /// 1 %) are refused, the taps holding the vehicle's dynamics at this one.
     pub speed: f64,
+    /// The sample step it was trained with \[s\]: records with another step are refused.
     pub step: f64,
+    /// Samples per grid point: the grid step is `speed * step * decimation`.
     pub decimation: usize,
+    /// Two-sided offline smoother or on-board fixed lag; decides whether the anti-alias filter
+    /// and the split run causally.
     pub lookahead: Lookahead,
     /// The hybrid's split wavelength \[m\] ([`Self::tune_split`]; 40 m until tuned).
     pub split: f64,
+    /// The Kalman estimate the hybrid takes the waves longer than `split` from.
     pub partner: Partner,
     fir: Fir,
 }

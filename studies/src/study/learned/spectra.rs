@@ -55,6 +55,8 @@ pub struct Correlations {
 }
 
 impl Correlations {
+    /// Empty sums for `channels` regressors at lags up to `span` each way, and `extra` weighted
+    /// target powers ([`Self::extra`]).
     pub fn new(channels: usize, span: usize, extra: usize) -> Correlations {
         Correlations {
             span,
@@ -144,6 +146,7 @@ impl Correlations {
         self.ct[c][(tau + self.span as isize) as usize] / self.count as f64
     }
 
+    /// Samples added over all records: the `N` the correlations are divided by.
     pub fn count(&self) -> usize {
         self.count
     }

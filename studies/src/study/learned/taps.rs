@@ -130,7 +130,11 @@ pub const CONTACT_MEMORY: f64 = 200.0;
 /// What to fit.
 #[derive(Debug, Clone)]
 pub struct Options {
+    /// The constant speeds of the training and validation runs \[m/s\]: the bank's speeds,
+    /// between which the runtime blends.
     pub speeds: Vec<f64>,
+    /// The Kalker-coefficient scales (contact conditions) to run the vehicle at, one run each
+    /// per speed; a condition under which the vehicle is unstable at a speed is left out there.
     pub kalker_scales: Vec<f64>,
     /// With several Kalker scales: fit each condition's taps on its own runs and the contact
     /// model that blends them ([`fmu_estimator::learned::contact`]); false: one set of taps on
@@ -140,7 +144,10 @@ pub struct Options {
     pub lags: Vec<f64>,
     /// Fit the four-sensor entries too (the vehicle must have `ws_roll_rate`).
     pub roll_rate: bool,
+    /// Track seed of the training runs ([`TRAINING_DISTANCE`] each).
     pub training_seed: u32,
+    /// Track seeds the ridge and band weights are chosen on and the windows' rms errors
+    /// measured ([`VALIDATION_DISTANCE`] each); they must differ from the training seed.
     pub validation_seeds: Vec<u32>,
     /// The command line, for the provenance.
     pub command: String,
