@@ -126,7 +126,7 @@ fn run(
     step: f64,
     columns: &Columns,
     how: How,
-) -> Result<(Processed, f64, Option<Resume>), String> {
+) -> Result<(Processed, f64, Option<Resume>), fmu_estimator::error::Error> {
     let values = offline::settings(overrides)?;
     let (config, _notes) = offline::config(&values, calibration)?;
     let learned = offline::learned(&values, &config)?;

@@ -11,9 +11,11 @@
 //! | [`GainError`] | the steady-state gain's Riccati solution |
 //! | [`StepError`] | one filter step: the update skipped ([`Skip`]), or the gain failed |
 //! | [`SampleError`] | one sample through [`crate::step`]: a negative speed, or the filter failed |
-//! | [`Error`] | any of these, a recording's columns, and the learned filter's own messages |
+//! | [`BankError`], [`LearnedError`] | the learned filter's tap bank, and its taps for the chosen sensors and lag (`learned::error`) |
+//! | [`Error`] | any of these, and a recording's columns |
 
 use crate::engine::Skip;
+use crate::learned::error::{BankError, LearnedError};
 use std::path::PathBuf;
 
 /// Any error of the estimator.
@@ -54,17 +56,17 @@ pub enum Error {
     /// An offline run's sample step is not a positive number.
     #[error("step {0} s must be a positive number")]
     SampleStep(f64),
-    /// The learned filter's bank or filter refused, in `learned`'s own words (that module has
-    /// no typed errors yet).
-    #[error("{0}")]
-    Learned(String),
+    /// The learned filter's tap bank cannot be read or used.
+    #[error(transparent)]
+    Bank(#[from] BankError),
     /// The learned filter of `tap_file` could not be built from its bank.
-    #[error("tap_file '{tap_file}': {message}")]
+    #[error("tap_file '{tap_file}': {source}")]
     TapFile {
         /// The `tap_file` parameter as given.
         tap_file: String,
-        /// Why the bank cannot give a filter, in `learned`'s words.
-        message: String,
+        /// Why the bank gives no filter for the chosen sensors and lag.
+        #[source]
+        source: LearnedError,
     },
     /// `tap_file`'s contract names runtime constants or filter designs other than this build's:
     /// no parameter changes those, so the bank was fitted by another build.
@@ -86,14 +88,6 @@ pub enum Error {
         /// The bank, the matrices that differ and the parameters not at their defaults.
         mismatch: String,
     },
-}
-
-/// The learned modules (`learned` here, `study::learned` in the studies) still return text: an
-/// [`Error`] reaching one of them becomes its message, until they have typed errors too.
-impl From<Error> for String {
-    fn from(e: Error) -> String {
-        e.to_string()
-    }
 }
 
 /// A setting (FMI parameter, or an offline override by FMI name) the estimator refuses.

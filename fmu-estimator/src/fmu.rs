@@ -314,11 +314,11 @@ pub fn learned_from_values(
     let name = v.string[vr::TAP_FILE as usize].trim().to_string();
     let bank = match resources {
         _ if std::path::Path::new(&name).is_absolute() => {
-            Bank::load(std::path::Path::new(&name)).map_err(Error::Learned)?
+            Bank::load(std::path::Path::new(&name)).map_err(Error::Bank)?
         }
-        Some(dir) => Bank::load(&dir.join(&name)).map_err(Error::Learned)?,
+        Some(dir) => Bank::load(&dir.join(&name)).map_err(Error::Bank)?,
         None => match crate::learned::shipped_named(&name) {
-            Some(bank) => bank.map_err(Error::Learned)?,
+            Some(bank) => bank.map_err(Error::Bank)?,
             None => return Err(SettingError::TapFileRelative { name }.into()),
         },
     };
@@ -327,9 +327,9 @@ pub fn learned_from_values(
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
         lag,
     };
-    let learned = Learned::new(&bank, choice).map_err(|message| Error::TapFile {
+    let learned = Learned::new(&bank, choice).map_err(|source| Error::TapFile {
         tap_file: name.clone(),
-        message,
+        source,
     })?;
     let (lo, hi) = learned.speed_range();
     log.info(&format!(

@@ -34,10 +34,6 @@ pub enum Error {
     /// results lack what the study needs.
     #[error("{0}")]
     Input(String),
-    /// The learned filters' fitting (`study::learned`) failed, in its own words: it has no
-    /// typed errors yet; as every error given as text, it exits 2.
-    #[error("{0}")]
-    Learned(String),
     /// Results cannot be written.
     #[error("{0}")]
     Io(String),
@@ -68,11 +64,7 @@ impl Error {
         match self {
             Error::Run(e) => e.exit_code(),
             Error::Derailed(_) => 3,
-            Error::Estimator(_)
-            | Error::Metric(_)
-            | Error::Recording(_)
-            | Error::Input(_)
-            | Error::Learned(_) => 2,
+            Error::Estimator(_) | Error::Metric(_) | Error::Recording(_) | Error::Input(_) => 2,
             Error::Io(_) | Error::Draw { .. } => 1,
             Error::Context { source, .. } => source.exit_code(),
         }
@@ -130,28 +122,6 @@ impl From<RunError> for Error {
 impl From<fmu_estimator::error::SettingError> for Error {
     fn from(e: fmu_estimator::error::SettingError) -> Error {
         Error::Estimator(e.into())
-    }
-}
-
-/// `study::learned` still returns text; its errors arrive here as [`Error::Learned`] (the lead
-/// converts that module after the merge).
-impl From<String> for Error {
-    fn from(message: String) -> Error {
-        Error::Learned(message)
-    }
-}
-
-impl From<&str> for Error {
-    fn from(message: &str) -> Error {
-        Error::Learned(message.to_string())
-    }
-}
-
-/// The other direction of the same boundary: a `study::learned` function that returns text
-/// calls a function of this crate that returns an [`Error`].
-impl From<Error> for String {
-    fn from(e: Error) -> String {
-        e.to_string()
     }
 }
 
@@ -221,7 +191,10 @@ mod tests {
                 crate::study::metrics::MetricError::NotEnoughSamples.into(),
                 2,
             ),
-            (Error::Learned("fit failed".into()), 2),
+            (
+                crate::study::learned::decimation(20.0, 100.0).unwrap_err(),
+                2,
+            ),
             (
                 Error::write(std::path::Path::new("/x/report.md"), "disk full"),
                 1,

@@ -171,7 +171,7 @@ fn learned_columns(
     // runaway file.
     let text = fmi_abi::resource::read_text(file, "learned smoother file", 1 << 30)
         .map_err(crate::Error::Input)?;
-    let l = LearnedSmoother::from_json(&text, file).map_err(crate::Error::Learned)?;
+    let l = LearnedSmoother::from_json(&text, file)?;
     // A standing start (a run's results.csv begins with the vehicle's outputs before its first
     // step, at speed 0) gets no learned estimate (NaN): the taps hold the dynamics at the one
     // speed they were fitted at. A stop later in the record is refused by the speed check.
@@ -180,10 +180,10 @@ fn learned_columns(
         .position(|s| s.speed > 0.0)
         .unwrap_or(samples.len());
     let (samples, moving) = (&samples[first..], &distance[first..]);
-    let kalman = l.kalman(samples, h).map_err(crate::Error::Learned)?;
+    let kalman = l.kalman(samples, h)?;
     let (learned, hybrid) = l
         .apply(samples, h, &kalman)
-        .map_err(|e| crate::Error::Learned(format!("{}: {e}", file.display())))?;
+        .map_err(|e| e.context(file.display()))?;
     // From its grid (every `decimation`-th sample) to every sample, linearly in distance.
     let grid: Vec<f64> = moving.iter().step_by(l.decimation).copied().collect();
     let standing = vec![f64::NAN; first];

@@ -107,8 +107,14 @@ fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
     for s in &mut slow {
         s.speed = 10.0;
     }
-    let e = smoother.apply(&slow, runs::STEP, &k).unwrap_err();
+    let e = smoother
+        .apply(&slow, runs::STEP, &k)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("trained at 20 m/s"), "{e}");
-    let e = smoother.apply(&held_out.samples, 2e-3, &k).unwrap_err();
+    let e = smoother
+        .apply(&held_out.samples, 2e-3, &k)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("step of 0.001 s"), "{e}");
 }

@@ -23,10 +23,14 @@
 //! run silently wrong, which is what the contract is for; `alignment-studies taps` makes a
 //! format 3 bank.
 
+use super::error::{BankError, BankProblem, EntryProblem};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The first word of a bank's first line: what tells a bank from any other file before its
+/// sizes are trusted.
 pub const MAGIC: &str = "learned-taps";
+/// The format [`Header::to_bytes`] writes (and the header's `format`).
 pub const FORMAT: u32 = 3;
 /// The formats this reader takes.
 pub const READS: [u32; 1] = [3];
@@ -83,6 +87,8 @@ pub struct Entry {
     /// taps serve every condition (fitted on all of `kalker_scales` at once).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub condition: Option<f64>,
+    /// The windows of this lag, one per history length (the full one and the start's shorter
+    /// ones); the runtime takes the longest the history it holds allows ([`super::window`]).
     pub windows: Vec<Window>,
 }
 
@@ -90,11 +96,15 @@ pub struct Entry {
 /// the full one and shorter ones for the start of a run, when less history exists.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Window {
+    /// Grid points of history behind the newest cell the window reads.
     pub past: usize,
+    /// Grid points the estimate lies behind the newest cell: always the entry's lag.
     pub future: usize,
     /// Root-mean-square error of this window's estimate against the true alignment on the
     /// validation seeds \[m\]: the estimate's standard deviation.
     pub rms_error: f64,
+    /// `channels × (past + future + 1)` taps in the order of the module docs, in physical units;
+    /// kept in the data block (as `f32`), not in the header.
     #[serde(skip)]
     pub taps: Vec<f64>,
 }
@@ -102,17 +112,21 @@ pub struct Window {
 /// The header: everything but the taps.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Header {
+    /// The format; a reader refuses any it does not take ([`READS`]).
     pub format: u32,
     /// Grid step along the track \[m\].
     pub grid: f64,
     /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
     pub kalman_highpass: f64,
+    /// Where the taps came from, for regenerating them and judging where they hold; only the
+    /// sample step is relied on (the contract's Kalman matrices are discretized for it).
     pub provenance: Provenance,
     /// What the taps require of the runtime, checked at initialization.
     pub contract: super::contract::Contract,
     /// The estimator of the contact condition, in a bank with per-condition entries.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<super::contact::ContactModel>,
+    /// The taps' entries: per speed, sensor set, lag and (with a contact model) condition.
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
 }
@@ -152,51 +166,49 @@ impl Header {
         out
     }
 
-    /// Reads a tap bank, checking everything the runtime relies on; errors start with `file`.
-    pub fn parse(bytes: &[u8], file: &Path) -> Result<Bank, String> {
-        let shown = file.display();
-        let bad = |m: String| format!("{shown}: not a valid tap bank: {m}");
+    /// Reads a tap bank, checking everything the runtime relies on; errors name `file`.
+    pub fn parse(bytes: &[u8], file: &Path) -> Result<Bank, BankError> {
+        let bad = |problem: BankProblem| BankError::Invalid {
+            file: file.to_path_buf(),
+            problem,
+        };
         let nl = bytes
             .iter()
             .position(|b| *b == b'\n')
             .filter(|n| *n < MAX_FIRST_LINE)
-            .ok_or_else(|| bad("no first line".into()))?;
-        let first = std::str::from_utf8(&bytes[..nl]).map_err(|_| bad("first line".into()))?;
+            .ok_or_else(|| bad(BankProblem::NoFirstLine))?;
+        let first =
+            std::str::from_utf8(&bytes[..nl]).map_err(|_| bad(BankProblem::FirstLineText))?;
         let f: Vec<&str> = first.split(' ').collect();
         if f.len() != 5 || f[0] != MAGIC {
-            return Err(bad(format!("the first line is '{first}'")));
+            return Err(bad(BankProblem::FirstLine(first.to_string())));
         }
         if !READS.iter().any(|r| f[1] == r.to_string()) {
-            let why = if f[1] == "1" || f[1] == "2" {
-                ": it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
-            } else {
-                ""
-            };
-            return Err(format!(
-                "{shown}: tap bank format {} (this estimator reads formats {READS:?}){why}",
-                f[1]
-            ));
+            return Err(BankError::Format {
+                file: file.to_path_buf(),
+                format: f[1].to_string(),
+            });
         }
         let num = |s: &str| {
             s.parse::<usize>()
-                .map_err(|_| bad(format!("'{s}' in the first line")))
+                .map_err(|_| bad(BankProblem::Size(s.to_string())))
         };
         let (hlen, dlen) = (num(f[2])?, num(f[3])?);
         let body = &bytes[nl + 1..];
         if body.len() != hlen.saturating_add(dlen) {
-            return Err(bad(format!(
-                "{} bytes after the first line, which announces {hlen} + {dlen} (truncated or extended)",
-                body.len()
-            )));
+            return Err(bad(BankProblem::Length {
+                body: body.len(),
+                header: hlen,
+                data: dlen,
+            }));
         }
         let (head, data) = body.split_at(hlen);
         if format!("{:016x}", fnv1a(data)) != f[4] {
-            return Err(bad(
-                "the taps' checksum does not match (damaged file)".into()
-            ));
+            return Err(bad(BankProblem::Checksum));
         }
-        let head = std::str::from_utf8(head).map_err(|_| bad("the header is not UTF-8".into()))?;
-        let mut bank: Bank = toml::from_str(head).map_err(|e| bad(format!("header: {e}")))?;
+        let head = std::str::from_utf8(head).map_err(|_| bad(BankProblem::HeaderText))?;
+        let mut bank: Bank =
+            toml::from_str(head).map_err(|e| bad(BankProblem::Toml(e.to_string())))?;
         bank.check().map_err(bad)?;
         let needed: usize = bank
             .entries
@@ -208,10 +220,10 @@ impl Header {
             })
             .sum();
         if needed * 4 != dlen {
-            return Err(bad(format!(
-                "the header's windows need {needed} taps, the data holds {}",
-                dlen / 4
-            )));
+            return Err(bad(BankProblem::TapCount {
+                needed,
+                held: dlen / 4,
+            }));
         }
         let mut taps = data
             .chunks_exact(4)
@@ -221,7 +233,7 @@ impl Header {
             for w in &mut e.windows {
                 w.taps = taps.by_ref().take(nc * (w.past + w.future + 1)).collect();
                 if w.taps.iter().any(|t| !t.is_finite()) {
-                    return Err(bad(format!("entry {i} has a tap that is not a number")));
+                    return Err(bad(BankProblem::Tap(i)));
                 }
             }
         }
@@ -229,15 +241,16 @@ impl Header {
     }
 
     /// Reads the tap bank at `path`.
-    pub fn load(path: &Path) -> Result<Bank, String> {
-        let bytes = fmi_abi::resource::read_bytes(path, "tap bank", 64 << 20)?;
+    pub fn load(path: &Path) -> Result<Bank, BankError> {
+        let bytes =
+            fmi_abi::resource::read_bytes(path, "tap bank", 64 << 20).map_err(BankError::Read)?;
         Bank::parse(&bytes, path)
     }
 
     /// The consistency of the header (taps aside).
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), BankProblem> {
         if !READS.contains(&self.format) {
-            return Err(format!("header format {}", self.format));
+            return Err(BankProblem::HeaderFormat(self.format));
         }
         if let Some(c) = &self.contact {
             c.check()?;
@@ -248,54 +261,62 @@ impl Header {
             .filter(|e| e.condition.is_some())
             .count();
         if conditional > 0 && (conditional < self.entries.len() || self.contact.is_none()) {
-            return Err(
-                "per-condition entries need a contact model and a condition on every entry".into(),
-            );
+            return Err(BankProblem::Conditions);
         }
         if !(self.grid.is_finite() && self.grid > 0.0) {
-            return Err(format!("grid step {} m", self.grid));
+            return Err(BankProblem::Grid(self.grid));
         }
         let step = self.provenance.sample_step;
         if !(step.is_finite() && step > 0.0) {
             // The contract's Kalman matrices are discretized for it.
-            return Err(format!("sample step {step} s"));
+            return Err(BankProblem::SampleStep(step));
         }
         if !(self.kalman_highpass.is_finite() && self.kalman_highpass > 2.0 * self.grid) {
-            return Err(format!("Kalman high-pass at {} m", self.kalman_highpass));
+            return Err(BankProblem::KalmanHighpass(self.kalman_highpass));
         }
         if self.entries.is_empty() {
-            return Err("no entries".into());
+            return Err(BankProblem::NoEntries);
         }
-        for (i, e) in self.entries.iter().enumerate() {
-            if !(e.speed.is_finite() && e.speed > 0.0) {
-                return Err(format!("entry {i}: speed {}", e.speed));
+        for (index, e) in self.entries.iter().enumerate() {
+            e.check()
+                .map_err(|problem| BankProblem::Entry { index, problem })?;
+        }
+        Ok(())
+    }
+}
+
+impl Entry {
+    /// The consistency of one entry's header (taps aside).
+    fn check(&self) -> Result<(), EntryProblem> {
+        if !(self.speed.is_finite() && self.speed > 0.0) {
+            return Err(EntryProblem::Speed(self.speed));
+        }
+        if self.channels.is_empty() {
+            return Err(EntryProblem::NoChannels);
+        }
+        for c in &self.channels {
+            if !super::grid::CHANNELS.contains(&c.as_str()) {
+                return Err(EntryProblem::UnknownChannel(c.clone()));
             }
-            if e.channels.is_empty() {
-                return Err(format!("entry {i}: no channels"));
+        }
+        if let Some(c) = self.condition
+            && !(c.is_finite() && c > 0.0)
+        {
+            return Err(EntryProblem::Condition(c));
+        }
+        if self.windows.is_empty() {
+            return Err(EntryProblem::NoWindows);
+        }
+        for w in &self.windows {
+            if w.future != self.lag || w.past > MAX_PAST {
+                return Err(EntryProblem::Window {
+                    past: w.past,
+                    future: w.future,
+                    lag: self.lag,
+                });
             }
-            for c in &e.channels {
-                if !super::grid::CHANNELS.contains(&c.as_str()) {
-                    return Err(format!("entry {i}: unknown channel '{c}'"));
-                }
-            }
-            if let Some(c) = e.condition
-                && !(c.is_finite() && c > 0.0)
-            {
-                return Err(format!("entry {i}: condition {c}"));
-            }
-            if e.windows.is_empty() {
-                return Err(format!("entry {i}: no windows"));
-            }
-            for w in &e.windows {
-                if w.future != e.lag || w.past > MAX_PAST {
-                    return Err(format!(
-                        "entry {i}: a window of {} behind and {} ahead under a lag of {}",
-                        w.past, w.future, e.lag
-                    ));
-                }
-                if !(w.rms_error.is_finite() && w.rms_error >= 0.0) {
-                    return Err(format!("entry {i}: rms error {}", w.rms_error));
-                }
+            if !(w.rms_error.is_finite() && w.rms_error >= 0.0) {
+                return Err(EntryProblem::RmsError(w.rms_error));
             }
         }
         Ok(())
@@ -394,22 +415,24 @@ pub(crate) mod tests {
         let p = Path::new("x.taps");
         let mut flipped = bytes.clone();
         *flipped.last_mut().unwrap() ^= 1;
-        let e = Bank::parse(&flipped, p).unwrap_err();
+        let e = Bank::parse(&flipped, p).unwrap_err().to_string();
         assert!(e.starts_with("x.taps:") && e.contains("checksum"), "{e}");
-        let e = Bank::parse(&bytes[..bytes.len() - 3], p).unwrap_err();
+        let e = Bank::parse(&bytes[..bytes.len() - 3], p)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("truncated"), "{e}");
         let mut no_step = sample_bank();
         no_step.provenance.sample_step = 0.0;
-        let e = Bank::parse(&no_step.to_bytes(), p).unwrap_err();
+        let e = Bank::parse(&no_step.to_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("sample step 0 s"), "{e}");
-        let e = Bank::parse(b"hello\n", p).unwrap_err();
+        let e = Bank::parse(b"hello\n", p).unwrap_err().to_string();
         assert!(e.contains("first line"), "{e}");
         let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 7");
-        let e = Bank::parse(text.as_bytes(), p).unwrap_err();
+        let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 7"), "{e}");
         // A bank of the formats before the contract says why it is refused.
         let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 2");
-        let e = Bank::parse(text.as_bytes(), p).unwrap_err();
+        let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 2") && e.contains("no contract"), "{e}");
     }
 }

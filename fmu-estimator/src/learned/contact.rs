@@ -46,6 +46,7 @@
 //! taps then lost D1 (0.28 against the nominal taps' 0.17). With the speed quotients but one set,
 //! the nominal vehicle was read right and the worn one wrong (0.6-0.8 for 0.5).
 
+use super::error::ContactProblem;
 use super::grid::Biquad;
 use serde::{Deserialize, Serialize};
 
@@ -79,9 +80,13 @@ pub struct ContactModel {
     pub speeds: Vec<SpeedModel>,
 }
 
+/// One bank speed's linear estimator of the Kalker-coefficient scale from the features.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SpeedModel {
+    /// The constant speed of the runs it was fitted on \[m/s\]: cells count towards it by
+    /// their speed's interpolation share.
     pub speed: f64,
+    /// [`FEATURES`] coefficients in the features' order, then the constant.
     pub coefficients: Vec<f64>,
     /// Root-mean-square error of the estimate on the validation seeds after 200 m.
     pub rms_error: f64,
@@ -89,34 +94,33 @@ pub struct SpeedModel {
 
 impl ContactModel {
     /// The consistency the runtime relies on.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ContactProblem> {
         let [short, long] = self.band;
         if !(short.is_finite() && short > 0.0 && long > short && long.is_finite()) {
-            return Err(format!("contact band {short}-{long} m"));
+            return Err(ContactProblem::Band { short, long });
         }
         if !(self.memory.is_finite() && self.memory > 0.0) {
-            return Err(format!("contact memory {} m", self.memory));
+            return Err(ContactProblem::Memory(self.memory));
         }
         let [lo, hi] = self.range;
         if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi >= lo) {
-            return Err(format!("contact range {lo}-{hi}"));
+            return Err(ContactProblem::Range { lo, hi });
         }
         if self.speeds.is_empty() {
-            return Err("a contact model without speeds".into());
+            return Err(ContactProblem::NoSpeeds);
         }
         for s in &self.speeds {
             if s.coefficients.len() != FEATURES + 1 || s.coefficients.iter().any(|c| !c.is_finite())
             {
-                return Err(format!(
-                    "contact model at {} m/s: {} coefficients (want {} finite ones)",
-                    s.speed,
-                    s.coefficients.len(),
-                    FEATURES + 1
-                ));
+                return Err(ContactProblem::Coefficients {
+                    speed: s.speed,
+                    count: s.coefficients.len(),
+                    want: FEATURES + 1,
+                });
             }
         }
         if self.speeds.windows(2).any(|w| !(w[1].speed > w[0].speed)) {
-            return Err("contact model speeds not increasing".into());
+            return Err(ContactProblem::SpeedsNotIncreasing);
         }
         Ok(())
     }
@@ -362,6 +366,11 @@ mod tests {
         assert_eq!(high.estimate_from(&moments), Some(1.0));
         let mut bad = m.clone();
         bad.speeds[0].coefficients.pop();
-        assert!(bad.check().unwrap_err().contains("coefficients"));
+        assert!(
+            bad.check()
+                .unwrap_err()
+                .to_string()
+                .contains("coefficients")
+        );
     }
 }

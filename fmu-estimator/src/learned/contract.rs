@@ -52,14 +52,23 @@ const SAME: f64 = 1e-12;
 /// The runtime's side of a bank: see the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Contract {
+    /// [`TAP_SPEED_POWER`]: the power of the speed each channel's history is divided by.
     pub tap_speed_power: [f64; 5],
+    /// [`EDGE`]: how far before its end a sample closes a cell \[m\].
     pub grid_edge: f64,
+    /// [`CONTACT_SPEED_POWER`]: the contact features' speed quotients.
     pub contact_speed_power: [i32; 3],
+    /// [`MIN_SPEED`]: the smallest speed the contact quotients divide by \[m/s\].
     pub contact_min_speed: f64,
+    /// [`MIN_MODEL_ERROR`]: the floor of a contact model's error in its weight.
     pub contact_min_model_error: f64,
+    /// The Kalman channel's high-pass as `[b0, b1, b2, a1, a2]` at the bank's grid and cut-off.
     pub kalman_highpass_design: [f64; 5],
+    /// The contact features' high-pass and low-pass, the same way; absent without a contact
+    /// model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact_band_design: Option<[[f64; 5]; 2]>,
+    /// The Kalman channel the taps were fitted with.
     pub kalman: KalmanChannel,
 }
 
@@ -73,14 +82,22 @@ pub struct KalmanChannel {
     pub design_speed: f64,
     /// `min_speed`: below it the filter holds \[m/s\].
     pub min_speed: f64,
+    /// The speed the matrices are hashed at \[m/s\] ([`REFERENCE_SPEED`]): with
+    /// `design_speed` 0 they depend on the speed, so both sides must take them at one.
     pub reference_speed: f64,
     /// The step the matrices are discretized for \[s\] (the bank's sample step).
     pub reference_step: f64,
     /// FNV-1a 64 (hex) of each matrix's entries, column by column, rounded to 9 significant
-    /// digits.
+    /// digits: here the discrete state transition `F` (model parameters, discretization,
+    /// alignment prior).
     pub f: String,
+    /// The hash of the measurement matrix `H`, as [`Self::f`].
     pub h: String,
+    /// The hash of the discrete process noise `Q` (calibration file or process noise
+    /// parameters), as [`Self::f`].
     pub q: String,
+    /// The hash of the measurement noise `R` (calibration file, sensor sigmas,
+    /// `prior_sigma_xi`), as [`Self::f`].
     pub r: String,
 }
 

@@ -86,6 +86,8 @@ impl Biquad {
         [self.b[0], self.b[1], self.b[2], self.a[0], self.a[1]]
     }
 
+    /// Filters the next grid value `x` and returns the output; the state carries over, so
+    /// values must come one per cell, in order.
     pub fn step(&mut self, x: f64) -> f64 {
         let y = self.b[0] * x + self.s[0];
         self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];
@@ -117,11 +119,17 @@ pub struct Grid {
 /// channel of each), and the distance of the sample that closed them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Closed {
+    /// The closed cells, oldest first: more than one when a sample jumps over a whole cell
+    /// (each empty cell repeats the last mean).
     pub cells: Vec<[f64; 5]>,
+    /// The distance of the sample that closed them \[m\]: the position their causal estimate
+    /// is for.
     pub distance: f64,
 }
 
 impl Grid {
+    /// An empty grid of cells `ds` long starting at distance 0, its Kalman channel high-passed
+    /// at the wavelength `kalman_highpass` (both metres, as the bank states them).
     pub fn new(ds: f64, kalman_highpass: f64) -> Grid {
         Grid {
             ds,
@@ -133,6 +141,7 @@ impl Grid {
         }
     }
 
+    /// The cell length \[m\]: converts the windows' grid points to metres.
     pub fn step_length(&self) -> f64 {
         self.ds
     }
@@ -181,7 +190,9 @@ impl Grid {
 /// that closed it (the position the causal estimate of that cell is for).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct GridRecord {
+    /// Every closed cell's channel values, as [`Closed::cells`].
     pub cells: Vec<[f64; 5]>,
+    /// Per cell, the index of the sample that closed it.
     pub closed_by: Vec<usize>,
 }
 

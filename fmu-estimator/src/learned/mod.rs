@@ -7,6 +7,8 @@
 //! - [`contract`]: what a bank requires of the runtime (constants, filter designs, the Kalman
 //!   channel), written by the fit and checked at initialization;
 //! - [`window`]: one window of taps and which one a history gets, shared with the tap fit;
+//! - [`error`]: a bank that cannot be read or used, and a bank without taps for what the
+//!   parameters choose;
 //! - [`stream`]: the run-time filter, per sample, of the parts below;
 //! - `history`, `selection`, `blend`, `track`, `delay`: the channels' ring buffer, the entries
 //!   the FMU's parameters choose, their blend in speed and contact, the extrapolation between
@@ -20,6 +22,7 @@ mod blend;
 pub mod contact;
 pub mod contract;
 mod delay;
+pub mod error;
 pub mod grid;
 mod history;
 mod selection;
@@ -28,6 +31,7 @@ mod track;
 pub mod window;
 
 pub use bank::Bank;
+pub use error::{BankError, LearnedError};
 pub use stream::{Choice, Learned};
 
 /// The tap banks shipped in the FMU's resources, by file name:
@@ -55,16 +59,14 @@ pub(crate) fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
 
 /// A tap bank shipped in the FMU's resources ([`SHIPPED`]), as built into this library
 /// (offline processing without an unpacked FMU); `None` for any other name.
-pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
+pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
     let bytes: &[u8] = match name {
         "learned.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps")),
         "learned-nominal.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned-nominal.taps")),
         _ => return None,
     };
     if bytes.is_empty() {
-        return Some(Err(format!(
-            "this build has no tap bank resources/{name}: run `alignment-studies taps`"
-        )));
+        return Some(Err(BankError::NotBuilt(name.to_string())));
     }
     Some(Bank::parse(
         bytes,
@@ -73,7 +75,7 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, String>> {
 }
 
 /// The default tap bank (`learned.taps`), as built into this library.
-pub fn shipped() -> Result<Bank, String> {
+pub fn shipped() -> Result<Bank, BankError> {
     shipped_named(SHIPPED[0]).expect("a shipped name")
 }
 
@@ -89,8 +91,11 @@ pub fn channels(s: &crate::offline::Sample, kalman: f64) -> [f64; 5] {
     ]
 }
 
-/// Which estimate the FMU's `alignment` output carries (`active_estimator`).
+/// `active_estimator` when the `alignment` output carries the paper's Kalman filter's
+/// estimate: no learned estimate exists yet (too little history) or the speed is outside the
+/// taps' range. The values are the FMU's `estimator` parameter's.
 pub const ACTIVE_PAPER: i32 = 1;
+/// `active_estimator` when the `alignment` output carries the learned filter's estimate.
 pub const ACTIVE_LEARNED: i32 = 2;
 
 /// The outputs of one step.
@@ -98,9 +103,12 @@ pub const ACTIVE_LEARNED: i32 = 2;
 pub struct Estimate {
     /// The best causal estimate at the current position, and its standard deviation \[m\].
     pub alignment: f64,
+    /// The standard deviation of `alignment` \[m\]: the blended windows' validation rms error,
+    /// or the Kalman filter's where `alignment` is its estimate.
     pub std: f64,
     /// The fixed-lag estimate for the position `lag` metres behind, and its standard deviation.
     pub lagged: f64,
+    /// The standard deviation of `lagged` \[m\], as `std`.
     pub lagged_std: f64,
     /// [`ACTIVE_PAPER`] or [`ACTIVE_LEARNED`].
     pub active: i32,

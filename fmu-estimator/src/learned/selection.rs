@@ -3,6 +3,7 @@
 
 use super::bank::{Bank, Entry};
 use super::contact::ContactModel;
+use super::error::{LearnedError, Taps};
 use super::grid::{CHANNELS, ROLL_RATE};
 use super::window::Windows;
 use serde::{Deserialize, Serialize};
@@ -36,24 +37,21 @@ impl Selection {
     /// The bank's entries for `choice`: the sensor set with or without the roll-rate channel
     /// and, for the fixed-lag output, the lag the bank holds nearest `choice.lag` (refused
     /// unless within half a grid step of it).
-    pub(super) fn new(bank: &Bank, choice: Choice) -> Result<Selection, String> {
+    pub(super) fn new(bank: &Bank, choice: Choice) -> Result<Selection, LearnedError> {
         let causal = of_set(bank, choice.roll_rate, 0);
         if causal.is_empty() {
-            return Err(format!(
-                "the tap bank has no causal taps for {}",
-                sensors(choice.roll_rate)
-            ));
+            return Err(LearnedError::NoCausal {
+                roll_rate: choice.roll_rate,
+            });
         }
         let conditions = conditions(bank, &causal);
-        let (speeds, causal) = by_speed(&causal, &conditions, "causal")?;
+        let (speeds, causal) = by_speed(&causal, &conditions, Taps::Causal)?;
         let (lag, lagged) = if choice.lag > 0.0 {
             let l = nearest_lag(bank, choice)?;
-            let what = format!("{} m lag", l as f64 * bank.grid);
-            let (at, windows) = by_speed(&of_set(bank, choice.roll_rate, l), &conditions, &what)?;
+            let taps = Taps::Lagged(l as f64 * bank.grid);
+            let (at, windows) = by_speed(&of_set(bank, choice.roll_rate, l), &conditions, taps)?;
             if at != speeds {
-                return Err(format!(
-                    "the tap bank's {what} taps are not at the speeds of its causal taps"
-                ));
+                return Err(LearnedError::LagSpeeds { taps });
             }
             (l, windows)
         } else {
@@ -90,15 +88,6 @@ fn uses_roll(e: &Entry) -> bool {
     e.channels.iter().any(|c| c == CHANNELS[ROLL_RATE])
 }
 
-/// The sensor set, for messages.
-fn sensors(roll_rate: bool) -> &'static str {
-    if roll_rate {
-        "four sensors (with the roll-rate gyroscope)"
-    } else {
-        "three sensors"
-    }
-}
-
 /// The entries of one sensor set and lag (grid points).
 fn of_set(bank: &Bank, roll_rate: bool, lag: usize) -> Vec<&Entry> {
     bank.entries
@@ -119,7 +108,7 @@ fn conditions(bank: &Bank, causal: &[&Entry]) -> Vec<f64> {
 }
 
 /// The bank's fixed lag (grid points) nearest `choice.lag`, if within half a grid step.
-fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, String> {
+fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, LearnedError> {
     let want = choice.lag / bank.grid;
     let mut lags: Vec<usize> = bank
         .entries
@@ -136,34 +125,23 @@ fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, String> {
     });
     match best {
         Some(l) if (l as f64 - want).abs() <= 0.5 => Ok(l),
-        _ => {
-            let shown: Vec<String> = lags
-                .iter()
-                .map(|l| format!("{}", *l as f64 * bank.grid))
-                .collect();
-            Err(format!(
-                "lag = {} m: the tap bank holds fixed-lag taps for {} m ({}); 0 switches the lagged output off",
-                choice.lag,
-                if shown.is_empty() {
-                    "no lag".into()
-                } else {
-                    shown.join(", ")
-                },
-                sensors(choice.roll_rate)
-            ))
-        }
+        _ => Err(LearnedError::Lag {
+            lag: choice.lag,
+            held: lags.iter().map(|l| *l as f64 * bank.grid).collect(),
+            roll_rate: choice.roll_rate,
+        }),
     }
 }
 
 /// The windows of `entries` by ascending speed, and per speed one per condition of
 /// `conditions` (the entry of the nearest condition at that speed), or the single entry of each
-/// speed when `conditions` is empty; `what` names the entries in errors.
+/// speed when `conditions` is empty; `taps` names the entries in errors.
 #[allow(clippy::type_complexity)]
 fn by_speed(
     entries: &[&Entry],
     conditions: &[f64],
-    what: &str,
-) -> Result<(Vec<f64>, Vec<Vec<Windows>>), String> {
+    taps: Taps,
+) -> Result<(Vec<f64>, Vec<Vec<Windows>>), LearnedError> {
     let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
@@ -172,9 +150,7 @@ fn by_speed(
         let at: Vec<&Entry> = entries.iter().copied().filter(|e| e.speed == *v).collect();
         if conditions.is_empty() {
             if at.len() > 1 {
-                return Err(format!(
-                    "the tap bank has two {what} entries for one speed ({v} m/s)"
-                ));
+                return Err(LearnedError::TwoEntries { taps, speed: *v });
             }
             table.push(vec![Windows::of(at[0])]);
             continue;

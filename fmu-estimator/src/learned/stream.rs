@@ -91,7 +91,7 @@ pub struct Learned {
 impl Learned {
     /// The learned filter with the bank's entries for `choice` (`selection.rs`), at the
     /// start of a run.
-    pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, String> {
+    pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, super::error::LearnedError> {
         let selection = Selection::new(bank, choice)?;
         Ok(Learned {
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
@@ -128,6 +128,9 @@ impl Learned {
         self.selection.sample_step
     }
 
+    /// Whether the taps read the wheelset roll-rate channel; when they do not, the per-sample
+    /// step ([`crate::step::step`]) zeroes that input, so that an unused (even non-finite)
+    /// column cannot spoil the grid's cells.
     pub fn uses_roll_rate(&self) -> bool {
         self.selection.uses_roll_rate
     }

@@ -217,7 +217,8 @@ fn unavailable_choices_are_refused_by_name() {
             lag: 0.0,
         },
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("four sensors"), "{e}");
     let e = Learned::new(
         &bank,
@@ -226,7 +227,8 @@ fn unavailable_choices_are_refused_by_name() {
             lag: 10.0,
         },
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("lag = 10 m") && e.contains("0.6"), "{e}");
 }
 

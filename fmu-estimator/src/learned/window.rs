@@ -77,10 +77,14 @@ impl Window {
         self.len == 0
     }
 
+    /// Grid points of history behind the estimated cell: which window a history of a given
+    /// length gets.
     pub fn past(&self) -> usize {
         self.past
     }
 
+    /// The window's validation rms error \[m\]: the standard deviation the FMU reports with
+    /// its estimate.
     pub fn rms_error(&self) -> f64 {
         self.rms_error
     }

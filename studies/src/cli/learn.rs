@@ -10,7 +10,7 @@ use std::path::PathBuf;
 /// `learn`'s options.
 #[derive(Args, Clone, Debug)]
 pub struct LearnArgs {
-    /// The vehicle and estimator FMUs.
+    /// The vehicle and estimator FMUs the training runs use.
     #[command(flatten)]
     pub fmus: StandardFmus,
     /// Track seed of the training run.

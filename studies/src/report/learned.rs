@@ -61,8 +61,7 @@ pub fn learn(fmus: &Fmus, a: &LearnOptions, out: &Path) -> Result<Report, Error>
         lookahead,
         grid,
         default_partner(lookahead, sigma),
-    )
-    .map_err(Error::Learned)?;
+    )?;
     let ahead = match l.lookahead {
         Lookahead::Smoother => format!("smoother, {SMOOTHER_WINDOW} m each way"),
         Lookahead::FixedLag(n) => format!("look-ahead {} m", n as f64 * l.grid()),

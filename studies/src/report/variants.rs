@@ -74,8 +74,7 @@ pub fn variants(
         };
         for &(lookahead, grid) in forms.iter().chain(extra) {
             let partner = default_partner(lookahead, shaping);
-            let (l, j) = learn(&runs[..scales.len()], &from, lookahead, grid, partner)
-                .map_err(Error::Learned)?;
+            let (l, j) = learn(&runs[..scales.len()], &from, lookahead, grid, partner)?;
             log(&format!(
                 "learned FIR ({lookahead:?}) from {from}: split {} m (mean whole Jrel there {j:.3}) with {}",
                 l.split, l.partner.name

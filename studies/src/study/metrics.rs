@@ -150,13 +150,6 @@ pub enum MetricError {
     NotEnoughSamples,
 }
 
-/// `study::learned` still returns text (until the lead converts it).
-impl From<MetricError> for String {
-    fn from(e: MetricError) -> String {
-        e.to_string()
-    }
-}
-
 /// A Butterworth design in second-order sections (`cutoffs` in the units of `fs`).
 pub fn butter(
     order: usize,

@@ -325,8 +325,7 @@ pub fn compare_learned(
     let metrics: Vec<(BandMetrics, BandMetrics)> = records
         .par_iter()
         .map(|rec| smoother.evaluate(rec))
-        .collect::<Result<_, String>>()
-        .map_err(Error::Learned)?;
+        .collect::<Result<_, Error>>()?;
     let (alone, hybrid): (Vec<_>, Vec<_>) = metrics.into_iter().unzip();
     let grid = metres(smoother.grid());
     let name = match smoother.lookahead {

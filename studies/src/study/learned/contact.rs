@@ -8,6 +8,7 @@
 //! filling, and the start transient) is left out of the fit and of the error.
 
 use super::taps::{BANK_GRID, CONTACT_BAND, CONTACT_MEMORY, GridRun};
+use crate::Error;
 use fmu_estimator::learned::contact::{FEATURES, Moments, SpeedModel};
 use nalgebra::{DMatrix, DVector};
 
@@ -35,7 +36,7 @@ pub(super) fn fit(
     speed: f64,
     training: &[(f64, GridRun)],
     validation: &[(f64, GridRun)],
-) -> Result<SpeedModel, String> {
+) -> Result<SpeedModel, Error> {
     let n = FEATURES + 1;
     let (mut ata, mut aty) = (DMatrix::<f64>::zeros(n, n), DVector::<f64>::zeros(n));
     for (k, r) in training {
@@ -48,7 +49,9 @@ pub(super) fn fit(
     let coefficients = ata
         .cholesky()
         .ok_or_else(|| {
-            format!("at {speed} m/s the contact features do not tell the conditions apart")
+            Error::input(format!(
+                "at {speed} m/s the contact features do not tell the conditions apart"
+            ))
         })?
         .solve(&aty);
     let coefficients: Vec<f64> = coefficients.iter().copied().collect();

@@ -2,6 +2,7 @@
 //! biased correlation estimates, one Cholesky solve per window, windows cut to the data at the
 //! ends of a record.
 
+use crate::Error;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
@@ -35,27 +36,33 @@ impl Fir {
         past: usize,
         future: usize,
         ridge: f64,
-    ) -> Result<Fir, String> {
+    ) -> Result<Fir, Error> {
         let n = target.len();
         if channels.is_empty() || channels.iter().any(|c| c.len() != n) {
-            return Err("the learned smoother needs channels as long as the target".into());
+            return Err(Error::input(
+                "the learned smoother needs channels as long as the target",
+            ));
         }
         let width = past + future + 1;
         if n < 2 * width {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{n} training samples are too few for a window of {width} (at least {})",
                 2 * width
-            ));
+            )));
         }
         if let Some(k) = target.iter().position(|v| !v.is_finite()) {
-            return Err(format!("training target sample {k} is not a number"));
+            return Err(Error::input(format!(
+                "training target sample {k} is not a number"
+            )));
         }
         let mut scale = Vec::with_capacity(channels.len());
         for (i, c) in channels.iter().enumerate() {
             let mean = c.iter().sum::<f64>() / n as f64;
             let sd = (c.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64).sqrt();
             if !(sd.is_finite() && sd > 0.0) {
-                return Err(format!("training channel {i} is constant or not finite"));
+                return Err(Error::input(format!(
+                    "training channel {i} is constant or not finite"
+                )));
             }
             scale.push(sd);
         }
@@ -94,7 +101,7 @@ impl Fir {
                     .collect()
             })
             .collect();
-        let solve = |p: usize, f: usize| -> Result<Window, String> {
+        let solve = |p: usize, f: usize| -> Result<Window, Error> {
             let lags: Vec<isize> = (-(f as isize)..=p as isize).collect();
             let k = nc * lags.len();
             let at = |i: usize| (i / lags.len(), lags[i % lags.len()]);
@@ -112,7 +119,11 @@ impl Fir {
             });
             let taps = m
                 .cholesky()
-                .ok_or("the learned smoother's normal equations are not positive definite")?
+                .ok_or_else(|| {
+                    Error::input(
+                        "the learned smoother's normal equations are not positive definite",
+                    )
+                })?
                 .solve(&rhs);
             Ok(Window {
                 past: p,
@@ -135,30 +146,30 @@ impl Fir {
     }
 
     /// That the windows and taps agree (a saved file may have been edited).
-    pub(super) fn check(&self) -> Result<(), String> {
+    pub(super) fn check(&self) -> Result<(), Error> {
         let nc = self.scale.len();
         if nc == 0 || self.scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err("the channel scales must be positive numbers".into());
+            return Err(Error::input("the channel scales must be positive numbers"));
         }
         let expected = (0..self.past)
             .map(|p| (p, self.future))
             .chain((0..self.future).map(|f| (self.past, f)));
         let windows = self.start.iter().chain(&self.end);
         if self.start.len() != self.past || self.end.len() != self.future {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{} start and {} end windows for a window of {} behind and {} ahead",
                 self.start.len(),
                 self.end.len(),
                 self.past,
                 self.future
-            ));
+            )));
         }
         for (w, (p, f)) in windows
             .chain([&self.full])
             .zip(expected.chain([(self.past, self.future)]))
         {
             if w.past != p || w.future != f || w.taps.len() != nc * (p + f + 1) {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "the window of {} behind and {} ahead has {} taps (expected {} behind, {} ahead, {} taps)",
                     w.past,
                     w.future,
@@ -166,32 +177,32 @@ impl Fir {
                     p,
                     f,
                     nc * (p + f + 1)
-                ));
+                )));
             }
             if w.taps.iter().any(|t| !t.is_finite()) {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "the window of {} behind and {} ahead has a tap that is not a number",
                     p, f
-                ));
+                )));
             }
         }
         Ok(())
     }
 
     /// The estimate at every sample of `channels` (scaled as in training).
-    pub fn apply(&self, channels: &[Vec<f64>]) -> Result<Vec<f64>, String> {
+    pub fn apply(&self, channels: &[Vec<f64>]) -> Result<Vec<f64>, Error> {
         let n = channels.first().map_or(0, Vec::len);
         if channels.len() != self.scale.len() || channels.iter().any(|c| c.len() != n) {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "the learned smoother takes {} channels of equal length",
                 self.scale.len()
-            ));
+            )));
         }
         let width = self.past + self.future + 1;
         if n < width {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{n} samples are fewer than the learned smoother's window ({width})"
-            ));
+            )));
         }
         Ok((0..n)
             .map(|m| {
@@ -288,16 +299,20 @@ mod tests {
         assert!(
             Fir::fit(std::slice::from_ref(&t), &t, 10, 10, 1e-6)
                 .unwrap_err()
+                .to_string()
                 .contains("too few")
         );
         let mut bad = noise(400, 3);
         bad[17] = f64::NAN;
-        let e = Fir::fit(&[noise(400, 2)], &bad, 10, 10, 1e-6).unwrap_err();
+        let e = Fir::fit(&[noise(400, 2)], &bad, 10, 10, 1e-6)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("sample 17"), "{e}");
         let fir = Fir::fit(&[noise(400, 2)], &noise(400, 3), 10, 10, 1e-6).unwrap();
         assert!(
             fir.apply(&[noise(15, 2)])
                 .unwrap_err()
+                .to_string()
                 .contains("fewer than")
         );
     }

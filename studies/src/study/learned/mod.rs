@@ -65,6 +65,7 @@ use super::metrics::{BandMetrics, bandpass, butter, evaluate, filtfilt};
 use super::records::{Record, estimate};
 use super::runs::STEP;
 use super::standard::{DS, TRIM};
+use crate::Error;
 use fmu_estimator::offline::Sample;
 use sci_rs::signal::filter::design::FilterBandType;
 use sci_rs::signal::filter::sosfilt_dyn;
@@ -111,8 +112,12 @@ pub enum Lookahead {
 /// the RTS smoother's estimate is used (else the causal filter's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Partner {
+    /// The partner in words, for the reports (not read back).
     pub name: String,
+    /// The estimator's parameters by FMI name and value, as `--set` gives them; the rest at
+    /// their defaults.
     pub settings: Vec<(String, String)>,
+    /// The RTS smoother's estimate (offline, two-sided) rather than the causal filter's.
     pub smooth: bool,
 }
 
@@ -124,12 +129,19 @@ pub struct LearnedSmoother {
     pub format: u32,
     /// How it was made (vehicle, seed, run length).
     pub provenance: String,
+    /// The constant speed it was trained at \[m/s\]: records at another speed (by more than
+    /// 1 %) are refused, the taps holding the vehicle's dynamics at this one.
     pub speed: f64,
+    /// The sample step it was trained with \[s\]: records with another step are refused.
     pub step: f64,
+    /// Samples per grid point: the grid step is `speed * step * decimation`.
     pub decimation: usize,
+    /// Two-sided offline smoother or on-board fixed lag; decides whether the anti-alias filter
+    /// and the split run causally.
     pub lookahead: Lookahead,
     /// The hybrid's split wavelength \[m\] ([`Self::tune_split`]; 40 m until tuned).
     pub split: f64,
+    /// The Kalman estimate the hybrid takes the waves longer than `split` from.
     pub partner: Partner,
     fir: Fir,
 }
@@ -143,7 +155,7 @@ fn channels(
     step: f64,
     decimation: usize,
     causal: bool,
-) -> Result<Vec<Vec<f64>>, String> {
+) -> Result<Vec<Vec<f64>>, Error> {
     let cols: [fn(&Sample) -> f64; 3] = [|s| s.ws_acc_y, |s| s.ws_yaw_rate, |s| s.frame_acc_y];
     cols.iter()
         .map(|f| {
@@ -155,7 +167,7 @@ fn channels(
 
 /// Anti-alias low-pass (module docs, step 1), forward only when `causal`, and every
 /// `decimation`-th sample.
-fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec<f64>, String> {
+fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec<f64>, Error> {
     let fs = 1.0 / step;
     let mut sos = butter(
         8,
@@ -173,13 +185,13 @@ fn decimate(x: &[f64], step: f64, decimation: usize, causal: bool) -> Result<Vec
 
 /// The decimation that puts samples `grid` metres apart at `speed` (rounded to whole samples
 /// of the study's step); refuses a grid finer than one sample or coarser than half the window.
-pub fn decimation(speed: f64, grid: f64) -> Result<usize, String> {
+pub fn decimation(speed: f64, grid: f64) -> Result<usize, Error> {
     let sample = speed * STEP;
     if !(grid.is_finite() && grid >= 0.5 * sample && grid <= 0.5 * SMOOTHER_WINDOW) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the grid step must lie between one sample at {speed} m/s ({sample} m) and half the window ({} m), not {grid} m",
             0.5 * SMOOTHER_WINDOW
-        ));
+        )));
     }
     Ok(((grid / sample).round() as usize).max(1))
 }
@@ -215,20 +227,22 @@ impl LearnedSmoother {
         grid: f64,
         partner: Partner,
         provenance: &str,
-    ) -> Result<LearnedSmoother, String> {
+    ) -> Result<LearnedSmoother, Error> {
         let speed = constant_speed(&rec.samples, None)?;
         let decimation = decimation(speed, grid)?;
         let half_window = (SMOOTHER_WINDOW / (speed * STEP * decimation as f64)).round() as usize;
         if let Lookahead::FixedLag(n) = lookahead
             && n > half_window
         {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "a look-ahead of {n} grid points is beyond the window ({half_window} points, {SMOOTHER_WINDOW} m)"
-            ));
+            )));
         }
         let skip = (SKIP / STEP) as usize;
         if rec.samples.len() <= skip {
-            return Err("the training run is shorter than its start transient".into());
+            return Err(Error::input(
+                "the training run is shorter than its start transient",
+            ));
         }
         let (future, causal) = match lookahead {
             Lookahead::Smoother => (half_window, false),
@@ -270,19 +284,19 @@ impl LearnedSmoother {
         samples: &[Sample],
         h: f64,
         kalman: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>), String> {
+    ) -> Result<(Vec<f64>, Vec<f64>), Error> {
         if (h - self.step).abs() > 1e-9 * self.step {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "the learned smoother was trained with a step of {} s; the record's step is {h} s",
                 self.step
-            ));
+            )));
         }
         if kalman.len() != samples.len() {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{} Kalman estimates for {} samples",
                 kalman.len(),
                 samples.len()
-            ));
+            )));
         }
         constant_speed(samples, Some(self.speed))?;
         let est = self
@@ -305,13 +319,13 @@ impl LearnedSmoother {
     }
 
     /// The partner's Kalman estimate of `samples` (step `h`), one per sample.
-    pub fn kalman(&self, samples: &[Sample], h: f64) -> Result<Vec<f64>, String> {
+    pub fn kalman(&self, samples: &[Sample], h: f64) -> Result<Vec<f64>, Error> {
         let p = &self.partner;
         Ok(estimate(samples, h, &p.settings, None, p.smooth)?.1)
     }
 
     /// The learned estimate and the hybrid on `rec`, each evaluated against the truth.
-    pub fn evaluate(&self, rec: &Record) -> Result<(BandMetrics, BandMetrics), String> {
+    pub fn evaluate(&self, rec: &Record) -> Result<(BandMetrics, BandMetrics), Error> {
         let kalman = self.kalman(&rec.samples, STEP)?;
         self.evaluate_with(rec, &kalman)
     }
@@ -320,7 +334,7 @@ impl LearnedSmoother {
         &self,
         rec: &Record,
         kalman: &[f64],
-    ) -> Result<(BandMetrics, BandMetrics), String> {
+    ) -> Result<(BandMetrics, BandMetrics), Error> {
         let (est, hybrid) = self.apply(&rec.samples, STEP, kalman)?;
         let distance: Vec<f64> = rec
             .distance
@@ -336,7 +350,7 @@ impl LearnedSmoother {
 
     /// Chooses the split from [`SPLITS`] by the hybrid's mean whole-band Jrel on `validation`
     /// (records the taps were not fitted on); returns that Jrel.
-    pub fn tune_split(&mut self, validation: &[Record]) -> Result<f64, String> {
+    pub fn tune_split(&mut self, validation: &[Record]) -> Result<f64, Error> {
         let kalman: Vec<Vec<f64>> = validation
             .iter()
             .map(|r| self.kalman(&r.samples, STEP))
@@ -354,7 +368,9 @@ impl LearnedSmoother {
             }
         }
         if !best.1.is_finite() {
-            return Err("no split gave a finite accuracy on the validation records".into());
+            return Err(Error::input(
+                "no split gave a finite accuracy on the validation records",
+            ));
         }
         self.split = best.0;
         Ok(best.1)
@@ -366,52 +382,54 @@ impl LearnedSmoother {
     }
 
     /// Reads a saved smoother, checking its format and that its taps fit its windows.
-    pub fn from_json(text: &str, file: &Path) -> Result<LearnedSmoother, String> {
-        let l: LearnedSmoother = serde_json::from_str(text)
-            .map_err(|e| format!("{}: not a learned smoother file: {e}", file.display()))?;
+    pub fn from_json(text: &str, file: &Path) -> Result<LearnedSmoother, Error> {
+        let l: LearnedSmoother = serde_json::from_str(text).map_err(|e| {
+            Error::input(format!(
+                "{}: not a learned smoother file: {e}",
+                file.display()
+            ))
+        })?;
         if l.format != FORMAT {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{}: format {} (this orchestrator reads format {FORMAT})",
                 file.display(),
                 l.format
-            ));
+            )));
         }
         let finite = [l.speed, l.step, l.split]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0);
         if !finite || l.decimation == 0 {
-            return Err(format!(
+            return Err(Error::input(format!(
                 "{}: speed, step, split and decimation must be positive",
                 file.display()
-            ));
+            )));
         }
-        l.fir
-            .check()
-            .map_err(|e| format!("{}: {e}", file.display()))?;
+        l.fir.check().map_err(|e| e.context(file.display()))?;
         Ok(l)
     }
 }
 
 /// The record's speed, refusing records whose speed varies by more than 1 % or differs from
 /// `expected` by more than 1 %: the taps hold the vehicle's dynamics at one speed.
-fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, String> {
+fn constant_speed(samples: &[Sample], expected: Option<f64>) -> Result<f64, Error> {
     let (lo, hi) = samples
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
             (lo.min(s.speed), hi.max(s.speed))
         });
     if !(lo > 0.0 && hi.is_finite() && hi <= (1.0 + SPEED_TOLERANCE) * lo) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the learned smoother needs a constant speed; the record's speed ranges from {lo} to {hi} m/s"
-        ));
+        )));
     }
     let v = 0.5 * (lo + hi);
     if let Some(e) = expected
         && (v - e).abs() > 0.01 * e
     {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the learned smoother was trained at {e} m/s; the record runs at {v} m/s"
-        ));
+        )));
     }
     Ok(v)
 }
@@ -527,8 +545,12 @@ mod tests {
         let s = |v: f64| Sample::from_columns(&[v], &[0.0], &[0.0], &[0.0])[0];
         let varying = vec![s(10.0), s(20.0)];
         let e = constant_speed(&varying, None).unwrap_err();
+        assert_eq!(e.exit_code(), 2, "bad input: {e}");
+        let e = e.to_string();
         assert!(e.contains("from 10 to 20 m/s"), "{e}");
-        let e = constant_speed(&[s(15.0)], Some(20.0)).unwrap_err();
+        let e = constant_speed(&[s(15.0)], Some(20.0))
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("trained at 20 m/s") && e.contains("15 m/s"),
             "{e}"

@@ -11,6 +11,7 @@
 //! which keep the normal matrix positive semi-definite; the filters' start and end transients,
 //! a few hundred points in hundreds of thousands, are left out).
 
+use crate::Error;
 use crate::study::metrics::{Band, ORDER, butter};
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
@@ -18,7 +19,7 @@ use sci_rs::signal::filter::design::FilterBandType;
 
 /// `|H(f)|^2` of the metric's Butterworth band-pass for `band` on a grid of step `ds`, at
 /// frequency `f` cycles per metre (the same design the metric filters with).
-pub fn band_power(band: &Band, ds: f64) -> Result<impl Fn(f64) -> f64, String> {
+pub fn band_power(band: &Band, ds: f64) -> Result<impl Fn(f64) -> f64, Error> {
     let sos = butter(
         ORDER,
         vec![1.0 / band.long, 1.0 / band.short],
@@ -54,6 +55,8 @@ pub struct Correlations {
 }
 
 impl Correlations {
+    /// Empty sums for `channels` regressors at lags up to `span` each way, and `extra` weighted
+    /// target powers ([`Self::extra`]).
     pub fn new(channels: usize, span: usize, extra: usize) -> Correlations {
         Correlations {
             span,
@@ -143,6 +146,7 @@ impl Correlations {
         self.ct[c][(tau + self.span as isize) as usize] / self.count as f64
     }
 
+    /// Samples added over all records: the `N` the correlations are divided by.
     pub fn count(&self) -> usize {
         self.count
     }

@@ -1,18 +1,19 @@
 //! The hybrid: the learned estimate for the short waves, a Kalman estimate for the long ones,
 //! through a complementary split (module docs of [`super`], step 5 and "On board").
 
+use crate::Error;
 use crate::study::metrics::{butter, filtfilt};
 use sci_rs::signal::filter::design::FilterBandType;
 use sci_rs::signal::filter::sosfilt_dyn;
 
 /// Zero-phase high-pass of a signal on a grid of step `ds` \[m\], cut-off wavelength `split` \[m\].
-pub fn highpass(x: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
+pub fn highpass(x: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, Error> {
     let sos = butter(4, vec![1.0 / split], FilterBandType::Highpass, 1.0 / ds)?;
     Ok(filtfilt(x, &sos, "hybrid's high-pass")?)
 }
 
 /// The hybrid estimate `kalman + HP(learned - kalman)` (module docs, step 5).
-pub fn hybrid(learned: &[f64], kalman: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, String> {
+pub fn hybrid(learned: &[f64], kalman: &[f64], ds: f64, split: f64) -> Result<Vec<f64>, Error> {
     let d: Vec<f64> = learned.iter().zip(kalman).map(|(a, b)| a - b).collect();
     let hp = highpass(&d, ds, split)?;
     Ok(kalman.iter().zip(hp).map(|(k, h)| k + h).collect())
@@ -27,7 +28,7 @@ pub fn causal_hybrid(
     kalman: &[f64],
     ds: f64,
     split: f64,
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, Error> {
     let mut sos = butter(2, vec![1.0 / split], FilterBandType::Highpass, 1.0 / ds)?;
     let d: Vec<f64> = learned.iter().zip(kalman).map(|(a, b)| a - b).collect();
     let hp = sosfilt_dyn(d.iter(), &mut sos);

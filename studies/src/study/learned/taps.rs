@@ -130,7 +130,11 @@ pub const CONTACT_MEMORY: f64 = 200.0;
 /// What to fit.
 #[derive(Debug, Clone)]
 pub struct Options {
+    /// The constant speeds of the training and validation runs \[m/s\]: the bank's speeds,
+    /// between which the runtime blends.
     pub speeds: Vec<f64>,
+    /// The Kalker-coefficient scales (contact conditions) to run the vehicle at, one run each
+    /// per speed; a condition under which the vehicle is unstable at a speed is left out there.
     pub kalker_scales: Vec<f64>,
     /// With several Kalker scales: fit each condition's taps on its own runs and the contact
     /// model that blends them ([`fmu_estimator::learned::contact`]); false: one set of taps on
@@ -140,7 +144,10 @@ pub struct Options {
     pub lags: Vec<f64>,
     /// Fit the four-sensor entries too (the vehicle must have `ws_roll_rate`).
     pub roll_rate: bool,
+    /// Track seed of the training runs ([`TRAINING_DISTANCE`] each).
     pub training_seed: u32,
+    /// Track seeds the ridge and band weights are chosen on and the windows' rms errors
+    /// measured ([`VALIDATION_DISTANCE`] each); they must differ from the training seed.
     pub validation_seeds: Vec<u32>,
     /// The command line, for the provenance.
     pub command: String,
@@ -258,7 +265,7 @@ fn run(
     };
     let ws_y = table
         .column(&format!("vehicle.{WS_Y}"))
-        .ok_or("no column vehicle.ws_y")?;
+        .ok_or_else(|| Error::input("no column vehicle.ws_y"))?;
     if ws_y.iter().any(|y| !(y.abs() <= UNSTABLE_WS_Y)) {
         return Ok(None);
     }
@@ -269,7 +276,7 @@ fn run(
 /// The channel is the time-varying filter's ([`offline::process`] runs the Kalman filter with
 /// its own gain), as the shipped taps were fitted; the FMU's scheduled steady-state channel
 /// equals it at the training's constant speeds once the start-up has passed.
-fn on_grid(rec: &Record) -> Result<GridRun, String> {
+fn on_grid(rec: &Record) -> Result<GridRun, Error> {
     let config = kalman_config()?;
     let out = offline::process(&config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
@@ -292,7 +299,7 @@ fn on_grid(rec: &Record) -> Result<GridRun, String> {
 
 /// The Kalman channel the taps are fitted with: the estimator's defaults and its built-in
 /// calibration, as the bank's contract states ([`Contract::expected`]).
-fn kalman_config() -> Result<fmu_estimator::config::Config, String> {
+fn kalman_config() -> Result<fmu_estimator::config::Config, Error> {
     let values = offline::settings(&[])?;
     Ok(offline::config(&values, None)?.0)
 }
@@ -321,7 +328,7 @@ impl Fit {
         channels: Vec<usize>,
         span: usize,
         band_weights: &[f64; 4],
-    ) -> Result<Fit, String> {
+    ) -> Result<Fit, Error> {
         let skip = points(SKIP);
         let col = |r: &GridRun, c: usize| -> Vec<f64> {
             r.cells.cells[skip..].iter().map(|x| x[c]).collect()
@@ -333,10 +340,10 @@ impl Fit {
             let mean = all.iter().sum::<f64>() / n;
             let sd = (all.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
             if !(sd.is_finite() && sd > 0.0) {
-                return Err(format!(
+                return Err(Error::input(format!(
                     "training channel {} is constant or not finite",
                     CHANNELS[c]
-                ));
+                )));
             }
             scale.push(sd);
         }
@@ -382,7 +389,7 @@ impl Fit {
     }
 
     /// Taps (physical units, file order) of the window `past` behind, `future` ahead.
-    fn solve(&self, past: usize, future: usize, ridge: f64) -> Result<Vec<f64>, String> {
+    fn solve(&self, past: usize, future: usize, ridge: f64) -> Result<Vec<f64>, Error> {
         let len = past + future + 1;
         let nc = self.channels.len();
         let k = nc * len;
@@ -400,7 +407,9 @@ impl Fit {
         });
         let w = m
             .cholesky()
-            .ok_or("the tap fit's normal equations are not positive definite")?
+            .ok_or_else(|| {
+                Error::input("the tap fit's normal equations are not positive definite")
+            })?
             .solve(&rhs);
         Ok((0..k).map(|i| w[i] / self.scale[i / len]).collect())
     }
@@ -459,7 +468,7 @@ fn validate_from_start(
     runs: &[GridRun],
     windows: &[window::Window],
     future: usize,
-) -> Result<f64, String> {
+) -> Result<f64, Error> {
     let mut obj = 0.0;
     for r in runs {
         let (pos, est) = apply_from_start(r, windows, future);
@@ -525,10 +534,9 @@ fn speed_runs(
         .filter_map(|(k, r)| r.map(|r| (k, r)))
         .collect();
     if training.is_empty() {
-        return Err(format!(
+        return Err(Error::input(format!(
             "at {speed} m/s the vehicle is unstable under every training contact condition"
-        )
-        .into());
+        )));
     }
     // Validated under every contact condition trained on: robust taps are chosen for all of them.
     let cases: Vec<(u32, f64)> = o
@@ -547,7 +555,9 @@ fn speed_runs(
         .filter_map(|(k, r)| r.map(|r| (k, r)))
         .collect();
     if validation.is_empty() {
-        return Err(format!("at {speed} m/s every validation run is unstable").into());
+        return Err(Error::input(format!(
+            "at {speed} m/s every validation run is unstable"
+        )));
     }
     Ok((training, validation))
 }
@@ -558,7 +568,7 @@ type Chosen = (usize, f64, f64, Vec<(Vec<f64>, usize)>);
 
 /// Every band weighting and ridge for the windows `pasts` looking `lag` cells ahead, judged on
 /// the validation runs `valid` from their start: the best.
-fn choose(fits: &[Fit], valid: &[GridRun], pasts: &[usize], lag: usize) -> Result<Chosen, String> {
+fn choose(fits: &[Fit], valid: &[GridRun], pasts: &[usize], lag: usize) -> Result<Chosen, Error> {
     let tried: Vec<Chosen> = (0..fits.len())
         .flat_map(|f| RIDGES.iter().map(move |r| (f, *r)))
         .collect::<Vec<_>>()
@@ -567,12 +577,12 @@ fn choose(fits: &[Fit], valid: &[GridRun], pasts: &[usize], lag: usize) -> Resul
             let windows: Vec<(Vec<f64>, usize)> = pasts
                 .iter()
                 .map(|p| Ok((fits[f].solve(*p, lag, ridge)?, *p)))
-                .collect::<Result<_, String>>()?;
+                .collect::<Result<_, Error>>()?;
             let objective =
                 validate_from_start(valid, &ready(&fits[f].channels, &windows, lag), lag)?;
             Ok((f, ridge, objective, windows))
         })
-        .collect::<Result<_, String>>()?;
+        .collect::<Result<_, Error>>()?;
     Ok(tried
         .into_iter()
         .min_by(|a, b| a.2.total_cmp(&b.2))
@@ -592,7 +602,7 @@ struct Group<'a> {
 }
 
 impl Group<'_> {
-    fn entries(&self, lags: &[usize]) -> Result<Vec<Entry>, String> {
+    fn entries(&self, lags: &[usize]) -> Result<Vec<Entry>, Error> {
         let past = points(BANK_WINDOW);
         let span = past + lags.iter().copied().max().unwrap_or(0);
         let fits: Vec<Fit> = BAND_WEIGHTS
@@ -697,24 +707,24 @@ fn fit_speed(
 /// Fits the bank (speeds one after the other, each speed's runs and solves in parallel).
 pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Error> {
     if o.validation_seeds.contains(&o.training_seed) {
-        return Err("the validation seeds must differ from the training seed".into());
+        return Err(Error::input(
+            "the validation seeds must differ from the training seed",
+        ));
     }
     if o.speeds.is_empty() || o.speeds.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the speeds must be positive numbers of m/s; got {:?}",
             o.speeds
-        )
-        .into());
+        )));
     }
     if o.lags
         .iter()
         .any(|l| !(l.is_finite() && *l > 0.0 && *l <= BANK_WINDOW))
     {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the lags must lie in (0, {BANK_WINDOW}] m; got {:?}",
             o.lags
-        )
-        .into());
+        )));
     }
     let mut entries = vec![];
     let mut models = vec![];

@@ -2,6 +2,7 @@
 //! (module docs of [`super`], step 6).
 
 use super::{LearnedSmoother, Lookahead, Partner};
+use crate::Error;
 use crate::study::records::{Record, record};
 use crate::study::runs::{Fmus, STEP, STOP, seeded};
 
@@ -19,19 +20,20 @@ pub fn training_runs(
     if let Some(v) = speed
         && !(v.is_finite() && v > 0.0)
     {
-        return Err(format!("the training speed must be a positive number of m/s; got {v}").into());
+        return Err(Error::input(format!(
+            "the training speed must be a positive number of m/s; got {v}"
+        )));
     }
     if !(stop > 2.0 * STOP) {
-        return Err(format!(
+        return Err(Error::input(format!(
             "the training run must be longer than {} s (the first {STOP} s choose the split); got {stop} s",
             2.0 * STOP
-        )
-        .into());
+        )));
     }
     if kalker_scales.is_empty() || kalker_scales.iter().any(|k| !(k.is_finite() && *k > 0.0)) {
-        return Err(
-            format!("the Kalker scales must be positive numbers; got {kalker_scales:?}").into(),
-        );
+        return Err(Error::input(format!(
+            "the Kalker scales must be positive numbers; got {kalker_scales:?}"
+        )));
     }
     let runs = kalker_scales
         .iter()
@@ -74,9 +76,12 @@ pub fn learn(
     lookahead: Lookahead,
     grid: f64,
     partner: Partner,
-) -> Result<(LearnedSmoother, f64), String> {
+) -> Result<(LearnedSmoother, f64), Error> {
     let head = validation_len();
-    let mut fit = runs.first().ok_or("no training run")?.tail(head);
+    let mut fit = runs
+        .first()
+        .ok_or_else(|| Error::input("no training run"))?
+        .tail(head);
     for r in &runs[1..] {
         // The joints are a handful of samples in hundreds of thousands: left as they are.
         let t = r.tail(head);
