@@ -190,15 +190,27 @@ pub enum Skip {
 /// The filter state and everything it needs, for `N` states.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Engine<const N: usize> {
+    /// The continuous model (the paper's section 3, "Dynamic modeling"), discretized again when the speed or step changes.
     pub space: StateSpace<N>,
+    /// How `space` is discretized (the paper's second-order Taylor scheme, or the exact matrix
+    /// exponential).
     pub scheme: Scheme,
+    /// Time-varying (the paper's) or scheduled steady-state Kalman gain.
     pub gain: Gain,
+    /// Measurement noise covariance R of the four sensors (calibration or parameters).
     pub r: Mat4,
+    /// The state estimate and its covariance.
     pub filter: Kalman<N>,
+    /// The discrete matrices of the last step's speed and step; none before the first step.
     pub discrete: Option<Discrete<N>>,
+    /// The steady-state gain in use (`Gain::SteadyState` only).
     pub steady: Option<SteadyState<N>>,
+    /// How often the discrete matrices were rebuilt (the FMU output `rebuilds`).
     pub rebuilds: i32,
+    /// How many updates were skipped (the FMU output `skipped_updates`).
     pub skipped: i32,
+    /// The filter's steps for the RTS smoother, kept only after [`Engine::record_history`]
+    /// (offline smoothing); none in the FMU.
     pub history: Option<History<N>>,
     /// The steady-state gains solved so far, by speed bin, for the step `gains_h` (derived
     /// data: not part of a saved state).
@@ -216,6 +228,8 @@ pub struct Engine<const N: usize> {
 }
 
 impl<const N: usize> Engine<N> {
+    /// An engine that starts at the zero state with covariance `p0`; the discrete matrices are
+    /// built at the first step, when the speed and step are known.
     pub fn new(
         space: StateSpace<N>,
         scheme: Scheme,

@@ -148,6 +148,7 @@ pub mod vr {
     pub const P0_STATIONARY: u32 = 2;
     /// `use_roll_rate` (Boolean parameter).
     pub const USE_ROLL_RATE: u32 = 3;
+    /// `allow_other_kalman` (Boolean parameter).
     pub const ALLOW_OTHER_KALMAN: u32 = 4;
     // String
     /// `calibration_file` (String parameter).
