@@ -112,8 +112,8 @@ pub struct Connection {
 /// nothing (see [`crate::cli::Common::options`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Experiment {
-    /// Start time \[s\] (SSP `startTime`, 0 when absent). Written back by `export-ssp`; a run
-    /// starts at `--start` (default 0), not here.
+    /// Start time \[s\] (SSP `startTime`, 0 when absent): where `run` starts unless `--start`
+    /// says otherwise; written back by `export-ssp`.
     pub start: f64,
     /// Stop time \[s\] (SSP `stopTime`), not before `start`; none when the description gives
     /// none.

@@ -3,6 +3,8 @@
 
 mod common;
 
+use common::rows;
+
 use orchestrator::master::{Algorithm, Cosimulation, Progress, RunError, RunOptions};
 use orchestrator::system::{Component, Connection, Endpoint, Experiment, System, Value};
 
@@ -46,15 +48,6 @@ fn options(dir: &std::path::Path, stop: f64, step: f64, algorithm: Algorithm) ->
         ]),
         ..RunOptions::new(0.0, stop, step)
     }
-}
-
-fn rows(path: &std::path::Path) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
-        .collect()
 }
 
 #[test]

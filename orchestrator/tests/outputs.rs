@@ -294,3 +294,52 @@ fn info_does_not_call_the_learned_filter_a_kalman_filter_estimate() {
     assert!(!text.contains("Kalman filter estimate"), "{text}");
     assert!(text.contains("by default the learned filter"), "{text}");
 }
+
+#[test]
+fn run_starts_at_the_system_start_time_unless_start_is_given() {
+    // The SSP DefaultExperiment's startTime is where the run starts (it was read, checked and
+    // written back by export-ssp, but the run started at 0 regardless).
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ssd = d.join("sys.ssd");
+    std::fs::write(
+        &ssd,
+        format!(
+            r#"<?xml version="1.0" encoding="UTF-8"?>
+<ssd:SystemStructureDescription version="1.0" name="s"
+    xmlns:ssd="http://ssp-standard.org/SSP1/SystemStructureDescription">
+  <ssd:System name="root">
+    <ssd:Elements>
+      <ssd:Component name="dq" source="{}"/>
+    </ssd:Elements>
+  </ssd:System>
+  <ssd:DefaultExperiment startTime="5" stopTime="5.5"/>
+</ssd:SystemStructureDescription>
+"#,
+            common::fmu("Dahlquist").display()
+        ),
+    )
+    .unwrap();
+    let first_and_last = |extra: &[&str]| {
+        let out = d.join("out");
+        let mut a: Vec<&dyn AsRef<std::ffi::OsStr>> =
+            vec![&"run", &ssd, &"--step", &"0.1", &"--quiet", &"--out", &out];
+        for x in extra {
+            a.push(x);
+        }
+        let o = orchestrator(&a);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let rows = common::rows(&out.join("results.csv"));
+        (rows[0][0], rows[rows.len() - 1][0])
+    };
+    let (first, last) = first_and_last(&[]);
+    assert!(
+        (first - 5.0).abs() < 1e-12 && (last - 5.5).abs() < 1e-12,
+        "{first}..{last}"
+    );
+    let (first, last) = first_and_last(&["--start", "5.2"]);
+    assert!(
+        (first - 5.2).abs() < 1e-12 && (last - 5.5).abs() < 1e-12,
+        "{first}..{last}"
+    );
+}

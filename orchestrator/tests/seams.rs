@@ -8,6 +8,8 @@
 
 mod common;
 
+use common::rows;
+
 use orchestrator::master::{
     Address, Cosimulation, End, Flow, ObserveError, Observer, RunError, RunOptions, StopToken,
     Values,
@@ -63,15 +65,6 @@ fn recorded(dir: &std::path::Path, stop: f64, vars: &[(&str, &str)]) -> RunOptio
         record: Some(vars.iter().map(|(c, v)| Endpoint::new(c, v)).collect()),
         ..RunOptions::new(0.0, stop, H)
     }
-}
-
-fn rows(path: &std::path::Path) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
-        .collect()
 }
 
 /// An observer made of a function of (step, time, values), step 0 being the start; it

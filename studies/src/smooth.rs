@@ -45,21 +45,34 @@ pub enum RecordingError {
         file: PathBuf,
     },
     /// The first two times do not increase (the step would be zero or negative).
-    #[error("{}: time does not increase at line 3", file.display())]
+    #[error("{}: time does not increase at {place}", file.display())]
     TimeNotIncreasing {
         /// The recording.
         file: PathBuf,
+        /// The second row: `line N` of a CSV file (the file's own line), `row N` of Parquet.
+        place: String,
+    },
+    /// A time that is not a finite number: the steps around it cannot be checked.
+    #[error("{}: time {time} at {place} is not a finite number", file.display())]
+    TimeNotFinite {
+        /// The recording.
+        file: PathBuf,
+        /// Where: `line N` of a CSV file, `row N` of Parquet.
+        place: String,
+        /// The value read.
+        time: f64,
     },
     /// A time step differs from the first by more than 1e-6 of it: the filter needs one step.
     #[error(
-        "{}: the time step changes at line {line} ({step} s instead of {expected} s): the filter needs a constant step",
+        "{}: the time step changes at {place} ({step} s instead of {expected} s): the filter needs a constant step",
         file.display()
     )]
     StepChanges {
         /// The recording.
         file: PathBuf,
-        /// The file line of the later row, counting the header as line 1.
-        line: usize,
+        /// The later row: `line N` of a CSV file (blank and comment lines counted, as an
+        /// editor shows them), `row N` of Parquet.
+        place: String,
         /// That row's step \[s\].
         step: f64,
         /// The first step \[s\].
@@ -82,15 +95,35 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
     if time.len() < 2 {
         return Err(RecordingError::FewRows { file: file() });
     }
+    // Row k's place as the user finds it: the file's own line (the reader skips blank and
+    // comment lines but keeps their numbers), or the row of a Parquet file (header line 0).
+    let place = |k: usize| {
+        let n = cols.lines.get(k).copied().unwrap_or(k + 1);
+        if cols.header_line == 0 {
+            format!("row {n}")
+        } else {
+            format!("line {n}")
+        }
+    };
+    if let Some(k) = time.iter().position(|t| !t.is_finite()) {
+        return Err(RecordingError::TimeNotFinite {
+            file: file(),
+            place: place(k),
+            time: time[k],
+        });
+    }
     let h = time[1] - time[0];
     if !(h > 0.0) {
-        return Err(RecordingError::TimeNotIncreasing { file: file() });
+        return Err(RecordingError::TimeNotIncreasing {
+            file: file(),
+            place: place(1),
+        });
     }
     for (k, w) in time.windows(2).enumerate() {
         if ((w[1] - w[0]) - h).abs() > 1e-6 * h {
             return Err(RecordingError::StepChanges {
                 file: file(),
-                line: k + 3,
+                place: place(k + 1),
                 step: w[1] - w[0],
                 expected: h,
             });
@@ -298,12 +331,37 @@ mod tests {
             "uneven",
             "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n0,1,0,0,0\n0.001,1,0,0,0\n0.003,1,0,0,0\n",
         );
-        let e = read_samples(&p).unwrap_err();
+        let e = read_samples(&p).unwrap_err().to_string();
         assert!(
-            matches!(e, RecordingError::StepChanges { line: 4, .. }),
+            e.contains("at line 4 (") && e.contains("constant step"),
             "{e}"
         );
-        let e = e.to_string();
-        assert!(e.contains("line 4") && e.contains("constant step"), "{e}");
+        // The file's own line numbers, with a comment and a blank line before the rows.
+        let p = write(
+            "commented",
+            "# logger v2\ntime,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n\n0,1,0,0,0\n0.001,1,0,0,0\n0.003,1,0,0,0\n",
+        );
+        let e = read_samples(&p).unwrap_err().to_string();
+        assert!(e.contains("at line 6 ("), "{e}");
+        let p = write(
+            "backwards",
+            "# logger v2\ntime,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n0,1,0,0,0\n\n0,1,0,0,0\n",
+        );
+        let e = read_samples(&p).unwrap_err().to_string();
+        assert!(e.contains("does not increase at line 5"), "{e}");
+    }
+
+    #[test]
+    fn a_time_that_is_not_a_number_is_named() {
+        // NaN compares false with everything, so the step check alone would let it through.
+        let p = write(
+            "nan-time",
+            "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y\n0,1,0,0,0\n0.001,1,0,0,0\nnan,1,0,0,0\n0.003,1,0,0,0\n",
+        );
+        let e = read_samples(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("time NaN at line 4 is not a finite number"),
+            "{e}"
+        );
     }
 }

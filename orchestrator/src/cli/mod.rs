@@ -32,9 +32,10 @@ pub struct Common {
     /// experiment).
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub step: Option<f64>,
-    /// Start time in s.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = time)]
-    pub start: f64,
+    /// Start time in s (default for `run`: the system's startTime, 0 when it gives none; for
+    /// `simulate`: 0).
+    #[arg(long, allow_negative_numbers = true, value_parser = time)]
+    pub start: Option<f64>,
     /// Output directory for the results (and manifest.json).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
@@ -118,8 +119,8 @@ impl Common {
         }
     }
 
-    /// The run's options: stop and step from the command line, else the system's, else the
-    /// first FMU's default experiment.
+    /// The run's options: start from the command line, else the system's; stop and step from
+    /// the command line, else the system's, else the first FMU's default experiment.
     pub fn options(&self, system: &System, cosim: &Cosimulation) -> Result<RunOptions, RunError> {
         let default = cosim
             .model_descriptions()
@@ -145,13 +146,19 @@ impl Common {
                     .collect::<Result<Vec<_>, _>>()?,
             )
         };
-        self.run_options(stop, step, record)
+        self.run_options(
+            self.start.unwrap_or(system.experiment.start),
+            stop,
+            step,
+            record,
+        )
     }
 
-    /// The run's options from the command line, with the stop time, step and recorded
-    /// variables the command resolved.
+    /// The run's options from the command line, with the start and stop times, step and
+    /// recorded variables the command resolved.
     pub fn run_options(
         &self,
+        start: f64,
         stop: f64,
         step: f64,
         record: Option<Vec<Endpoint>>,
@@ -164,7 +171,7 @@ impl Common {
             progress: !self.quiet,
             log: self.log_config(),
             max_output: self.max_output_size,
-            ..RunOptions::new(self.start, stop, step)
+            ..RunOptions::new(start, stop, step)
         })
     }
 

@@ -70,7 +70,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<RunSummary, RunError> {
             .to_string();
         Some(c.record.iter().map(|r| Endpoint::new(&name, r)).collect())
     };
-    let mut opts = c.run_options(stop, step, record)?;
+    let mut opts = c.run_options(c.start.unwrap_or(0.0), stop, step, record)?;
     let _out = c.hold_output(
         &mut opts,
         concat!("orchestrator ", env!("CARGO_PKG_VERSION")),

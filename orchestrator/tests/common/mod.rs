@@ -54,3 +54,14 @@ pub fn hidden_files(dir: &Path) -> Vec<String> {
         .filter(|n| n.starts_with('.'))
         .collect()
 }
+
+/// A results CSV's rows (header skipped), every field a number.
+#[allow(dead_code)] // only the master's tests read results this way
+pub fn rows(path: &Path) -> Vec<Vec<f64>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect()
+}

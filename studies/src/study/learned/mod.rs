@@ -1,6 +1,16 @@
-//! A learned linear smoother: the alignment estimated from the three sensors by a multichannel,
-//! two-sided FIR (Wiener) filter whose taps are fitted on the calibration seed's run, and its
-//! combination with the Kalman (RTS) smoother, which keeps the long waves.
+//! The learned filters: the estimator FMU's default and the offline studies' smoother.
+//!
+//! | what | where | used by |
+//! |---|---|---|
+//! | the tap bank the estimator FMU runs by default (`estimator` 2): causal and fixed-lag taps per speed, sensor set and contact condition, fitted in the metric's bands, with the bank's contract | [`taps`] (`alignment-studies taps`); run-time side `fmu_estimator::learned` | `fmu-estimator/resources/learned*.taps`, the FMU, `smooth --learned`, the Python bindings |
+//! | the contact condition's estimator stored in that bank | `contact` | [`taps`] |
+//! | the band-limited correlations the bank's fit solves | [`spectra`] | [`taps`] |
+//! | the offline learned smoother below (two-sided FIR + Kalman RTS hybrid) | this module, [`Fir`] | `alignment-studies learn` and `variants` |
+//!
+//! The rest of these docs describe the offline smoother: the alignment estimated from the three
+//! sensors by a multichannel, two-sided FIR (Wiener) filter whose taps are fitted on the
+//! calibration seed's run, and its combination with the Kalman (RTS) smoother, which keeps the
+//! long waves. The shipped bank's method is in [`taps`] and docs/learned-filter.md.
 //!
 //! # Why
 //! `docs/cross-level.md`: the Kalman filter's D1 error on our vehicle comes from the track's
