@@ -178,20 +178,18 @@ impl Model for Estimator {
         h: f64,
         log: &Logger,
     ) -> Result<StepOutcome, String> {
-        let speed = v.real[vr::SPEED as usize];
-        let mut outcome = StepOutcome::Ok;
-        let settings = step::Settings {
-            min_speed: self.min_speed,
-            design_speed: self.design_speed,
-        };
         let input = step::Input {
-            speed,
+            speed: v.real[vr::SPEED as usize],
             sensors: [
                 v.real[vr::WS_ACC_Y as usize],
                 v.real[vr::WS_YAW_RATE as usize],
                 v.real[vr::FRAME_ACC_Y as usize],
                 v.real[vr::WS_ROLL_RATE as usize],
             ],
+        };
+        let settings = step::Settings {
+            min_speed: self.min_speed,
+            design_speed: self.design_speed,
         };
         let core = self.core.as_mut().ok_or("the filter was not initialized")?;
         let stepped = step::step(
@@ -203,80 +201,115 @@ impl Model for Estimator {
             input,
         )
         .map_err(|e| e.to_string())?;
-        let (update, implausible) = match stepped {
+        match stepped {
             step::Stepped::Held { finite_speed } => {
-                if !self.holding {
-                    log.info(&format!(
-                        "speed {speed} m/s is below min_speed {} m/s: holding the estimate",
-                        self.min_speed
-                    ));
-                    self.holding = true;
-                }
-                if !finite_speed {
-                    self.repeats.warn(log, "non-finite speed", || {
-                        format!("non-finite speed {speed}: estimate held")
-                    });
-                    outcome = StepOutcome::Warning;
-                }
                 v.boolean[vr::UPDATED as usize] = false;
-                return Ok(outcome);
+                Ok(self.held(input.speed, finite_speed, log))
             }
             step::Stepped::Filtered {
                 update,
                 implausible,
-            } => (update, implausible),
-        };
-        self.holding = false;
-        if !implausible.is_empty() {
-            self.repeats.warn(log, "implausible sensor sample", || {
-                format!(
-                    "implausible sensor sample ({}): skipped like a non-finite one",
-                    implausible.join(", ")
-                )
-            });
-            outcome = StepOutcome::Warning;
+            } => {
+                self.holding = false;
+                let mut outcome = self.note_implausible(&implausible, log);
+                self.note_step(h, log);
+                if let Some(note) = self.core.as_mut().and_then(|c| c.take_start_note()) {
+                    log.warning(&note);
+                }
+                let updated = match update {
+                    Ok(nis) => {
+                        v.real[vr::NIS as usize] = nis;
+                        true
+                    }
+                    Err(skip) => {
+                        self.note_skip(skip, implausible.is_empty(), input.sensors, log);
+                        outcome = StepOutcome::Warning;
+                        false
+                    }
+                };
+                v.boolean[vr::UPDATED as usize] = updated;
+                self.note_speed_range(input.speed, log);
+                self.write_outputs(v);
+                Ok(outcome)
+            }
         }
+    }
+}
+
+/// What a step logs, once or by [`Repeats`], so that a long run's log says each thing once and
+/// counts the rest. Apart from [`Model::do_step`] so the step reads as the filter's sequence.
+impl Estimator {
+    /// The filter held (speed below `min_speed`, or not finite): said once per hold.
+    fn held(&mut self, speed: f64, finite_speed: bool, log: &Logger) -> StepOutcome {
+        if !self.holding {
+            log.info(&format!(
+                "speed {speed} m/s is below min_speed {} m/s: holding the estimate",
+                self.min_speed
+            ));
+            self.holding = true;
+        }
+        if finite_speed {
+            return StepOutcome::Ok;
+        }
+        self.repeats.warn(log, "non-finite speed", || {
+            format!("non-finite speed {speed}: estimate held")
+        });
+        StepOutcome::Warning
+    }
+
+    /// Sensors replaced as implausible this step.
+    fn note_implausible(&mut self, implausible: &[String], log: &Logger) -> StepOutcome {
+        if implausible.is_empty() {
+            return StepOutcome::Ok;
+        }
+        self.repeats.warn(log, "implausible sensor sample", || {
+            format!(
+                "implausible sensor sample ({}): skipped like a non-finite one",
+                implausible.join(", ")
+            )
+        });
+        StepOutcome::Warning
+    }
+
+    /// A communication step other than the taps' sample step: said once.
+    fn note_step(&mut self, h: f64, log: &Logger) {
         if let Some(l) = self.learned.as_ref()
             && !self.step_warned
             && (h - l.sample_step()).abs() > STEP_TOLERANCE * l.sample_step()
         {
             log.warning(&format!(
-                    "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",
-                    l.sample_step()
-                ));
+                "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",
+                l.sample_step()
+            ));
             self.step_warned = true;
         }
-        if let Some(note) = core.take_start_note() {
-            log.warning(&note);
-        }
-        let updated = match update {
-            Ok(nis) => {
-                v.real[vr::NIS as usize] = nis;
-                true
+    }
+
+    /// A skipped measurement update; a non-finite sample already reported as implausible is
+    /// not reported twice.
+    fn note_skip(&mut self, skip: Skip, unreported: bool, sensors: [f64; 4], log: &Logger) {
+        match skip {
+            Skip::NonFinite if unreported => {
+                self.repeats.warn(log, "non-finite sensor sample", || {
+                    format!(
+                        "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
+                        sensors[0], sensors[1], sensors[2]
+                    )
+                });
             }
-            Err(Skip::NonFinite) => {
-                if implausible.is_empty() {
-                    self.repeats.warn(log, "non-finite sensor sample", || {
-                        format!(
-                            "non-finite sensor sample (ws_acc_y={}, ws_yaw_rate={}, frame_acc_y={}): measurement update skipped, prediction kept",
-                            input.sensors[0], input.sensors[1], input.sensors[2]
-                        )
-                    });
-                }
-                outcome = StepOutcome::Warning;
-                false
-            }
-            Err(Skip::NotPositiveDefinite) => {
+            Skip::NonFinite => {}
+            Skip::NotPositiveDefinite => {
                 self.repeats
                     .warn(log, "innovation covariance not positive definite", || {
                         "innovation covariance not positive definite: measurement update skipped"
                             .into()
                     });
-                outcome = StepOutcome::Warning;
-                false
             }
-        };
-        v.boolean[vr::UPDATED as usize] = updated;
+        }
+    }
+
+    /// The speed leaving the learned taps' range: said each time it leaves.
+    fn note_speed_range(&mut self, speed: f64, log: &Logger) {
         if let Some(l) = self.learned.as_ref() {
             let (lo, hi) = l.speed_range();
             let outside = !(speed >= lo && speed <= hi);
@@ -287,8 +320,6 @@ impl Model for Estimator {
             }
             self.outside = outside;
         }
-        self.write_outputs(v);
-        Ok(outcome)
     }
 }
 

@@ -37,100 +37,15 @@ impl Fir {
         future: usize,
         ridge: f64,
     ) -> Result<Fir, Error> {
-        let n = target.len();
-        if channels.is_empty() || channels.iter().any(|c| c.len() != n) {
-            return Err(Error::input(
-                "the learned smoother needs channels as long as the target",
-            ));
-        }
-        let width = past + future + 1;
-        if n < 2 * width {
-            return Err(Error::input(format!(
-                "{n} training samples are too few for a window of {width} (at least {})",
-                2 * width
-            )));
-        }
-        if let Some(k) = target.iter().position(|v| !v.is_finite()) {
-            return Err(Error::input(format!(
-                "training target sample {k} is not a number"
-            )));
-        }
-        let mut scale = Vec::with_capacity(channels.len());
-        for (i, c) in channels.iter().enumerate() {
-            let mean = c.iter().sum::<f64>() / n as f64;
-            let sd = (c.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n as f64).sqrt();
-            if !(sd.is_finite() && sd > 0.0) {
-                return Err(Error::input(format!(
-                    "training channel {i} is constant or not finite"
-                )));
-            }
-            scale.push(sd);
-        }
+        check_training(channels, target, past + future + 1)?;
+        let scale = unit_scales(channels)?;
         let x: Vec<Vec<f64>> = channels
             .iter()
             .zip(&scale)
             .map(|(c, s)| c.iter().map(|v| v / s).collect())
             .collect();
-        // rho(a, b, tau) = (1/N) sum_n a[n] b[n + tau].
-        let corr = |a: &[f64], b: &[f64], tau: isize| -> f64 {
-            let (lo, hi) = if tau >= 0 {
-                (0, n - tau as usize)
-            } else {
-                ((-tau) as usize, n)
-            };
-            (lo..hi)
-                .map(|i| a[i] * b[(i as isize + tau) as usize])
-                .sum::<f64>()
-                / n as f64
-        };
-        let span = (past + future) as isize;
-        let nc = x.len();
-        // rho_cd[c][d][tau + span], |tau| <= past + future
-        let rho: Vec<Vec<Vec<f64>>> = (0..nc)
-            .map(|c| {
-                (0..nc)
-                    .map(|d| (-span..=span).map(|tau| corr(&x[c], &x[d], tau)).collect())
-                    .collect()
-            })
-            .collect();
-        // r[c][l + future] = rho_ct(l) = (1/N) sum_n x_c[n] t[n + l], l in -future..=past
-        let r: Vec<Vec<f64>> = (0..nc)
-            .map(|c| {
-                (-(future as isize)..=past as isize)
-                    .map(|l| corr(&x[c], target, l))
-                    .collect()
-            })
-            .collect();
-        let solve = |p: usize, f: usize| -> Result<Window, Error> {
-            let lags: Vec<isize> = (-(f as isize)..=p as isize).collect();
-            let k = nc * lags.len();
-            let at = |i: usize| (i / lags.len(), lags[i % lags.len()]);
-            let mut m = DMatrix::<f64>::from_fn(k, k, |i, j| {
-                let ((c, l), (d, q)) = (at(i), at(j));
-                rho[c][d][(l - q + span) as usize]
-            });
-            let mean_diag = m.diagonal().mean();
-            for i in 0..k {
-                m[(i, i)] += ridge * mean_diag;
-            }
-            let rhs = DVector::<f64>::from_fn(k, |i, _| {
-                let (c, l) = at(i);
-                r[c][(l + future as isize) as usize]
-            });
-            let taps = m
-                .cholesky()
-                .ok_or_else(|| {
-                    Error::input(
-                        "the learned smoother's normal equations are not positive definite",
-                    )
-                })?
-                .solve(&rhs);
-            Ok(Window {
-                past: p,
-                future: f,
-                taps: taps.iter().copied().collect(),
-            })
-        };
+        let normal = Normal::new(&x, target, past, future);
+        let solve = |p: usize, f: usize| normal.solve(p, f, ridge);
         Ok(Fir {
             past,
             future,
@@ -225,6 +140,136 @@ impl Fir {
                 e
             })
             .collect())
+    }
+}
+
+/// Channels as long as the target, enough samples for a window of `width`, a finite target.
+fn check_training(channels: &[Vec<f64>], target: &[f64], width: usize) -> Result<(), Error> {
+    let n = target.len();
+    if channels.is_empty() || channels.iter().any(|c| c.len() != n) {
+        return Err(Error::input(
+            "the learned smoother needs channels as long as the target",
+        ));
+    }
+    if n < 2 * width {
+        return Err(Error::input(format!(
+            "{n} training samples are too few for a window of {width} (at least {})",
+            2 * width
+        )));
+    }
+    if let Some(k) = target.iter().position(|v| !v.is_finite()) {
+        return Err(Error::input(format!(
+            "training target sample {k} is not a number"
+        )));
+    }
+    Ok(())
+}
+
+/// Each channel's standard deviation: the channels are divided by it so that one ridge suits
+/// channels of any unit (conditioning only; the taps are scaled back by [`Fir::scale`]).
+fn unit_scales(channels: &[Vec<f64>]) -> Result<Vec<f64>, Error> {
+    channels
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let n = c.len() as f64;
+            let mean = c.iter().sum::<f64>() / n;
+            let sd = (c.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+            if sd.is_finite() && sd > 0.0 {
+                Ok(sd)
+            } else {
+                Err(Error::input(format!(
+                    "training channel {i} is constant or not finite"
+                )))
+            }
+        })
+        .collect()
+}
+
+/// The Wiener-Hopf equations' ingredients (module docs, step 3): the channels' correlations
+/// and their correlations with the target, biased (`1/N`) so that every window's matrix is a
+/// Gram matrix.
+struct Normal {
+    /// `rho[c][d][tau + span] = (1/N) sum_n x_c[n] x_d[n + tau]`, `|tau| <= span`.
+    rho: Vec<Vec<Vec<f64>>>,
+    /// `r[c][l + future] = (1/N) sum_n x_c[n] t[n + l]`, `l` in `-future..=past`.
+    r: Vec<Vec<f64>>,
+    /// `past + future`: the largest lag difference a window needs.
+    span: isize,
+    /// The full window's look-ahead (the offset of `r`'s index).
+    future: usize,
+}
+
+impl Normal {
+    fn new(x: &[Vec<f64>], target: &[f64], past: usize, future: usize) -> Normal {
+        let n = target.len();
+        // rho(a, b, tau) = (1/N) sum_n a[n] b[n + tau].
+        let corr = |a: &[f64], b: &[f64], tau: isize| -> f64 {
+            let (lo, hi) = if tau >= 0 {
+                (0, n - tau as usize)
+            } else {
+                ((-tau) as usize, n)
+            };
+            (lo..hi)
+                .map(|i| a[i] * b[(i as isize + tau) as usize])
+                .sum::<f64>()
+                / n as f64
+        };
+        let span = (past + future) as isize;
+        let rho = x
+            .iter()
+            .map(|a| {
+                x.iter()
+                    .map(|b| (-span..=span).map(|tau| corr(a, b, tau)).collect())
+                    .collect()
+            })
+            .collect();
+        let r = x
+            .iter()
+            .map(|a| {
+                (-(future as isize)..=past as isize)
+                    .map(|l| corr(a, target, l))
+                    .collect()
+            })
+            .collect();
+        Normal {
+            rho,
+            r,
+            span,
+            future,
+        }
+    }
+
+    /// The taps of the window `p` behind and `f` ahead, with a ridge of `ridge` times the
+    /// matrix's mean diagonal.
+    fn solve(&self, p: usize, f: usize, ridge: f64) -> Result<Window, Error> {
+        let nc = self.rho.len();
+        let lags: Vec<isize> = (-(f as isize)..=p as isize).collect();
+        let k = nc * lags.len();
+        let at = |i: usize| (i / lags.len(), lags[i % lags.len()]);
+        let mut m = DMatrix::<f64>::from_fn(k, k, |i, j| {
+            let ((c, l), (d, q)) = (at(i), at(j));
+            self.rho[c][d][(l - q + self.span) as usize]
+        });
+        let mean_diag = m.diagonal().mean();
+        for i in 0..k {
+            m[(i, i)] += ridge * mean_diag;
+        }
+        let rhs = DVector::<f64>::from_fn(k, |i, _| {
+            let (c, l) = at(i);
+            self.r[c][(l + self.future as isize) as usize]
+        });
+        let taps = m
+            .cholesky()
+            .ok_or_else(|| {
+                Error::input("the learned smoother's normal equations are not positive definite")
+            })?
+            .solve(&rhs);
+        Ok(Window {
+            past: p,
+            future: f,
+            taps: taps.iter().copied().collect(),
+        })
     }
 }
 
