@@ -13,7 +13,7 @@
 //! | one sample's step, the same in the FMU and offline: distance, hold, sensors, filters | [`step`] |
 //! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
 //! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
-//! | the learned filter: grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
+//! | the learned filter: its tap bank and the bank's contract (checked at initialization), grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
 //!
 //! The paper's filter, which the learned one builds on and which `estimator = 1` runs alone:
 //!
