@@ -365,3 +365,33 @@ fn no_help_text_shows_a_rustdoc_escape() {
         }
     }
 }
+
+#[test]
+fn fit_speeds_lags_and_contact_scales_are_checked_as_they_are_parsed() {
+    // Before, `taps --speeds 0` or `learn --lag nan` reached the fit (minutes of training runs
+    // with a meaningless condition); now the parser refuses them by option, before any work.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("bank.taps");
+    for (args, option, words) in [
+        (&["taps", "--speeds", "20,0"][..], "--speeds", "above zero"),
+        (&["taps", "--speeds", "nan"], "--speeds", "finite speed"),
+        (&["taps", "--lags", "-1"], "--lags", "not negative"),
+        (&["taps", "--kalker-scales", "1,0"], "--kalker-scales", "above zero"),
+        (&["learn", "--lag", "inf"], "--lag", "finite look-ahead"),
+        (&["learn", "--speed", "-5"], "--speed", "above zero"),
+        (&["learn", "--kalker-scales", "x"], "--kalker-scales", "a number"),
+    ] {
+        let o = studies()
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(option) && err.contains(words), "{args:?}: {err}");
+        // clap's own usage error: the message and its "try '--help'" line, no panic.
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists());
+    }
+}

@@ -22,7 +22,7 @@ pub struct LearnArgs {
     /// Look-ahead in m (rounded to grid points) for an on-board filter combined with the
     /// paper's causal filter, 0 for a causal one; absent: the offline smoother (60 m each
     /// way) with the shaping filter's RTS smoother.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::lag)]
     pub lag: Option<f64>,
     /// Grid step along the track in m the sensors are decimated to (finer costs more: the
     /// window is 60 m whatever the step).
@@ -30,11 +30,11 @@ pub struct LearnArgs {
     pub grid: f64,
     /// Kalker-coefficient scales of the vehicle to train on, one run each (e.g. 1,0.5 for a
     /// filter robust to the wheel-rail contact; 1: the vehicle as it is).
-    #[arg(long, value_delimiter = ',', default_value = "1")]
+    #[arg(long, value_delimiter = ',', default_value = "1", allow_negative_numbers = true, value_parser = super::kalker_scale)]
     pub kalker_scales: Vec<f64>,
     /// Constant speed of the training runs in m/s (default: the vehicle's, 20); the filter
     /// applies to records at this speed only.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::speed)]
     pub speed: Option<f64>,
     /// The file to write.
     #[arg(long, default_value = "out/learned.json")]

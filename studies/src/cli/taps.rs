@@ -17,18 +17,20 @@ pub struct TapsArgs {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "5,7.5,10,12.5,15,17.5,20,22.5,25,27.5,30"
+        default_value = "5,7.5,10,12.5,15,17.5,20,22.5,25,27.5,30",
+        allow_negative_numbers = true,
+        value_parser = super::speed
     )]
     pub speeds: Vec<f64>,
     /// Kalker-coefficient scales of the training runs (one run each): each condition gets its
     /// own taps, blended at run time by the contact model fitted with them.
-    #[arg(long, value_delimiter = ',', default_value = "1,0.75,0.5")]
+    #[arg(long, value_delimiter = ',', default_value = "1,0.75,0.5", allow_negative_numbers = true, value_parser = super::kalker_scale)]
     pub kalker_scales: Vec<f64>,
     /// One set of taps fitted on every condition's runs at once, no contact model.
     #[arg(long)]
     pub pooled: bool,
     /// Lags of the fixed-lag entries in m.
-    #[arg(long, value_delimiter = ',', default_value = "10")]
+    #[arg(long, value_delimiter = ',', default_value = "10", allow_negative_numbers = true, value_parser = super::lag)]
     pub lags: Vec<f64>,
     /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).
     #[arg(long)]
