@@ -37,7 +37,8 @@ enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// The standard case on held-out seeds.
     Standard(StudyArgs),
-    /// The robustness cases (noise, vertical irregularity, conicity, Kalker coefficients).
+    /// The robustness cases (noise, vertical irregularity, conicity, Kalker coefficients) and
+    /// the conicity sweep (0.05-0.4).
     Robustness(StudyArgs),
     /// The resonance cases at the vehicle's first lateral mode.
     Resonance(StudyArgs),
@@ -74,7 +75,7 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Smooth(a) => smooth::execute(&a)?,
         Command::Calibrate(a) => calibrate::execute(&a, &say)?,
         Command::Standard(a) => cases::execute(&a, &[Group::Standard], &say)?,
-        Command::Robustness(a) => cases::execute(&a, &[Group::Robustness], &say)?,
+        Command::Robustness(a) => cases::execute(&a, &[Group::Robustness, Group::Conicity], &say)?,
         Command::Resonance(a) => cases::execute(&a, &[Group::Resonance], &say)?,
         Command::All(a) => cases::execute(&a, &Group::ALL, &say)?,
         Command::Variants(a) => variants::execute(&a, &say)?,

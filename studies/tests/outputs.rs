@@ -376,10 +376,18 @@ fn fit_speeds_lags_and_contact_scales_are_checked_as_they_are_parsed() {
         (&["taps", "--speeds", "20,0"][..], "--speeds", "above zero"),
         (&["taps", "--speeds", "nan"], "--speeds", "finite speed"),
         (&["taps", "--lags", "-1"], "--lags", "not negative"),
-        (&["taps", "--kalker-scales", "1,0"], "--kalker-scales", "above zero"),
+        (
+            &["taps", "--kalker-scales", "1,0"],
+            "--kalker-scales",
+            "above zero",
+        ),
         (&["learn", "--lag", "inf"], "--lag", "finite look-ahead"),
         (&["learn", "--speed", "-5"], "--speed", "above zero"),
-        (&["learn", "--kalker-scales", "x"], "--kalker-scales", "a number"),
+        (
+            &["learn", "--kalker-scales", "x"],
+            "--kalker-scales",
+            "a number",
+        ),
     ] {
         let o = studies()
             .args(args)
@@ -389,7 +397,10 @@ fn fit_speeds_lags_and_contact_scales_are_checked_as_they_are_parsed() {
             .unwrap();
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
-        assert!(err.contains(option) && err.contains(words), "{args:?}: {err}");
+        assert!(
+            err.contains(option) && err.contains(words),
+            "{args:?}: {err}"
+        );
         // clap's own usage error: the message and its "try '--help'" line, no panic.
         assert!(!err.contains("panicked"), "{err}");
         assert!(!out.exists());

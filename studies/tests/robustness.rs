@@ -40,3 +40,31 @@ fn every_robustness_case_runs_with_both_estimators_and_the_told_conicity_reaches
         );
     }
 }
+
+#[test]
+fn the_conicity_sweep_runs_the_learned_filter_told_a_worn_wheel_s_conicity() {
+    // The learned filter told the conicity runs on a Kalman channel its taps were not fitted
+    // with (allow_other_kalman): it must initialize, and telling it must change its estimate.
+    let fmus = runs::Fmus::new(
+        common::fmu("RailVehicle"),
+        common::fmu("AlignmentEstimator"),
+    );
+    let sweep = cases::conicity_sweep();
+    let at = |name: &str| sweep.iter().find(|c| c.name == name).unwrap();
+    let told =
+        cases::run_seed_until(&fmus, at("conicity 0.3, learned filter told it"), 1, 6.0).unwrap();
+    let blind = cases::run_seed_until(
+        &fmus,
+        at("conicity 0.3, learned filter told nothing"),
+        1,
+        6.0,
+    )
+    .unwrap();
+    assert!(told.whole.jrel.is_finite() && blind.whole.jrel.is_finite());
+    assert!(
+        (told.whole.jrel - blind.whole.jrel).abs() > 1e-6,
+        "told {} and told nothing {} alike",
+        told.whole.jrel,
+        blind.whole.jrel
+    );
+}

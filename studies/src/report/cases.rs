@@ -28,17 +28,25 @@ pub enum Group {
     Robustness,
     /// The paper's Table 6: speeds around the vehicle's first lateral mode.
     Resonance,
+    /// The wheels' conicity 0.05-0.4 (worn wheels), for each estimator told it or not.
+    Conicity,
 }
 
 impl Group {
     /// Every group, in the order `all` runs and reports them.
-    pub const ALL: [Group; 3] = [Group::Standard, Group::Robustness, Group::Resonance];
+    pub const ALL: [Group; 4] = [
+        Group::Standard,
+        Group::Robustness,
+        Group::Conicity,
+        Group::Resonance,
+    ];
 
     fn title(self) -> &'static str {
         match self {
             Group::Standard => "Standard case",
             Group::Robustness => "Robustness",
             Group::Resonance => "Resonance",
+            Group::Conicity => "Conicity",
         }
     }
 }
@@ -56,7 +64,9 @@ pub fn outputs(groups: &[Group], first_seed: u32) -> Vec<String> {
                 "standard_alignment.svg".into(),
                 "standard_spectra.svg".into(),
             ]),
-            Group::Robustness | Group::Resonance => names.push(format!("{title}.svg")),
+            Group::Robustness | Group::Resonance | Group::Conicity => {
+                names.push(format!("{title}.svg"))
+            }
         }
     }
     names
@@ -90,9 +100,11 @@ pub fn cases(
                 ));
                 cases::resonance(mode.frequency, 20.0)
             }
+            Group::Conicity => cases::conicity_sweep(),
         };
-        // A user who chose the estimator (--set estimator.estimator=N) gets that one only.
-        let group = if fmus.estimator_number("estimator").is_some() {
+        // A user who chose the estimator (--set estimator.estimator=N) gets that one only; the
+        // conicity sweep names its estimators itself.
+        let group = if g == Group::Conicity || fmus.estimator_number("estimator").is_some() {
             group
         } else {
             cases::with_learned(group)
@@ -124,7 +136,7 @@ pub fn cases(
             Group::Standard => {
                 md.push_str(&first_seed(seeds[0], out, fmus, &cases[0], &mut report)?)
             }
-            Group::Robustness | Group::Resonance => {
+            Group::Robustness | Group::Resonance | Group::Conicity => {
                 let svg = format!("{}.svg", title.to_lowercase());
                 let path = out.join(&svg);
                 plot::case_bars(&path, slice, &format!("{title}: Jrel per band"))?;

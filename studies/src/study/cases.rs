@@ -4,6 +4,8 @@
 //! - standard: 20 s at 20 m/s, lateral and vertical irregularities, sensor noise;
 //! - robustness: no sensor noise; no vertical irregularity; conicity -10 % in the filter;
 //!   Kalker coefficients -50 % in the vehicle; all of these together;
+//! - conicity sweep: the wheels' conicity 0.05-0.4, the paper's filter told it, the learned
+//!   filter told it, and the learned filter told nothing;
 //! - resonance: the vehicle's first lateral mode from the modal analysis gives the wavelength
 //!   `V / f`; case 1 the standard track, case 2 a 1 mm harmonic alignment of that wavelength
 //!   alone, case 3 their sum.
@@ -110,6 +112,51 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
             paper: None,
         },
     ]
+}
+
+/// The wheel conicities of the conicity sweep: from new low-conicity profiles (0.05) to worn
+/// ones (0.3-0.4), the range issue 27 sets; 0.1 is the vehicle's (and the filter's) own.
+pub const SWEEP_CONICITIES: [f64; 7] = [0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4];
+
+/// The conicity sweep (not in the paper): the vehicle's wheels at each of
+/// [`SWEEP_CONICITIES`], estimated three ways: the paper's filter told the conicity (`alpha`),
+/// the learned filter told it (its Kalman channel then differs from the one its taps were fitted
+/// with: `allow_other_kalman`), and the learned filter told nothing (the FMU's defaults, as a
+/// user who does not know the wheels' state runs it).
+pub fn conicity_sweep() -> Vec<Case> {
+    SWEEP_CONICITIES
+        .iter()
+        .flat_map(|&c| {
+            let vehicle = vec![set("conicity", Value::Real(c))];
+            let told = |estimator: i32| {
+                vec![
+                    set("estimator", Value::Integer(estimator)),
+                    set("alpha", Value::Real(c)),
+                    set("allow_other_kalman", Value::Boolean(true)),
+                ]
+            };
+            [
+                Case {
+                    name: format!("conicity {c}, paper's filter told it"),
+                    vehicle: vehicle.clone(),
+                    estimator: told(1),
+                    paper: None,
+                },
+                Case {
+                    name: format!("conicity {c}, learned filter told it"),
+                    vehicle: vehicle.clone(),
+                    estimator: told(2),
+                    paper: None,
+                },
+                Case {
+                    name: format!("conicity {c}, learned filter told nothing"),
+                    vehicle,
+                    estimator: vec![set("estimator", Value::Integer(2))],
+                    paper: None,
+                },
+            ]
+        })
+        .collect()
 }
 
 /// The resonance cases (the paper's Table 6) for a first lateral mode at `frequency` \[Hz\].
@@ -343,6 +390,31 @@ pub fn markdown(title: &str, results: &[CaseResult]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_conicity_sweep_tells_each_filter_the_vehicle_s_conicity_or_nothing() {
+        let cases = conicity_sweep();
+        assert_eq!(cases.len(), 3 * SWEEP_CONICITIES.len());
+        for (triple, &c) in cases.chunks(3).zip(&SWEEP_CONICITIES) {
+            for case in triple {
+                assert_eq!(case.vehicle, vec![set("conicity", Value::Real(c))]);
+            }
+            let alpha = |case: &Case| {
+                case.estimator
+                    .iter()
+                    .find(|(n, _)| n == "alpha")
+                    .map(|(_, v)| v.clone())
+            };
+            let estimator = |case: &Case| case.estimator[0].clone();
+            assert_eq!(estimator(&triple[0]), set("estimator", Value::Integer(1)));
+            assert_eq!(estimator(&triple[1]), set("estimator", Value::Integer(2)));
+            assert_eq!(estimator(&triple[2]), set("estimator", Value::Integer(2)));
+            assert_eq!(alpha(&triple[0]), Some(Value::Real(c)));
+            assert_eq!(alpha(&triple[1]), Some(Value::Real(c)));
+            assert_eq!(alpha(&triple[2]), None, "{}", triple[2].name);
+            assert!(triple[1].name.contains("told it") && triple[2].name.contains("nothing"));
+        }
+    }
 
     #[test]
     fn every_case_is_followed_by_its_learned_twin_which_overrides_the_estimator() {
