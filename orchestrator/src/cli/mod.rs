@@ -74,19 +74,36 @@ pub struct Common {
 
 /// A time in s: a finite number, not negative.
 pub fn time(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        Ok(_) => Err("expected a finite time in s, not negative".into()),
-        Err(_) => Err("expected a number of seconds".into()),
-    }
+    number(
+        s,
+        |v| v >= 0.0,
+        "expected a finite time in s, not negative",
+        "expected a number of seconds",
+    )
 }
 
 /// A duration in s: a finite number above zero.
 pub fn positive(s: &str) -> Result<f64, String> {
+    number(
+        s,
+        |v| v > 0.0,
+        "expected a finite number of seconds above zero",
+        "expected a number of seconds",
+    )
+}
+
+/// A command-line number: finite and `accepted`, else `refused`; `not_a_number` when `s` does
+/// not parse. The value parsers of both binaries' options are this with their own words.
+pub fn number(
+    s: &str,
+    accepted: impl Fn(f64) -> bool,
+    refused: &str,
+    not_a_number: &str,
+) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(_) => Err("expected a finite number of seconds above zero".into()),
-        Err(_) => Err("expected a number of seconds".into()),
+        Ok(v) if v.is_finite() && accepted(v) => Ok(v),
+        Ok(_) => Err(refused.into()),
+        Err(_) => Err(not_a_number.into()),
     }
 }
 

@@ -148,28 +148,31 @@ pub use orchestrator::cli::summary_text as orchestrator_summary;
 /// A speed in m/s (`taps --speeds`, `learn --speed`): a finite number above zero. Checked as
 /// the command line is parsed, so a bad value stops the command before any run.
 pub fn speed(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(_) => Err("expected a finite speed in m/s above zero".into()),
-        Err(_) => Err("expected a number of m/s".into()),
-    }
+    orchestrator::cli::number(
+        s,
+        |v| v > 0.0,
+        "expected a finite speed in m/s above zero",
+        "expected a number of m/s",
+    )
 }
 
 /// A look-ahead in m (`taps --lags`, `learn --lag`): a finite number, not negative (0: causal).
 pub fn lag(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        Ok(_) => Err("expected a finite look-ahead in m, not negative".into()),
-        Err(_) => Err("expected a number of metres".into()),
-    }
+    orchestrator::cli::number(
+        s,
+        |v| v >= 0.0,
+        "expected a finite look-ahead in m, not negative",
+        "expected a number of metres",
+    )
 }
 
 /// A Kalker-coefficient scale (`--kalker-scales`): a finite number above zero (1: the vehicle's
 /// own coefficients).
 pub fn kalker_scale(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
-        Ok(_) => Err("expected a finite scale above zero".into()),
-        Err(_) => Err("expected a number".into()),
-    }
+    orchestrator::cli::number(
+        s,
+        |v| v > 0.0,
+        "expected a finite scale above zero",
+        "expected a number",
+    )
 }
