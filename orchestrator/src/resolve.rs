@@ -136,39 +136,7 @@ fn type_name(b: BaseType) -> &'static str {
 
 /// Resolves `system` against the model descriptions of its components (same order).
 pub fn resolve(system: &System, descriptions: &[&ModelDescription]) -> Result<Plan, ResolveError> {
-    let index: HashMap<&str, usize> = system
-        .components
-        .iter()
-        .enumerate()
-        .map(|(i, c)| (c.name.as_str(), i))
-        .collect();
-    let known = || {
-        system
-            .components
-            .iter()
-            .map(|c| c.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let lookup = |e: &Endpoint, context: &str| -> Result<(usize, &ScalarVariable), ResolveError> {
-        let &i = index
-            .get(e.component.as_str())
-            .ok_or_else(|| ResolveError::UnknownComponent {
-                context: context.to_string(),
-                component: e.component.clone(),
-                known: known(),
-            })?;
-        let v =
-            descriptions[i]
-                .variable(&e.variable)
-                .ok_or_else(|| ResolveError::UnknownVariable {
-                    context: context.to_string(),
-                    component: e.component.clone(),
-                    variable: e.variable.clone(),
-                    fmu: system.components[i].source.clone(),
-                })?;
-        Ok((i, v))
-    };
+    let lookup = |e: &Endpoint, context: &str| find(system, descriptions, e, context);
 
     let mut links = vec![];
     let mut fed: HashMap<(usize, u32), Endpoint> = HashMap::new();
@@ -193,19 +161,7 @@ pub fn resolve(system: &System, descriptions: &[&ModelDescription]) -> Result<Pl
                 c.to, tv.causality
             )));
         }
-        let (fb, tb) = (fv.kind.base_type(), tv.kind.base_type());
-        let (fb, tb) = (
-            if fb == BaseType::Enumeration {
-                BaseType::Integer
-            } else {
-                fb
-            },
-            if tb == BaseType::Enumeration {
-                BaseType::Integer
-            } else {
-                tb
-            },
-        );
+        let (fb, tb) = (carrier(fv.kind.base_type()), carrier(tv.kind.base_type()));
         if fb != tb {
             return Err(bad(format!(
                 "type mismatch: {} is {}, {} is {}",
@@ -333,14 +289,50 @@ fn feedthrough(md: &ModelDescription, output_vr: u32, input_vr: u32, base: BaseT
 }
 
 fn same_space(a: BaseType, b: BaseType) -> bool {
-    let n = |x: BaseType| {
-        if x == BaseType::Enumeration {
-            BaseType::Integer
-        } else {
-            x
-        }
-    };
-    n(a) == n(b)
+    carrier(a) == carrier(b)
+}
+
+/// The type whose fmi2Get/fmi2Set functions carry a variable of type `b`: an Enumeration
+/// travels as an Integer ([`Link::base`]).
+pub(crate) fn carrier(b: BaseType) -> BaseType {
+    match b {
+        BaseType::Enumeration => BaseType::Integer,
+        other => other,
+    }
+}
+
+/// The component and variable `e` names in `system`, whose FMUs' model descriptions are
+/// `descriptions` (in the components' order), or an error naming what is missing; `context`
+/// says what named it (a connection, a parameter, `--set`, a recorded variable, an input).
+pub(crate) fn find<'a>(
+    system: &System,
+    descriptions: &[&'a ModelDescription],
+    e: &Endpoint,
+    context: &str,
+) -> Result<(usize, &'a ScalarVariable), ResolveError> {
+    let i = system
+        .components
+        .iter()
+        .position(|c| c.name == e.component)
+        .ok_or_else(|| ResolveError::UnknownComponent {
+            context: context.to_string(),
+            component: e.component.clone(),
+            known: system
+                .components
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })?;
+    let v = descriptions[i]
+        .variable(&e.variable)
+        .ok_or_else(|| ResolveError::UnknownVariable {
+            context: context.to_string(),
+            component: e.component.clone(),
+            variable: e.variable.clone(),
+            fmu: system.components[i].source.clone(),
+        })?;
+    Ok((i, v))
 }
 
 /// A cycle of links in which every component passes its input straight to the output that

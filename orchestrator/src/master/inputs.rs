@@ -6,6 +6,7 @@
 //! refused by name; the stepping then only fills a buffer and sets the values.
 
 use super::{Address, Cosimulation, RunError};
+use crate::resolve::carrier;
 use crate::system::Endpoint;
 use fmi_import::{FmiError, Instance};
 use model_description::{BaseType, Causality};
@@ -17,15 +18,6 @@ pub type InputFn<'a> = dyn Fn(f64, &mut [f64]) + 'a;
 
 /// The inputs of a run that has none.
 pub fn no_inputs(_: f64, _: &mut [f64]) {}
-
-/// The type whose fmi2Get/fmi2Set functions reach a variable of type `b` (the connections' type,
-/// [`crate::resolve::Link::base`]).
-fn accessor(b: BaseType) -> BaseType {
-    match b {
-        BaseType::Enumeration => BaseType::Integer,
-        other => other,
-    }
-}
 
 /// The resolved inputs with the buffer they are filled into (reused from step to step).
 pub(super) struct External<'a> {
@@ -68,7 +60,7 @@ impl<'a> External<'a> {
                 .plan()
                 .links
                 .iter()
-                .find(|l| l.to == c && l.to_vr == target.vr && l.base == accessor(base))
+                .find(|l| l.to == c && l.to_vr == target.vr && l.base == carrier(base))
             {
                 return Err(refuse(format!(
                     "the connection {} -> {} already feeds it",

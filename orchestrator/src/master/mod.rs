@@ -229,32 +229,7 @@ impl Cosimulation {
         e: &Endpoint,
         context: &str,
     ) -> Result<(usize, &ScalarVariable), ResolveError> {
-        let c = self
-            .system
-            .components
-            .iter()
-            .position(|x| x.name == e.component)
-            .ok_or_else(|| ResolveError::UnknownComponent {
-                context: context.to_string(),
-                component: e.component.clone(),
-                known: self
-                    .system
-                    .components
-                    .iter()
-                    .map(|c| c.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            })?;
-        let v = self.fmus[c]
-            .model_description()
-            .variable(&e.variable)
-            .ok_or_else(|| ResolveError::UnknownVariable {
-                context: context.to_string(),
-                component: e.component.clone(),
-                variable: e.variable.clone(),
-                fmu: self.system.components[c].source.clone(),
-            })?;
-        Ok((c, v))
+        crate::resolve::find(&self.system, &self.model_descriptions(), e, context)
     }
 
     /// Where the variable `e` is, for an observer to read it ([`Values::value`]); an unknown
@@ -272,26 +247,7 @@ impl Cosimulation {
     /// system's own parameters; they are applied after those, so they win. The setting goes
     /// into the plan and into the component's parameters alike.
     pub fn set(&mut self, name: &Endpoint, text: &str) -> Result<(), RunError> {
-        let c = self
-            .system
-            .components
-            .iter()
-            .position(|x| x.name == name.component)
-            .ok_or_else(|| {
-                RunError::Config(format!(
-                    "--set {name}={text}: no component '{}'",
-                    name.component
-                ))
-            })?;
-        let md = self.fmus[c].model_description();
-        let v = md.variable(&name.variable).ok_or_else(|| {
-            RunError::Config(format!(
-                "--set {name}={text}: component '{}' ({}) has no variable '{}'",
-                name.component,
-                self.fmus[c].path().display(),
-                name.variable
-            ))
-        })?;
+        let (c, v) = self.find(name, &format!("--set {name}={text}"))?;
         let value = Value::String(text.to_string());
         let s = crate::resolve::setting(c, v, &value, name.clone())?;
         self.plan.settings.push(s);

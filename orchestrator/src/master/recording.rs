@@ -52,24 +52,8 @@ impl Recording {
             }
             Some(list) => {
                 for e in list {
-                    let c = system
-                        .components
-                        .iter()
-                        .position(|x| x.name == e.component)
-                        .ok_or_else(|| {
-                            RunError::Config(format!(
-                                "recorded variable {e}: no component '{}'",
-                                e.component
-                            ))
-                        })?;
-                    let v = mds[c].variable(&e.variable).ok_or_else(|| {
-                        RunError::Config(format!(
-                            "recorded variable {e}: component '{}' ({}) has no variable '{}'",
-                            e.component,
-                            system.components[c].source.display(),
-                            e.variable
-                        ))
-                    })?;
+                    let (c, v) =
+                        crate::resolve::find(system, mds, e, &format!("recorded variable {e}"))?;
                     if v.kind.base_type() == BaseType::String {
                         return Err(RunError::Config(format!(
                             "recorded variable {e}: String variables cannot be recorded"
