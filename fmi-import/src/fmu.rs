@@ -57,7 +57,47 @@ unsafe fn returned(p: *const c_char) -> Option<String> {
     }
 }
 
+/// What identifies an FMU file for [`Fmu::open_shared`]: its canonical path, size and
+/// modification time (a file rebuilt in place is another FMU).
+type FileKey = (PathBuf, u64, Option<std::time::SystemTime>);
+
+/// The FMUs [`Fmu::open_shared`] opened, while a clone of each is alive.
+static SHARED: Mutex<Vec<(FileKey, std::sync::Weak<FmuInner>)>> = Mutex::new(Vec::new());
+
 impl Fmu {
+    /// The FMU at `path` as [`open`](Fmu::open) gives it, or a clone of one this process opened
+    /// from the same unchanged file through this function and still holds.
+    ///
+    /// Why: every [`open`](Fmu::open) unpacks and loads a new copy of the library, and a copy
+    /// never gives back what its loading took: a Rust FMU's standard library takes thread-local
+    /// keys (glibc has 1024 per process). A study that ran a few thousand co-simulations of the
+    /// same two FMUs, each opening them anew, aborted with "out of TLS keys". Instances of one
+    /// library are independent (FMI 2.0 requires it unless
+    /// `canBeInstantiatedOnlyOncePerProcess`, which then holds across the clones too, as it
+    /// should: the flag is about the process).
+    pub fn open_shared(path: &Path) -> Result<Fmu, ImportError> {
+        let key = std::fs::canonicalize(path).ok().and_then(|p| {
+            let m = std::fs::metadata(&p).ok()?;
+            Some((p, m.len(), m.modified().ok()))
+        });
+        let Some(key) = key else {
+            // Opening reports why the file cannot be read.
+            return Fmu::open(path);
+        };
+        let mut shared = SHARED.lock().unwrap_or_else(|e| e.into_inner());
+        shared.retain(|(_, w)| w.strong_count() > 0);
+        if let Some(inner) = shared
+            .iter()
+            .find(|(k, _)| *k == key)
+            .and_then(|(_, w)| w.upgrade())
+        {
+            return Ok(Fmu { inner });
+        }
+        let fmu = Fmu::open(path)?;
+        shared.push((key, Arc::downgrade(&fmu.inner)));
+        Ok(fmu)
+    }
+
     /// Unpacks `path` into a fresh temporary directory (in the system's temp dir), reads the
     /// model description, loads this platform's binary and checks it is an FMI 2.0
     /// co-simulation library. The archive may unpack to at most [`UnpackLimits::DEFAULT`].

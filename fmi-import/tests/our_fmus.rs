@@ -298,3 +298,49 @@ fn unknown_variable_names_fmu_and_variable() {
         "{text}"
     );
 }
+
+/// `open_shared` gives the FMU opened before from the same file while a clone of it lives (one
+/// unpacked directory, one library), two independent instances of it, and a fresh one once
+/// every clone is gone or the file has changed.
+#[test]
+fn a_shared_fmu_is_loaded_once_while_held_and_its_instances_are_independent() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("Estimator.fmu");
+    std::fs::copy(our_fmu("AlignmentEstimator"), &path).unwrap();
+    let a = Fmu::open_shared(&path).unwrap();
+    let b = Fmu::open_shared(&path).unwrap();
+    assert_eq!(a.unpacked_dir(), b.unpacked_dir());
+    // `open` always loads anew.
+    let c = Fmu::open(&path).unwrap();
+    assert_ne!(c.unpacked_dir(), a.unpacked_dir());
+    // Two instances of the shared library, fed differently, keep their own states.
+    let (mut x, mut y) = (start(&a, "x"), start(&b, "y"));
+    let (acc, out) = (vr(&a, "ws_acc_y"), vr(&a, "alignment_kalman"));
+    for k in 0..200 {
+        x.set_real(&[acc], &[0.5 * (k as f64 * 0.05).sin()])
+            .unwrap();
+        x.do_step(k as f64 * H, H).unwrap();
+        y.do_step(k as f64 * H, H).unwrap();
+    }
+    let (mut ox, mut oy) = ([0.0], [0.0]);
+    x.get_real(&[out], &mut ox).unwrap();
+    y.get_real(&[out], &mut oy).unwrap();
+    assert!(ox[0] != 0.0 && oy[0] == 0.0, "{ox:?} {oy:?}");
+    let first = a.unpacked_dir().to_path_buf();
+    drop((x, y, a, b));
+    // Gone: the next shared open unpacks anew.
+    let d = Fmu::open_shared(&path).unwrap();
+    assert_ne!(d.unpacked_dir(), first);
+    assert!(
+        !first.exists(),
+        "the last clone's drop removed its directory"
+    );
+    // The file rewritten (another size): another FMU, although `d` is held.
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes.extend_from_slice(b"\0");
+    std::fs::write(&path, &bytes).unwrap();
+    let e = Fmu::open_shared(&path);
+    if let Ok(e) = e {
+        assert_ne!(e.unpacked_dir(), d.unpacked_dir());
+    }
+}

@@ -199,7 +199,9 @@ impl Cosimulation {
         }
         let mut fmus = vec![];
         for c in &system.components {
-            fmus.push(Fmu::open(&c.source)?);
+            // Shared: a process that runs the same FMUs many times (a study) loads each once
+            // while it holds them ([`Fmu::open_shared`]).
+            fmus.push(Fmu::open_shared(&c.source)?);
         }
         let mds: Vec<&ModelDescription> = fmus.iter().map(|f| f.model_description()).collect();
         let plan = resolve(&system, &mds)?;
