@@ -76,7 +76,11 @@ fn main() {
     // The tap banks are built into the library for offline use. Before the first
     // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
     let mut layout = state_layout::Fingerprint::of_fmu_crate();
-    for name in ["learned.taps", "learned-nominal.taps"] {
+    for name in [
+        "learned.taps",
+        "learned-nominal.taps",
+        "learned-conicity.taps",
+    ] {
         let taps = manifest.join("resources").join(name);
         println!("cargo::rerun-if-changed={}", taps.display());
         let bytes = std::fs::read(&taps).unwrap_or_default();

@@ -182,6 +182,16 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
             .unwrap_or_else(|| vec![0.0; n])
             .into_pyarray(py),
     )?;
+    d.set_item(
+        "conicity_estimate",
+        out.conicity
+            .unwrap_or_else(|| vec![0.0; n])
+            .into_pyarray(py),
+    )?;
+    let novelty = out.novelty.unwrap_or_else(|| vec![0.0; n]);
+    d.set_item("novelty", novelty.into_pyarray(py))?;
+    let outside = out.outside_training.unwrap_or_else(|| vec![false; n]);
+    d.set_item("outside_training", outside.into_pyarray(py))?;
     d.set_item("distance_lagged", distance_lagged.into_pyarray(py))?;
     d.set_item("distance", out.distance.into_pyarray(py))?;
     if let Some(s) = out.smoothed {

@@ -148,6 +148,9 @@ pub enum SettingError {
     /// `lag` \[m\] is negative or not finite (the value given).
     #[error("parameter 'lag' = {0} m must be 0 (off) or a positive lag")]
     Lag(f64),
+    /// `conicity` is negative or not finite (the value given).
+    #[error("parameter 'conicity' = {0} must be 0 (estimate it) or a positive equivalent conicity")]
+    TapConicity(f64),
     /// `design_speed` \[m/s\] is negative or not finite (the value given).
     #[error(
         "parameter 'design_speed' = {0} must be 0 (follow the speed input) or a positive speed"

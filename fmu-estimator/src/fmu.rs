@@ -36,6 +36,8 @@ pub struct Estimator {
     learned: Option<Learned>,
     /// Whether the last step's speed was outside the taps' range (for the warning on entry).
     outside: bool,
+    /// Whether `outside_training` has set in this run (warned once).
+    novelty_warned: bool,
     /// The step size warned about, if any (once).
     step_warned: bool,
     /// Warnings that recur per step, logged once and counted.
@@ -60,6 +62,9 @@ impl Estimator {
                 o[vr::DISTANCE_LAGGED as usize] = distance - l.lag();
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = e.active;
                 v.real[vr::CONTACT_SCALE as usize] = l.contact_scale();
+                v.real[vr::CONICITY_ESTIMATE as usize] = l.conicity();
+                v.real[vr::NOVELTY as usize] = l.novelty();
+                v.boolean[vr::OUTSIDE_TRAINING as usize] = l.outside_training();
             }
             None => {
                 o[vr::ALIGNMENT as usize] = xi;
@@ -69,6 +74,9 @@ impl Estimator {
                 o[vr::DISTANCE_LAGGED as usize] = distance;
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = crate::learned::ACTIVE_PAPER;
                 v.real[vr::CONTACT_SCALE as usize] = 0.0;
+                v.real[vr::CONICITY_ESTIMATE as usize] = 0.0;
+                v.real[vr::NOVELTY as usize] = 0.0;
+                v.boolean[vr::OUTSIDE_TRAINING as usize] = false;
             }
         }
         let o = &mut v.real;
@@ -121,6 +129,7 @@ impl Model for Estimator {
             holding: false,
             learned: None,
             outside: false,
+            novelty_warned: false,
             step_warned: false,
             repeats: Default::default(),
         })
@@ -161,6 +170,7 @@ impl Model for Estimator {
         self.core = Some(core);
         self.holding = false;
         self.outside = false;
+        self.novelty_warned = false;
         self.step_warned = false;
         self.repeats.clear();
         self.write_outputs(v);
@@ -229,6 +239,7 @@ impl Model for Estimator {
                 };
                 v.boolean[vr::UPDATED as usize] = updated;
                 self.note_speed_range(input.speed, log);
+                self.note_novelty(v.real[vr::DISTANCE as usize], log);
                 self.write_outputs(v);
                 Ok(outcome)
             }
@@ -308,6 +319,35 @@ impl Estimator {
         }
     }
 
+    /// `outside_training` setting for the first time in the run: said once.
+    fn note_novelty(&mut self, distance: f64, log: &Logger) {
+        if let Some(l) = self.learned.as_ref()
+            && !self.novelty_warned
+            && l.outside_training()
+        {
+            let why = if l.beyond_conicities() {
+                let c = l.selected_conicities();
+                format!(
+                    "conicity_estimate {:.3} lies beyond the selected taps' conicities ({}-{}; use_roll_rate: the four-sensor taps hold 0.1 only)",
+                    l.conicity(),
+                    c[0],
+                    c[c.len() - 1]
+                )
+            } else {
+                format!(
+                    "the sensors are unlike what the learned taps were fitted on (novelty {:.2} > 1, conicity_estimate {:.3}, contact_scale {:.2})",
+                    l.novelty(),
+                    l.conicity(),
+                    l.contact_scale()
+                )
+            };
+            log.warning(&format!(
+                "at {distance:.1} m {why}: outside_training is set; the estimate may be several times less accurate (said once)"
+            ));
+            self.novelty_warned = true;
+        }
+    }
+
     /// The speed leaving the learned taps' range: said each time it leaves.
     fn note_speed_range(&mut self, speed: f64, log: &Logger) {
         if let Some(l) = self.learned.as_ref() {
@@ -354,9 +394,14 @@ pub fn learned_from_values(
         },
     };
     check_contract(v, &bank, config, &name, log)?;
+    let conicity = v.real[vr::CONICITY as usize];
+    if !(conicity >= 0.0 && conicity.is_finite()) {
+        return Err(SettingError::TapConicity(conicity).into());
+    }
     let choice = Choice {
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
         lag,
+        conicity: (conicity > 0.0).then_some(conicity),
     };
     let learned = Learned::new(&bank, choice).map_err(|source| Error::TapFile {
         tap_file: name.clone(),
@@ -375,9 +420,10 @@ pub fn learned_from_values(
 /// the gain (the fit's time-varying channel equals the steady-state one after the start-up) and
 /// the initial covariance (a start-up transient the steady-state gain does not have). Any other
 /// parameter not at its default can make the channel differ from the bank's.
-const OUTSIDE_THE_CONTRACT: [&str; 8] = [
+const OUTSIDE_THE_CONTRACT: [&str; 9] = [
     "estimator",
     "lag",
+    "conicity",
     "use_roll_rate",
     "tap_file",
     "allow_other_kalman",

@@ -84,6 +84,12 @@ pub struct Processed {
     pub learned: Option<Vec<Estimate>>,
     /// The FMU's `contact_scale` output per sample (with the learned filter).
     pub contact_scale: Option<Vec<f64>>,
+    /// The FMU's `conicity_estimate` output per sample (with the learned filter).
+    pub conicity: Option<Vec<f64>>,
+    /// The FMU's `novelty` output per sample (with the learned filter).
+    pub novelty: Option<Vec<f64>>,
+    /// The FMU's `outside_training` output per sample (with the learned filter).
+    pub outside_training: Option<Vec<bool>>,
     /// The filter covariance checked after every step (when asked for: an eigen-decomposition
     /// per step, [`process_columns_checked`]).
     pub covariance: Option<CovarianceCheck>,
@@ -397,6 +403,7 @@ fn run_from(
     } = start;
     let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
     let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
+    let (mut conicity, mut novelty, mut outside) = (Vec::new(), Vec::new(), Vec::new());
     if !(h > 0.0 && h.is_finite()) {
         return Err(Error::SampleStep(h));
     }
@@ -446,9 +453,15 @@ fn run_from(
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
             e.push(l.estimate(distance, core.alignment()));
             c.push(l.contact_scale());
+            conicity.push(l.conicity());
+            novelty.push(l.novelty());
+            outside.push(l.outside_training());
         }
     }
     out.learned = estimates;
+    out.conicity = contact.is_some().then_some(conicity);
+    out.novelty = contact.is_some().then_some(novelty);
+    out.outside_training = contact.is_some().then_some(outside);
     out.contact_scale = contact;
     out.covariance = checked_p;
     if smooth {
@@ -605,7 +618,7 @@ mod tests {
             .unwrap();
             inst.do_step(t, 1e-3).unwrap();
             t += 1e-3;
-            let mut o = [0.0; 5];
+            let mut o = [0.0; 7];
             inst.get_real(
                 &[
                     vr::ALIGNMENT,
@@ -613,6 +626,8 @@ mod tests {
                     vr::ALIGNMENT_LAGGED,
                     vr::ALIGNMENT_LAGGED_STD,
                     vr::CONTACT_SCALE,
+                    vr::CONICITY_ESTIMATE,
+                    vr::NOVELTY,
                 ],
                 &mut o,
             )
@@ -622,9 +637,13 @@ mod tests {
                 .unwrap();
             let e = est[k];
             let c = offline.contact_scale.as_ref().unwrap()[k];
+            let (a, n) = (
+                offline.conicity.as_ref().unwrap()[k],
+                offline.novelty.as_ref().unwrap()[k],
+            );
             assert_eq!(
                 o,
-                [e.alignment, e.std, e.lagged, e.lagged_std, c],
+                [e.alignment, e.std, e.lagged, e.lagged_std, c, a, n],
                 "step {k}"
             );
             assert_eq!(active[0], e.active, "step {k}");

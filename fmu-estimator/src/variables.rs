@@ -124,6 +124,12 @@ pub mod vr {
     pub const ALIGNMENT_KALMAN: u32 = 51;
     /// `contact_scale` (Real output, dimensionless).
     pub const CONTACT_SCALE: u32 = 52;
+    /// `conicity` (Real parameter, dimensionless).
+    pub const CONICITY: u32 = 53;
+    /// `conicity_estimate` (Real output, dimensionless).
+    pub const CONICITY_ESTIMATE: u32 = 54;
+    /// `novelty` (Real output, dimensionless).
+    pub const NOVELTY: u32 = 55;
     // Integer
     /// `discretization` (Integer parameter).
     pub const DISCRETIZATION: u32 = 0;
@@ -150,6 +156,8 @@ pub mod vr {
     pub const USE_ROLL_RATE: u32 = 3;
     /// `allow_other_kalman` (Boolean parameter).
     pub const ALLOW_OTHER_KALMAN: u32 = 4;
+    /// `outside_training` (Boolean output).
+    pub const OUTSIDE_TRAINING: u32 = 5;
     // String
     /// `calibration_file` (String parameter).
     pub const CALIBRATION_FILE: u32 = 0;
@@ -221,12 +229,16 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
     VarSpec::boolean_parameter(vr::USE_ROLL_RATE, "use_roll_rate", false, "Use the taps fitted with the wheelset roll-rate gyroscope (connect ws_roll_rate); false: the three-sensor taps"),
     VarSpec::boolean_parameter(vr::ALLOW_OTHER_KALMAN, "allow_other_kalman", false, "estimator 2: run the learned filter, with a warning, when its Kalman channel differs from the one the tap bank was fitted with (other model parameters, calibration, alignment_model, design_speed or min_speed): approximate; false: that is an error at initialization"),
-    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (alignment-studies taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (taps per contact condition, Kalker 100, 75 and 50 %, blended by the estimated contact_scale), learned-nominal.taps (Kalker 100 % only)"),
+    VarSpec::string_parameter(vr::TAP_FILE, "tap_file", "learned.taps", "The learned filter's tap bank (alignment-studies taps), relative to the FMU's resources directory or absolute; shipped: learned.taps (taps per contact condition at conicity 0.1, Kalker 100, 75 and 50 %, blended by the estimated contact_scale), learned-nominal.taps (Kalker 100 % only), learned-conicity.taps (conicity 0.05-0.4 x Kalker 100, 75, 50 %, blended by conicity_estimate and contact_scale; sets novelty and outside_training)"),
     VarSpec::real_output(vr::ALIGNMENT_LAGGED, "alignment_lagged", "m", 0.0, "Fixed-lag estimate of the alignment at distance_lagged (estimator 2, lag > 0; over the first lag + 1 m and outside the taps' speed range the causal output made at distance_lagged, from its first 0.2 m grid point on: the learned estimate, or the Kalman one where none was made)"),
     VarSpec::real_output_calculated(vr::ALIGNMENT_LAGGED_STD, "alignment_lagged_std", "m", "Standard deviation of alignment_lagged (rms error of its taps on the validation seeds)"),
     VarSpec::real_output_calculated(vr::DISTANCE_LAGGED, "distance_lagged", "m", "The position alignment_lagged is for: distance - lag"),
     VarSpec::real_output(vr::ALIGNMENT_KALMAN, "alignment_kalman", "m", 0.0, "The Kalman filter's own alignment estimate (the paper's estimator)"),
     VarSpec::real_output(vr::CONTACT_SCALE, "contact_scale", "1", 0.0, "The wheel-rail contact's Kalker-coefficient scale as the learned filter estimates it from the sensors (1: nominal creep coefficients, 0.5: halved, as worn wheels and rails); it blends the taps fitted per condition. 0 when the tap bank has no contact model (learned-nominal.taps, estimator 1)"),
+    VarSpec::real_parameter(vr::CONICITY, "conicity", "1", 0.0, "The wheels' equivalent conicity, when known (estimator 2, a tap bank fitted over conicities: learned-conicity.taps): the taps are blended at it; 0: estimated from the sensors (conicity_estimate). The paper's filter's conicity is alpha").min(0.0),
+    VarSpec::real_output(vr::CONICITY_ESTIMATE, "conicity_estimate", "1", 0.0, "The wheels' equivalent conicity the learned filter's taps are blended at: the conicity parameter when set, else estimated from the sensors (within the bank's trained range, 0.05-0.4 for learned-conicity.taps; 200 m memory). 0 when the tap bank has no conicity conditions (learned.taps, learned-nominal.taps, estimator 1)"),
+    VarSpec::real_output(vr::NOVELTY, "novelty", "1", 0.0, "How far the sensors' contact features lie from what the tap bank's training runs showed at the estimated condition (squared Mahalanobis distance over the level exceeded on 0.2 % of the validation distance; 200 m memory): above 1 the vehicle or its wheels are unlike what the taps were fitted on. 0 without a bank fitted over conicities"),
+    VarSpec::boolean_output(vr::OUTSIDE_TRAINING, "outside_training", false, "novelty above 1: the learned filter's estimate is less trustworthy here (alignment_std grows with it); a warning is logged when it first sets"),
     VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", DEFAULT_CALIBRATION_FILE, "Calibration file (Q and R; its [parameters] are this build's defaults only: set them too for another file), relative to the FMU's resources directory or absolute; a file other than the default that does not exist is an error"),
 ];

@@ -48,6 +48,9 @@ enum Command {
     /// Beyond the paper: the estimator's options (alignment prior, steady-state gain, RTS
     /// smoother, speed following) against the paper's filter, at constant and variable speed.
     Variants(StudyArgs),
+    /// The outside_training flag over 10 km runs: false alarms on the conditions the shipped
+    /// taps were fitted for, detection on other vehicles and conditions.
+    Envelope(StudyArgs),
     /// Fit the learned FIR smoother on one track seed and save it (JSON) for `smooth
     /// --learned`: taps from the run after its first 20 s, the split chosen on those.
     Learn(learn::LearnArgs),
@@ -75,9 +78,14 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Smooth(a) => smooth::execute(&a)?,
         Command::Calibrate(a) => calibrate::execute(&a, &say)?,
         Command::Standard(a) => cases::execute(&a, &[Group::Standard], &say)?,
-        Command::Robustness(a) => cases::execute(&a, &[Group::Robustness, Group::Conicity], &say)?,
+        Command::Robustness(a) => cases::execute(
+            &a,
+            &[Group::Robustness, Group::Conicity, Group::Vehicles],
+            &say,
+        )?,
         Command::Resonance(a) => cases::execute(&a, &[Group::Resonance], &say)?,
         Command::All(a) => cases::execute(&a, &Group::ALL, &say)?,
+        Command::Envelope(a) => variants::envelope(&a, &say)?,
         Command::Variants(a) => variants::execute(&a, &say)?,
         Command::Learn(a) => learn::execute(&a)?,
         Command::Taps(a) => taps::execute(&a, &|m| eprintln!("{m}"))?,

@@ -43,19 +43,26 @@ fn every_robustness_case_runs_with_both_estimators_and_the_told_conicity_reaches
 
 #[test]
 fn the_conicity_sweep_runs_the_learned_filter_told_a_worn_wheel_s_conicity() {
-    // The learned filter told the conicity runs on a Kalman channel its taps were not fitted
-    // with (allow_other_kalman): it must initialize, and telling it must change its estimate.
+    // The learned filter told the conicity (its `conicity` parameter) blends the taps at it
+    // instead of at the one it estimates: it must initialize, and telling it must change its
+    // estimate.
     let fmus = runs::Fmus::new(
         common::fmu("RailVehicle"),
         common::fmu("AlignmentEstimator"),
     );
-    let sweep = cases::conicity_sweep();
+    let bank = cases::conicity_bank().unwrap();
+    let sweep = cases::conicity_sweep(&bank);
     let at = |name: &str| sweep.iter().find(|c| c.name == name).unwrap();
-    let told =
-        cases::run_seed_until(&fmus, at("conicity 0.3, learned filter told it"), 1, 6.0).unwrap();
+    let told = cases::run_seed_until(
+        &fmus,
+        at("conicity 0.3, Kalker 100 %, learned filter told it"),
+        1,
+        6.0,
+    )
+    .unwrap();
     let blind = cases::run_seed_until(
         &fmus,
-        at("conicity 0.3, learned filter told nothing"),
+        at("conicity 0.3, Kalker 100 %, learned filter told nothing"),
         1,
         6.0,
     )

@@ -40,6 +40,12 @@ unsafe extern "C" {
     fn fmi2SetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int) -> fmi2Status;
     fn fmi2GetInteger(c: fmi2Component, vr: *const u32, n: usize, v: *mut c_int) -> fmi2Status;
     fn fmi2SetBoolean(c: fmi2Component, vr: *const u32, n: usize, v: *const c_int) -> fmi2Status;
+    fn fmi2SetString(
+        c: fmi2Component,
+        vr: *const u32,
+        n: usize,
+        v: *const *const std::ffi::c_char,
+    ) -> fmi2Status;
 }
 
 /// The paper's filter alone (`estimator` 1) with the given discretization.
@@ -199,19 +205,36 @@ fn bench_options(c: &mut Criterion) {
 /// 10 steps and costs the FIR products of two bank speeds, so the figure is the mean over cells.
 fn bench_learned(c: &mut Criterion) {
     let h = 1e-3;
-    for (lag, roll, label) in [
-        (10.0, false, "learned, causal + 10 m lag (default)"),
-        (0.0, false, "learned, causal only"),
-        (10.0, true, "learned + roll-rate gyro, causal + 10 m lag"),
+    for (lag, roll, taps, label) in [
+        (
+            10.0,
+            false,
+            c"learned.taps",
+            "learned, causal + 10 m lag (default)",
+        ),
+        (0.0, false, c"learned.taps", "learned, causal only"),
+        (
+            10.0,
+            true,
+            c"learned.taps",
+            "learned + roll-rate gyro, causal + 10 m lag",
+        ),
+        (
+            10.0,
+            false,
+            c"learned-conicity.taps",
+            "learned over conicities (learned-conicity.taps), causal + 10 m lag",
+        ),
     ] {
         // gain 0, the default: the learned filter's Kalman channel takes the scheduled
         // steady-state gain.
         // SAFETY: `instance_with` passes its live instance; each reference and value is one
-        // element, as n = 1 says.
+        // element, as n = 1 says; the tap file's name is a NUL-terminated static string.
         let comp = instance_with(1, 1, 0, |c| unsafe {
             fmi2SetInteger(c, &vr::ESTIMATOR, 1, &2);
             fmi2SetReal(c, &vr::LAG, 1, &lag);
             fmi2SetBoolean(c, &vr::USE_ROLL_RATE, 1, &(roll as fmi2Boolean));
+            fmi2SetString(c, &vr::TAP_FILE, 1, &taps.as_ptr());
         });
         let inputs = [
             vr::WS_ACC_Y,

@@ -1,27 +1,39 @@
 //! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
 //! sensor set and lag, with where they came from and what they require of the runtime.
 //!
-//! # Format (version 3)
+//! # Format (version 4; version 3 is read too)
 //! | part | content |
 //! |---|---|
 //! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
 //! | header | TOML, UTF-8: [`Header`] (grid, high-pass, provenance, the contract, the contact model, and every entry's windows without their taps) |
-//! | data | the taps, little-endian `f32`, entry after entry, window after window in header order |
+//! | data | the taps, entry after entry, window after window in header order, as the header's `encoding` says (below) |
 //!
-//! A window of `past` points behind and `future` ahead over `C` channels holds `C (past + future
-//! + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
+//! Version 4 adds the conicity conditions: each entry's `conicity`, the contact model's
+//! `conicity_range`, `extra_bands` and per-speed conicity models ([`super::contact`]). A
+//! version 3 bank has none, and is read as before.
+//!
+//! A window of `past` points behind and `future` ahead over `C` channels holds
+//! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
 //! multiplies the channel's value `j` grid points before the newest one. The estimate is for the
 //! position `future` points behind the newest cell (the lag). Taps are in physical units (metres
-//! of alignment per unit of the channel). `f32` keeps 7 significant digits: the estimate's
-//! rounding error is below 1e-6 of its rms, far under the estimator's own error, at half the
-//! size of `f64`.
+//! of alignment per unit of the channel).
+//!
+//! | `encoding` | data per window | precision |
+//! |---|---|---|
+//! | `f32` (absent: format 3) | every tap as a little-endian `f32` | 7 significant digits: the estimate's rounding error is below 1e-6 of its rms |
+//! | `i16` | per channel: a little-endian `f32` scale, then its taps as little-endian `i16`, each tap `q * scale` | the taps, rounded to `f32` first, divided by `scale = max |tap| / 32767` of the channel and rounded: every tap within 1.5e-5 of the channel's largest |
+//!
+//! Why `i16`: the bank over conicities holds seven times the entries of the one over Kalker
+//! scales alone; at half the size, its estimates differ from the `f32` bank's by far less
+//! than the estimator's own error (the figure: docs/learned-filter.md#conicity). Rounding to
+//! `f32` first makes an `i16` bank re-encoded from an `f32` one equal to one written directly.
 //!
 //! The `[contract]` table ([`super::contract`]) holds the runtime constants and filter designs
 //! the taps were fitted with and a hash of the Kalman channel's matrices; the FMU compares it
 //! with its own at initialization. Formats 1 and 2 (before 2026-11-25) had no contract and are
 //! refused: without one, a bank fitted by another build or with another Kalman channel would
 //! run silently wrong, which is what the contract is for; `alignment-studies taps` makes a
-//! format 3 bank.
+//! format 4 bank.
 
 use super::error::{BankError, BankProblem, EntryProblem};
 use serde::{Deserialize, Serialize};
@@ -30,10 +42,12 @@ use std::path::Path;
 /// The first word of a bank's first line: what tells a bank from any other file before its
 /// sizes are trusted.
 pub const MAGIC: &str = "learned-taps";
-/// The format [`Header::to_bytes`] writes (and the header's `format`).
-pub const FORMAT: u32 = 3;
-/// The formats this reader takes.
-pub const READS: [u32; 1] = [3];
+/// The format [`Header::to_bytes`] writes (and the header's `format`). Format 4 added the
+/// conicity conditions (entries' `conicity`, the contact model's conicity models): a reader of
+/// format 3 would take such a bank's entries of one speed for duplicates.
+pub const FORMAT: u32 = 4;
+/// The formats this reader takes (3: no conicity conditions).
+pub const READS: [u32; 2] = [3, 4];
 
 /// Where the taps came from: enough to regenerate them and to judge where they hold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -87,6 +101,10 @@ pub struct Entry {
     /// taps serve every condition (fitted on all of `kalker_scales` at once).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub condition: Option<f64>,
+    /// The wheels' equivalent conicity this entry's taps are fitted for, in a bank fitted over
+    /// conicities (its contact model then estimates the conicity too); absent: the vehicle's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conicity: Option<f64>,
     /// The windows of this lag, one per history length (the full one and the start's shorter
     /// ones); the runtime takes the longest the history it holds allows ([`super::window`]).
     pub windows: Vec<Window>,
@@ -123,6 +141,9 @@ pub struct Header {
     pub provenance: Provenance,
     /// What the taps require of the runtime, checked at initialization.
     pub contract: super::contract::Contract,
+    /// How the data block stores the taps (absent: `f32`, as format 3 did).
+    #[serde(default, skip_serializing_if = "is_f32")]
+    pub encoding: Encoding,
     /// The estimator of the contact condition, in a bank with per-condition entries.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<super::contact::ContactModel>,
@@ -134,6 +155,81 @@ pub struct Header {
 /// A whole tap bank.
 pub type Bank = Header;
 
+/// How the data block stores the taps (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    /// Every tap as an `f32`.
+    #[default]
+    F32,
+    /// Per window and channel an `f32` scale, then the taps as `i16` multiples of it.
+    I16,
+}
+
+impl Encoding {
+    /// Bytes of one window of `channels` channels and `len` taps each.
+    fn bytes(self, channels: usize, len: usize) -> usize {
+        match self {
+            Encoding::F32 => 4 * channels * len,
+            Encoding::I16 => channels * (4 + 2 * len),
+        }
+    }
+
+    /// Appends the taps of one window (`channels` channels of `len` taps, channel after
+    /// channel) to `data`.
+    fn write(self, taps: &[f64], len: usize, data: &mut Vec<u8>) {
+        match self {
+            Encoding::F32 => {
+                for t in taps {
+                    data.extend_from_slice(&(*t as f32).to_le_bytes());
+                }
+            }
+            Encoding::I16 => {
+                for channel in taps.chunks(len.max(1)) {
+                    let rounded: Vec<f64> = channel.iter().map(|t| *t as f32 as f64).collect();
+                    let largest = rounded.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+                    let scale = (largest / I16_STEPS) as f32;
+                    data.extend_from_slice(&scale.to_le_bytes());
+                    for t in rounded {
+                        let q = if scale > 0.0 {
+                            (t / scale as f64).round().clamp(-I16_STEPS, I16_STEPS) as i16
+                        } else {
+                            0
+                        };
+                        data.extend_from_slice(&q.to_le_bytes());
+                    }
+                }
+            }
+        }
+    }
+
+    /// Reads the taps of one window (`channels` channels of `len` taps) from `data`.
+    fn read(self, data: &[u8], channels: usize, len: usize) -> Vec<f64> {
+        match self {
+            Encoding::F32 => data
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
+                .collect(),
+            Encoding::I16 => {
+                let mut taps = Vec::with_capacity(channels * len);
+                for channel in data.chunks_exact(4 + 2 * len) {
+                    let scale =
+                        f32::from_le_bytes([channel[0], channel[1], channel[2], channel[3]]) as f64;
+                    taps.extend(
+                        channel[4..]
+                            .chunks_exact(2)
+                            .map(|c| i16::from_le_bytes([c[0], c[1]]) as f64 * scale),
+                    );
+                }
+                taps
+            }
+        }
+    }
+}
+
+/// The largest magnitude of an `i16` tap: the channel's largest tap.
+const I16_STEPS: f64 = 32767.0;
+
 /// The longest first line a bank may have: its magic, format, size and hash take under 60
 /// bytes, so anything longer is not a bank (and is not read further).
 const MAX_FIRST_LINE: usize = 200;
@@ -142,6 +238,10 @@ const MAX_FIRST_LINE: usize = 200;
 /// 60 m): a bound that stops a corrupt file from asking for gigabytes of history.
 const MAX_PAST: usize = 100_000;
 
+fn is_f32(e: &Encoding) -> bool {
+    *e == Encoding::F32
+}
+
 impl Header {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -149,9 +249,8 @@ impl Header {
         let mut data = Vec::new();
         for e in &self.entries {
             for w in &e.windows {
-                for t in &w.taps {
-                    data.extend_from_slice(&(*t as f32).to_le_bytes());
-                }
+                self.encoding
+                    .write(&w.taps, w.past + w.future + 1, &mut data);
             }
         }
         let mut out = format!(
@@ -210,28 +309,27 @@ impl Header {
         let mut bank: Bank =
             toml::from_str(head).map_err(|e| bad(BankProblem::Toml(e.to_string())))?;
         bank.check().map_err(bad)?;
+        let encoding = bank.encoding;
         let needed: usize = bank
             .entries
             .iter()
             .flat_map(|e| {
                 e.windows
                     .iter()
-                    .map(|w| e.channels.len() * (w.past + w.future + 1))
+                    .map(|w| encoding.bytes(e.channels.len(), w.past + w.future + 1))
             })
             .sum();
-        if needed * 4 != dlen {
-            return Err(bad(BankProblem::TapCount {
-                needed,
-                held: dlen / 4,
-            }));
+        if needed != dlen {
+            return Err(bad(BankProblem::TapCount { needed, held: dlen }));
         }
-        let mut taps = data
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64);
+        let mut at = 0;
         for (i, e) in bank.entries.iter_mut().enumerate() {
             let nc = e.channels.len();
             for w in &mut e.windows {
-                w.taps = taps.by_ref().take(nc * (w.past + w.future + 1)).collect();
+                let len = w.past + w.future + 1;
+                let n = encoding.bytes(nc, len);
+                w.taps = encoding.read(&data[at..at + n], nc, len);
+                at += n;
                 if w.taps.iter().any(|t| !t.is_finite()) {
                     return Err(bad(BankProblem::Tap(i)));
                 }
@@ -262,6 +360,15 @@ impl Header {
             .count();
         if conditional > 0 && (conditional < self.entries.len() || self.contact.is_none()) {
             return Err(BankProblem::Conditions);
+        }
+        // Conicity conditions: on every entry, with a contact model that estimates them.
+        let coned = self.entries.iter().filter(|e| e.conicity.is_some()).count();
+        let estimates = self
+            .contact
+            .as_ref()
+            .is_some_and(|c| c.conicity_range.is_some());
+        if (coned > 0 || estimates) && (coned < self.entries.len() || !estimates) {
+            return Err(BankProblem::Conicities);
         }
         if !(self.grid.is_finite() && self.grid > 0.0) {
             return Err(BankProblem::Grid(self.grid));
@@ -303,6 +410,11 @@ impl Entry {
             && !(c.is_finite() && c > 0.0)
         {
             return Err(EntryProblem::Condition(c));
+        }
+        if let Some(c) = self.conicity
+            && !(c.is_finite() && c > 0.0)
+        {
+            return Err(EntryProblem::Conicity(c));
         }
         if self.windows.is_empty() {
             return Err(EntryProblem::NoWindows);
@@ -352,6 +464,7 @@ pub(crate) mod tests {
             validation_objective: 0.1,
             kalker_scales: vec![],
             condition: None,
+            conicity: None,
             windows: [2usize, 5]
                 .iter()
                 .map(|&past| Window {
@@ -381,6 +494,7 @@ pub(crate) mod tests {
                 command: "none".into(),
             },
             contract: sample_contract(),
+            encoding: Encoding::F32,
             contact: None,
             entries: vec![
                 entry(10.0, 0),
@@ -410,6 +524,54 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn an_i16_bank_keeps_every_tap_within_its_channel_s_step() {
+        let mut b = sample_bank();
+        b.encoding = Encoding::I16;
+        // A channel of zeros, and one with a tap far larger than the rest.
+        b.entries[0].windows[0]
+            .taps
+            .iter_mut()
+            .take(3)
+            .for_each(|t| *t = 0.0);
+        b.entries[1].windows[1].taps[0] = 40.0;
+        let bytes = b.to_bytes();
+        let back = Bank::parse(&bytes, Path::new("t.taps")).unwrap();
+        assert_eq!(back.encoding, Encoding::I16);
+        let mut f32_bank = b.clone();
+        f32_bank.encoding = Encoding::F32;
+        // The data block's size, from the first line: smaller than the f32 one's (about half
+        // for the shipped windows of 300 taps; these are short, so the scales weigh more).
+        let data = |b: &[u8]| -> usize {
+            let first = std::str::from_utf8(&b[..b.iter().position(|c| *c == b'\n').unwrap()])
+                .unwrap()
+                .to_string();
+            first.split(' ').nth(3).unwrap().parse().unwrap()
+        };
+        assert!(data(&bytes) < data(&f32_bank.to_bytes()) * 9 / 10);
+        for (e, f) in b.entries.iter().zip(&back.entries) {
+            for (w, v) in e.windows.iter().zip(&f.windows) {
+                let len = w.past + w.future + 1;
+                for (ch, (a, b)) in w.taps.chunks(len).zip(v.taps.chunks(len)).enumerate() {
+                    let largest = a.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+                    for (x, y) in a.iter().zip(b) {
+                        // Half a step of the channel's scale, and the f32 rounding before it.
+                        let step = largest / 32767.0;
+                        assert!(
+                            (x - y).abs() <= 0.5 * step * (1.0 + 1e-6) + 1e-7 * x.abs(),
+                            "channel {ch}: {x} read back as {y}"
+                        );
+                    }
+                }
+            }
+        }
+        // Written again, byte for byte; and re-encoding an f32 bank gives the same bytes.
+        assert_eq!(back.to_bytes(), bytes);
+        let mut via_f32 = Bank::parse(&f32_bank.to_bytes(), Path::new("t.taps")).unwrap();
+        via_f32.encoding = Encoding::I16;
+        assert_eq!(via_f32.to_bytes(), bytes);
+    }
+
+    #[test]
     fn damaged_files_are_refused_by_name() {
         let bytes = sample_bank().to_bytes();
         let p = Path::new("x.taps");
@@ -427,11 +589,11 @@ pub(crate) mod tests {
         assert!(e.contains("sample step 0 s"), "{e}");
         let e = Bank::parse(b"hello\n", p).unwrap_err().to_string();
         assert!(e.contains("first line"), "{e}");
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 7");
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 4", "learned-taps 7");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 7"), "{e}");
         // A bank of the formats before the contract says why it is refused.
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 3", "learned-taps 2");
+        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 4", "learned-taps 2");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 2") && e.contains("no contract"), "{e}");
     }

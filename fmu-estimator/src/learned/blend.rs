@@ -1,6 +1,7 @@
 //! The blend of the selected windows' estimates: linear in speed between the two bank speeds
-//! around the current one, and in contact condition between the two trained conditions around
-//! the estimated one (up to four windows per estimate).
+//! around the current one, in contact condition between the two trained conditions around the
+//! estimated one, and in conicity between the two trained conicities around the estimated or
+//! given one (up to eight windows per estimate).
 
 use super::weights;
 use super::window::{History, Windows};
@@ -12,16 +13,36 @@ pub(super) struct Blend {
 }
 
 impl Blend {
-    /// The weights at `speed` among `speeds` and at `contact_scale` among `conditions` (one
-    /// set of windows per speed when `conditions` is empty).
-    pub(super) fn at(speeds: &[f64], speed: f64, conditions: &[f64], contact_scale: f64) -> Blend {
+    /// The weights at `speed` among `speeds`, at `contact_scale` among `conditions` and at
+    /// `conicity` among `conicities` (linear in the logarithm: equal ratios of conicity change
+    /// a wheel's kinematic wavelength alike); one set of windows per speed when both are
+    /// empty. The condition index is conicity-major ([`super::selection`]).
+    pub(super) fn at(
+        speeds: &[f64],
+        speed: f64,
+        conditions: &[f64],
+        contact_scale: f64,
+        conicities: &[f64],
+        conicity: f64,
+    ) -> Blend {
+        let by_kalker = if conditions.is_empty() {
+            vec![(0, 1.0)]
+        } else {
+            weights(conditions, contact_scale)
+        };
+        let by_condition = if conicities.is_empty() {
+            by_kalker
+        } else {
+            let ln: Vec<f64> = conicities.iter().map(|c| c.ln()).collect();
+            let nk = conditions.len().max(1);
+            weights(&ln, conicity.ln())
+                .into_iter()
+                .flat_map(|(c, a)| by_kalker.iter().map(move |(k, b)| (c * nk + k, a * b)))
+                .collect()
+        };
         Blend {
             by_speed: weights(speeds, speed),
-            by_condition: if conditions.is_empty() {
-                vec![(0, 1.0)]
-            } else {
-                weights(conditions, contact_scale)
-            },
+            by_condition,
         }
     }
 

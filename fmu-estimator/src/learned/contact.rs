@@ -30,6 +30,14 @@
 //! | `M_02 / sqrt(M_00 M_22)` | correlation of wheelset and frame accelerations |
 //! | `M_12 / sqrt(M_11 M_22)` | correlation of yaw rate and frame acceleration |
 //!
+//! # Conicity (a bank fitted over conicities)
+//! The features are taken in three more bands, the octaves 5-10, 10-20 and 20-40 m around the
+//! wheelset's kinematic wavelength `2 pi sqrt(r0 l / conicity)` (13 m for the ML95 at 0.1),
+//! where a conicity shows: 20 features. `ln(conicity)` is a linear function of all of them
+//! ([`ConicityModel`]); the Kalker scale, one per bank conicity, of the first band's five
+//! ([`NodeModel`]), blended at the conicity. The `novelty` checks the 20 against a model of
+//! what the training runs showed ([`ConicityModel`]).
+//!
 //! # Estimate
 //! At each model speed the Kalker-coefficient scale is a linear function of the features,
 //! fitted by least squares on the training runs of every trained condition at that constant
@@ -56,7 +64,7 @@ pub const MIN_MODEL_ERROR: f64 = 1e-3;
 
 /// The channels the features read ([`super::grid::CHANNELS`] indices).
 pub const CHANNELS: [usize; 3] = [0, 1, 2];
-/// Number of features.
+/// Number of features per band.
 pub const FEATURES: usize = 5;
 /// The power of the speed each channel is divided by before its moments are taken: a wheelset
 /// following a track wave `y(s)` has `y'' V^2` of lateral acceleration and `psi' V` of yaw rate,
@@ -66,11 +74,20 @@ pub const CONTACT_SPEED_POWER: [i32; 3] = [2, 1, 2];
 /// are left out of the moments anyway).
 pub const MIN_SPEED: f64 = 1.0;
 
-/// The fitted estimator of the contact condition, as the tap bank holds it.
+/// The fitted estimator of the contact condition, as the tap bank holds it. Its optional
+/// fields (absent in banks before format 4) are never skipped when written: the FMU's state
+/// serializes it with postcard, which reads fields by position (a skipped one made every
+/// genuine state of a bank without conicities undecodable).
+///
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ContactModel {
     /// Shortest and longest wavelength of the features' band \[m\].
     pub band: [f64; 2],
+    /// Further bands whose features join the first band's, in a bank fitted over conicities
+    /// (shortest and longest wavelength \[m\]): the conicity moves the wheelset's kinematic
+    /// wavelength, and the ratios and correlations of the sensors per band show where it lies.
+    #[serde(default)]
+    pub extra_bands: Vec<[f64; 2]>,
     /// Memory of the running moments \[m\].
     pub memory: f64,
     /// The lowest and highest Kalker-coefficient scale trained on: the estimate's range.
@@ -78,6 +95,113 @@ pub struct ContactModel {
     /// Per bank speed, the coefficients of the features and the constant last.
     #[serde(rename = "at")]
     pub speeds: Vec<SpeedModel>,
+    /// The lowest and highest equivalent conicity trained on, in a bank fitted over conicities
+    /// (every speed then has a [`ConicityModel`]): the conicity estimate's range.
+    #[serde(default)]
+    pub conicity_range: Option<[f64; 2]>,
+}
+
+/// The condition the features indicate ([`ContactModel::estimate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Condition {
+    /// The Kalker-coefficient scale, within the trained range.
+    pub kalker: f64,
+    /// The equivalent conicity (the one told, or estimated within the trained range); `None`
+    /// in a bank without conicity conditions.
+    pub conicity: Option<f64>,
+    /// How far the features lie from what the training runs showed at that condition, in units
+    /// of the level exceeded on [`LEVEL_SHARE`] of the validation cells; `None` in a bank
+    /// without conicity conditions.
+    pub novelty: Option<f64>,
+}
+
+/// The share of the validation cells (after the memory filled) whose novelty exceeds 1: what
+/// the level is set by, so that `outside_training` false alarms stay under 1 % of the distance
+/// on trained conditions.
+pub const LEVEL_SHARE: f64 = 0.002;
+
+/// The novelty above which `outside_training` sets: the level itself (the novelty's unit).
+pub const NOVELTY_LEVEL: f64 = 1.0;
+
+/// The share of a set's memory its cells must fill before its novelty counts (0.1: 20 m of
+/// the 200 m memory). Before it, the first metres' features set `outside_training` at the start
+/// of every run (10 km runs on trained conditions, seeds 1-2: at 0-2 m on every one).
+pub const NOVELTY_FROM: f64 = 0.1;
+
+/// Terms of the forward model of a feature in the condition (`x` ln conicity, `y` Kalker scale).
+pub const FORWARD_TERMS: usize = 6;
+
+/// The forward model's terms: `[1, x, y, x^2, x y, y^2]`.
+pub fn forward_terms(x: f64, y: f64) -> [f64; FORWARD_TERMS] {
+    [1.0, x, y, x * x, x * y, y * y]
+}
+
+/// One bank speed's estimator of the wheels' equivalent conicity, and the model of the features
+/// it checks them against (the novelty): in a bank fitted over conicities.
+///
+/// # Why the novelty
+/// The training runs' features lie near a surface in feature space, parametrised by the two
+/// conditions the bank was fitted over (conicity and Kalker scale). A vehicle or wheel state
+/// the taps were not fitted for gives features off that surface, or on it beyond the trained
+/// range: the forward model at the estimated (clamped) condition misses them. The squared
+/// Mahalanobis distance of the miss, with the training cells' residual covariance, divided by
+/// the level that [`LEVEL_SHARE`] of the validation cells exceed, is the novelty: above 1,
+/// the sensors say something the taps have not seen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConicityModel {
+    /// One coefficient of `ln(conicity)` per feature, then the constant.
+    pub coefficients: Vec<f64>,
+    /// Root-mean-square error of `ln(conicity)` on the validation runs after the memory filled
+    /// (0.1: about 10 %).
+    pub rms_error: f64,
+    /// Per feature, the coefficients of [`forward_terms`]: the features the training runs show
+    /// at a condition.
+    pub forward: Vec<Vec<f64>>,
+    /// The inverse covariance of the training cells' features about the forward model at their
+    /// own condition, row after row (features squared).
+    pub precision: Vec<f64>,
+    /// The squared Mahalanobis distance exceeded on [`LEVEL_SHARE`] of the validation cells.
+    pub level: f64,
+}
+
+impl ConicityModel {
+    /// The squared Mahalanobis distance of features `f` from the forward model at (`x` ln
+    /// conicity, `y` Kalker scale), over the level.
+    pub fn novelty(&self, f: &[f64], x: f64, y: f64) -> f64 {
+        let t = forward_terms(x, y);
+        let n = f.len();
+        let r: Vec<f64> = f
+            .iter()
+            .zip(&self.forward)
+            .map(|(f, row)| f - row.iter().zip(&t).map(|(a, b)| a * b).sum::<f64>())
+            .collect();
+        let mut d2 = 0.0;
+        for (i, ri) in r.iter().enumerate() {
+            let row = &self.precision[i * n..(i + 1) * n];
+            d2 += ri * row.iter().zip(&r).map(|(p, rj)| p * rj).sum::<f64>();
+        }
+        d2 / self.level
+    }
+
+    fn check(&self, speed: f64, features: usize) -> Result<(), ContactProblem> {
+        let bad = || ContactProblem::Conicity { speed };
+        let finite = |v: &[f64]| v.iter().all(|c| c.is_finite());
+        if self.coefficients.len() != features + 1
+            || !finite(&self.coefficients)
+            || self.forward.len() != features
+            || self
+                .forward
+                .iter()
+                .any(|r| r.len() != FORWARD_TERMS || !finite(r))
+            || self.precision.len() != features * features
+            || !finite(&self.precision)
+            || !(self.level.is_finite() && self.level > 0.0)
+            || !(self.rms_error.is_finite() && self.rms_error >= 0.0)
+        {
+            return Err(bad());
+        }
+        Ok(())
+    }
 }
 
 /// One bank speed's linear estimator of the Kalker-coefficient scale from the features.
@@ -90,15 +214,58 @@ pub struct SpeedModel {
     pub coefficients: Vec<f64>,
     /// Root-mean-square error of the estimate on the validation seeds after 200 m.
     pub rms_error: f64,
+    /// The conicity's estimator and the features' model, in a bank fitted over conicities.
+    #[serde(default)]
+    pub conicity: Option<ConicityModel>,
+    /// In a bank fitted over conicities: per bank conicity, the Kalker scale from the first
+    /// band's features, fitted on that conicity's runs alone; the estimate blends them at the
+    /// conicity (linearly in its logarithm) instead of using [`Self::coefficients`].
+    #[serde(default)]
+    pub kalker_by_conicity: Vec<NodeModel>,
+}
+
+/// The Kalker-scale estimator at one bank conicity ([`SpeedModel::kalker_by_conicity`]).
+///
+/// Why per conicity: one linear model over every conicity and Kalker scale reads the contact
+/// of the nominal ML95 about 0.1 low, and the blended taps lose D1 (20 m/s, validation seeds
+/// 102-104, conicity told 0.1: D1 0.34); the model fitted on the nominal conicity's runs
+/// alone, as the bank over Kalker scales had it, gives 0.13.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct NodeModel {
+    /// The bank conicity.
+    pub conicity: f64,
+    /// [`FEATURES`] coefficients of the first band's features, then the constant.
+    pub coefficients: Vec<f64>,
+    /// Root-mean-square error on that conicity's validation runs after the memory filled.
+    pub rms_error: f64,
+}
+
+/// A linear model's value at features `f`: the coefficients, then the constant.
+pub fn linear(c: &[f64], f: &[f64]) -> f64 {
+    f.iter().zip(c).map(|(x, c)| x * c).sum::<f64>() + c[f.len()]
 }
 
 impl ContactModel {
+    /// Every band the features are taken in: [`Self::band`] first, then the extra ones.
+    pub fn bands(&self) -> Vec<[f64; 2]> {
+        std::iter::once(self.band)
+            .chain(self.extra_bands.iter().copied())
+            .collect()
+    }
+
+    /// How many features the models read ([`FEATURES`] per band).
+    pub fn features(&self) -> usize {
+        FEATURES * (1 + self.extra_bands.len())
+    }
+
     /// The consistency the runtime relies on.
     pub fn check(&self) -> Result<(), ContactProblem> {
-        let [short, long] = self.band;
-        if !(short.is_finite() && short > 0.0 && long > short && long.is_finite()) {
-            return Err(ContactProblem::Band { short, long });
+        for [short, long] in self.bands() {
+            if !(short.is_finite() && short > 0.0 && long > short && long.is_finite()) {
+                return Err(ContactProblem::Band { short, long });
+            }
         }
+        let features = self.features();
         if !(self.memory.is_finite() && self.memory > 0.0) {
             return Err(ContactProblem::Memory(self.memory));
         }
@@ -110,61 +277,158 @@ impl ContactModel {
             return Err(ContactProblem::NoSpeeds);
         }
         for s in &self.speeds {
-            if s.coefficients.len() != FEATURES + 1 || s.coefficients.iter().any(|c| !c.is_finite())
+            let bad_node = |n: &NodeModel| {
+                n.coefficients.len() != FEATURES + 1
+                    || n.coefficients.iter().any(|c| !c.is_finite())
+                    || !(n.conicity > 0.0 && n.rms_error.is_finite())
+            };
+            if s.kalker_by_conicity.iter().any(bad_node)
+                || s.kalker_by_conicity
+                    .windows(2)
+                    .any(|w| !(w[1].conicity > w[0].conicity))
+            {
+                return Err(ContactProblem::Conicity { speed: s.speed });
+            }
+            if s.coefficients.len() != features + 1 || s.coefficients.iter().any(|c| !c.is_finite())
             {
                 return Err(ContactProblem::Coefficients {
                     speed: s.speed,
                     count: s.coefficients.len(),
-                    want: FEATURES + 1,
+                    want: features + 1,
                 });
             }
         }
         if self.speeds.windows(2).any(|w| !(w[1].speed > w[0].speed)) {
             return Err(ContactProblem::SpeedsNotIncreasing);
         }
+        if let Some([lo, hi]) = self.conicity_range {
+            if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && hi >= lo) {
+                return Err(ContactProblem::ConicityRange { lo, hi });
+            }
+            for s in &self.speeds {
+                s.conicity
+                    .as_ref()
+                    .ok_or(ContactProblem::Conicity { speed: s.speed })?
+                    .check(s.speed, features)?;
+            }
+        } else if let Some(s) = self.speeds.iter().find(|s| s.conicity.is_some()) {
+            return Err(ContactProblem::Conicity { speed: s.speed });
+        }
         Ok(())
     }
 
-    /// The Kalker-coefficient scale the moments indicate: each speed's model applied to the
-    /// features of the cells near that speed, the estimates averaged with weights of how much
-    /// recent track each set holds, times how full its memory is, over the model's squared
-    /// error there. Cells are never judged
-    /// by another speed's model, so a run's slow start does not bias the estimate while the
-    /// train accelerates. `None` before any set has features. `moments` must have been made with
-    /// this model's speeds ([`Self::moments`]).
+    /// The Kalker-coefficient scale the moments indicate ([`Self::estimate`] without a
+    /// conicity told).
     pub fn estimate_from(&self, moments: &Moments) -> Option<f64> {
-        let (mut sum, mut weight) = (0.0, 0.0);
+        self.estimate(moments, None).map(|c| c.kalker)
+    }
+
+    /// The condition the moments indicate: each speed's models applied to the features of the
+    /// cells near that speed, the estimates averaged with weights of how much recent track each
+    /// set holds, times how full its memory is, over the model's squared error there. Cells
+    /// are never judged by another speed's model, so a run's slow start does not bias the
+    /// estimate while the train accelerates. `told`: the conicity given by the user (then not
+    /// estimated; the novelty is judged at it). `None` before any set has features. `moments`
+    /// must have been made with this model's speeds ([`Self::moments`]).
+    ///
+    /// The conicity is estimated as `ln(conicity)` (a wheel's kinematic wavelength goes as
+    /// `conicity^-1/2`, so equal ratios matter alike), clamped to the trained range per set.
+    /// A young set's novelty is scaled by how full its memory is: the features' scatter about
+    /// the training surface shrinks as the memory fills, and the level was set on full ones.
+    pub fn estimate(&self, moments: &Moments, told: Option<f64>) -> Option<Condition> {
+        let ln_range = self.conicity_range.map(|[lo, hi]| [lo.ln(), hi.ln()]);
+        let (mut k_sum, mut k_weight) = (0.0, 0.0);
+        let (mut c_sum, mut c_weight) = (0.0, 0.0);
+        let (mut n_sum, mut n_weight) = (0.0, 0.0);
         for (i, m) in self.speeds.iter().enumerate() {
             let Some(f) = moments.features(i) else {
                 continue;
             };
-            let c = &m.coefficients;
-            let e = f.iter().zip(c).map(|(x, c)| x * c).sum::<f64>() + c[FEATURES];
-            if !e.is_finite() {
+            // This set's conicity (told, or estimated), where the bank has conicities.
+            let x = match (&m.conicity, ln_range) {
+                (Some(cm), Some([lo, hi])) => Some(match told {
+                    Some(c) => c.ln().clamp(lo, hi),
+                    None => linear(&cm.coefficients, f).clamp(lo, hi),
+                }),
+                _ => None,
+            };
+            let (k, rms) = match (x, m.kalker_by_conicity.is_empty()) {
+                (Some(x), false) => {
+                    let ln: Vec<f64> = m
+                        .kalker_by_conicity
+                        .iter()
+                        .map(|n| n.conicity.ln())
+                        .collect();
+                    super::weights(&ln, x)
+                        .iter()
+                        .fold((0.0, 0.0), |(k, r), (j, a)| {
+                            let n = &m.kalker_by_conicity[*j];
+                            let e = linear(&n.coefficients, &f[..FEATURES])
+                                .clamp(self.range[0], self.range[1]);
+                            (k + a * e, r + a * n.rms_error)
+                        })
+                }
+                _ => (linear(&m.coefficients, f), m.rms_error),
+            };
+            if !k.is_finite() {
                 continue;
             }
+            let k = k.clamp(self.range[0], self.range[1]);
             // A young set's features are far noisier than the model's error (fitted after a
             // full memory): its weight grows with its cells until the memory is full.
             let set = &moments.sets[i];
             let full = set.n.min(moments.memory_points) / moments.memory_points;
-            let w = set.recent * full / m.rms_error.max(MIN_MODEL_ERROR).powi(2);
-            sum += w * e.clamp(self.range[0], self.range[1]);
-            weight += w;
+            let w = set.recent * full;
+            let wk = w / rms.max(MIN_MODEL_ERROR).powi(2);
+            k_sum += wk * k;
+            k_weight += wk;
+            if let (Some(cm), Some(x)) = (&m.conicity, x)
+                && x.is_finite()
+            {
+                let wc = w / cm.rms_error.max(MIN_MODEL_ERROR).powi(2);
+                c_sum += wc * x;
+                c_weight += wc;
+                // Sets holding less than a cell of the recent track hardly count: their
+                // novelty (a quadratic form over every feature) is not worth its cost. The
+                // first cells' features are too wild to judge (their ratios of tiny
+                // moments): novelty from NOVELTY_FROM of a memory on.
+                if set.recent >= 1.0 && full >= NOVELTY_FROM {
+                    let n = cm.novelty(f, x, k) * full;
+                    if n.is_finite() {
+                        n_sum += w * n;
+                        n_weight += w;
+                    }
+                }
+            }
         }
-        (weight > 0.0).then(|| (sum / weight).clamp(self.range[0], self.range[1]))
+        if k_weight <= 0.0 {
+            return None;
+        }
+        let kalker = k_sum / k_weight;
+        let ln_c = (c_weight > 0.0).then(|| c_sum / c_weight);
+        Some(Condition {
+            kalker: kalker.clamp(self.range[0], self.range[1]),
+            conicity: match (told, self.conicity_range) {
+                (Some(c), Some(_)) => Some(c),
+                (None, Some([lo, hi])) => ln_c.map(|x| x.exp().clamp(lo, hi)),
+                _ => None,
+            },
+            novelty: (n_weight > 0.0).then(|| n_sum / n_weight),
+        })
     }
 
     /// Empty moments for this model's speeds on a grid of `ds` metres.
     pub fn moments(&self, ds: f64) -> Moments {
         let speeds: Vec<f64> = self.speeds.iter().map(|m| m.speed).collect();
-        Moments::new(ds, self.band, self.memory, &speeds)
+        Moments::new(ds, &self.bands(), self.memory, &speeds)
     }
 }
 
 /// The running moments of the band-passed channels, one set per speed of the contact model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
-    filters: Vec<[Biquad; 2]>,
+    /// Per band, per channel: the high-pass and the low-pass.
+    filters: Vec<Vec<[Biquad; 2]>>,
     /// The speeds of the sets \[m/s\], ascending (the contact model's).
     speeds: Vec<f64>,
     sets: Vec<MomentSet>,
@@ -174,28 +438,34 @@ pub struct Moments {
 /// The moments of the cells near one speed.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 struct MomentSet {
-    m: [[f64; 3]; 3],
+    /// Per band, the channels' second moments.
+    m: Vec<[[f64; 3]; 3]>,
     /// The cells' weight summed (each cell's share of this speed).
     n: f64,
     /// How much of the last `memory` metres of track this set holds (decays with distance).
     recent: f64,
     /// The features of `m`, updated when a cell changes it: every closed cell reads every
-    /// set's features, but changes at most two sets.
-    features: Option<[f64; FEATURES]>,
+    /// set's features, but changes at most two sets. [`FEATURES`] per band, band after band.
+    features: Option<Vec<f64>>,
 }
 
 impl Moments {
-    /// Moments on a grid of `ds` metres, per speed of `speeds` (ascending).
-    pub fn new(ds: f64, band: [f64; 2], memory: f64, speeds: &[f64]) -> Moments {
+    /// Moments on a grid of `ds` metres in each of `bands`, per speed of `speeds` (ascending).
+    pub fn new(ds: f64, bands: &[[f64; 2]], memory: f64, speeds: &[f64]) -> Moments {
         Moments {
-            filters: (0..CHANNELS.len())
-                .map(|_| [Biquad::highpass(ds, band[1]), Biquad::lowpass(ds, band[0])])
+            filters: bands
+                .iter()
+                .map(|band| {
+                    (0..CHANNELS.len())
+                        .map(|_| [Biquad::highpass(ds, band[1]), Biquad::lowpass(ds, band[0])])
+                        .collect()
+                })
                 .collect(),
             speeds: speeds.to_vec(),
             sets: speeds
                 .iter()
                 .map(|_| MomentSet {
-                    m: [[0.0; 3]; 3],
+                    m: vec![[[0.0; 3]; 3]; bands.len()],
                     n: 0.0,
                     recent: 0.0,
                     features: None,
@@ -213,14 +483,20 @@ impl Moments {
     /// start dominate the lowest set).
     pub fn push(&mut self, cell: &[f64; 5], speed: f64) {
         let v = speed.max(MIN_SPEED);
-        let x: [f64; 3] = std::array::from_fn(|i| {
-            let [hp, lp] = &mut self.filters[i];
-            lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(CONTACT_SPEED_POWER[i])
-        });
+        let xs: Vec<[f64; 3]> = self
+            .filters
+            .iter_mut()
+            .map(|band| {
+                std::array::from_fn(|i| {
+                    let [hp, lp] = &mut band[i];
+                    lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(CONTACT_SPEED_POWER[i])
+                })
+            })
+            .collect();
         let (Some(lo), Some(hi)) = (self.speeds.first(), self.speeds.last()) else {
             return;
         };
-        if x.iter().any(|v| !v.is_finite()) || !(speed >= *lo && speed <= *hi) {
+        if xs.iter().flatten().any(|v| !v.is_finite()) || !(speed >= *lo && speed <= *hi) {
             return;
         }
         let decay = 1.0 - 1.0 / self.memory_points;
@@ -232,19 +508,26 @@ impl Moments {
             set.n += w;
             set.recent += w;
             let a = w / set.n.min(self.memory_points);
-            for (r, row) in set.m.iter_mut().enumerate() {
-                for (c, m) in row.iter_mut().enumerate() {
-                    *m += a * (x[r] * x[c] - *m);
+            for (m, x) in set.m.iter_mut().zip(&xs) {
+                for (r, row) in m.iter_mut().enumerate() {
+                    for (c, m) in row.iter_mut().enumerate() {
+                        *m += a * (x[r] * x[c] - *m);
+                    }
                 }
             }
-            set.features = features_of(&set.m);
+            set.features = set
+                .m
+                .iter()
+                .map(features_of)
+                .collect::<Option<Vec<_>>>()
+                .map(|f| f.concat());
         }
     }
 
     /// The features ([module docs](self)) of the set of speed index `i`; `None` while a channel
     /// has no variance there yet.
-    pub fn features(&self, i: usize) -> Option<[f64; FEATURES]> {
-        self.sets.get(i)?.features
+    pub fn features(&self, i: usize) -> Option<&[f64]> {
+        self.sets.get(i)?.features.as_deref()
     }
 }
 
@@ -282,8 +565,8 @@ mod tests {
     #[test]
     fn features_are_scale_free_and_see_correlation() {
         // Channel 1 = 3 x channel 0 (perfectly correlated), channel 2 independent noise.
-        let mut a = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
-        let mut b = Moments::new(0.2, [3.0, 25.0], 200.0, &[1.0]);
+        let mut a = Moments::new(0.2, &[[3.0, 25.0]], 200.0, &[1.0]);
+        let mut b = Moments::new(0.2, &[[3.0, 25.0]], 200.0, &[1.0]);
         let mut noise = uniform(1);
         // At 1 m/s the speed quotients (CONTACT_SPEED_POWER) leave the channels as they are.
         for _ in 0..20_000 {
@@ -293,7 +576,7 @@ mod tests {
             b.push(&[1e3 * u, 3e3 * u, 1e3 * w, 0.0, 0.0], 1.0);
         }
         let (fa, fb) = (a.features(0).unwrap(), b.features(0).unwrap());
-        for (x, y) in fa.iter().zip(&fb) {
+        for (x, y) in fa.iter().zip(fb) {
             assert!((x - y).abs() < 1e-9, "{fa:?} {fb:?}");
         }
         assert!((fa[0] - 9f64.ln()).abs() < 1e-9, "{fa:?}");
@@ -305,6 +588,7 @@ mod tests {
     fn model() -> ContactModel {
         ContactModel {
             band: [3.0, 25.0],
+            extra_bands: vec![],
             memory: 200.0,
             range: [0.5, 1.0],
             speeds: vec![
@@ -312,13 +596,18 @@ mod tests {
                     speed: 10.0,
                     coefficients: vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.5],
                     rms_error: 0.1,
+                    conicity: None,
+                    kalker_by_conicity: vec![],
                 },
                 SpeedModel {
                     speed: 20.0,
                     coefficients: vec![0.2, 0.0, 0.0, 0.0, 0.0, 0.5],
                     rms_error: 0.1,
+                    conicity: None,
+                    kalker_by_conicity: vec![],
                 },
             ],
+            conicity_range: None,
         }
     }
 

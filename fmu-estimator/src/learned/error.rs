@@ -90,6 +90,12 @@ pub enum BankProblem {
     /// to estimate the condition with.
     #[error("per-condition entries need a contact model and a condition on every entry")]
     Conditions,
+    /// Some entries carry a conicity and others do not, or the contact model does not
+    /// estimate the conicity.
+    #[error(
+        "entries per conicity need a contact model with a conicity range and a conicity on every entry"
+    )]
+    Conicities,
     /// The grid step is not a positive number \[m\].
     #[error("grid step {0} m")]
     Grid(f64),
@@ -111,12 +117,13 @@ pub enum BankProblem {
         /// What is wrong with it.
         problem: EntryProblem,
     },
-    /// The data block holds another number of taps than the header's windows need.
-    #[error("the header's windows need {needed} taps, the data holds {held}")]
+    /// The data block holds another number of bytes than the header's windows need in its
+    /// encoding.
+    #[error("the header's windows need {needed} bytes of taps, the data holds {held}")]
     TapCount {
-        /// Taps the windows need.
+        /// Bytes the windows need.
         needed: usize,
-        /// Taps (4 bytes each) the data holds.
+        /// Bytes the data holds.
         held: usize,
     },
     /// The entry at this position (0-based) has a tap that is NaN or infinite.
@@ -139,6 +146,9 @@ pub enum EntryProblem {
     /// The contact condition (Kalker-coefficient scale) is not a positive number.
     #[error("condition {0}")]
     Condition(f64),
+    /// The conicity is not a positive number.
+    #[error("conicity {0}")]
+    Conicity(f64),
     /// The entry has no windows.
     #[error("no windows")]
     NoWindows,
@@ -197,6 +207,21 @@ pub enum ContactProblem {
     /// The speeds are not strictly increasing (the blend interpolates between them).
     #[error("contact model speeds not increasing")]
     SpeedsNotIncreasing,
+    /// The trained range of conicities is not `0 < lo <= hi`.
+    #[error("conicity range {lo}-{hi}")]
+    ConicityRange {
+        /// Lowest conicity.
+        lo: f64,
+        /// Highest conicity.
+        hi: f64,
+    },
+    /// A speed's conicity model is missing (the bank has a conicity range), present without a
+    /// conicity range, or not of the features' sizes and finite.
+    #[error("contact model at {speed} m/s: conicity model missing, unexpected or malformed")]
+    Conicity {
+        /// The model's speed \[m/s\].
+        speed: f64,
+    },
 }
 
 /// A valid bank that holds no taps for the sensor set or lag the FMU's parameters choose
@@ -294,11 +319,11 @@ mod tests {
         };
         assert_eq!(
             format("7"),
-            "x.taps: tap bank format 7 (this estimator reads formats [3])"
+            "x.taps: tap bank format 7 (this estimator reads formats [3, 4])"
         );
         assert_eq!(
             format("2"),
-            "x.taps: tap bank format 2 (this estimator reads formats [3]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
+            "x.taps: tap bank format 2 (this estimator reads formats [3, 4]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
         );
         let invalid = |problem: BankProblem| {
             BankError::Invalid {

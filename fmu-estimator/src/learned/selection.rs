@@ -15,6 +15,9 @@ pub struct Choice {
     pub roll_rate: bool,
     /// The fixed-lag output's lag \[m\] (0: none).
     pub lag: f64,
+    /// The wheels' equivalent conicity, when known (`conicity` parameter): the taps are
+    /// blended at it instead of at the one estimated from the sensors. `None` or 0: estimate.
+    pub conicity: Option<f64>,
 }
 
 /// The bank's entries for one sensor set and lag, by speed, then by contact condition.
@@ -24,6 +27,10 @@ pub(super) struct Selection {
     /// Contact conditions (Kalker-coefficient scales, ascending); empty without a contact
     /// model (one set of windows per speed).
     pub(super) conditions: Vec<f64>,
+    /// The conicities of the entries (ascending); empty in a bank without conicity
+    /// conditions. With them, a speed's windows are conicity-major: `conicity index *
+    /// conditions.len() + condition index`.
+    pub(super) conicities: Vec<f64>,
     pub(super) causal: Vec<Vec<Windows>>,
     pub(super) lagged: Vec<Vec<Windows>>,
     pub(super) contact: Option<ContactModel>,
@@ -45,11 +52,16 @@ impl Selection {
             });
         }
         let conditions = conditions(bank, &causal);
-        let (speeds, causal) = by_speed(&causal, &conditions, Taps::Causal)?;
+        let conicities = conicities(&causal);
+        let grid = Conditions {
+            kalker: &conditions,
+            conicities: &conicities,
+        };
+        let (speeds, causal) = by_speed(&causal, &grid, Taps::Causal)?;
         let (lag, lagged) = if choice.lag > 0.0 {
             let l = nearest_lag(bank, choice)?;
             let taps = Taps::Lagged(l as f64 * bank.grid);
-            let (at, windows) = by_speed(&of_set(bank, choice.roll_rate, l), &conditions, taps)?;
+            let (at, windows) = by_speed(&of_set(bank, choice.roll_rate, l), &grid, taps)?;
             if at != speeds {
                 return Err(LearnedError::LagSpeeds { taps });
             }
@@ -61,6 +73,7 @@ impl Selection {
         Ok(Selection {
             speeds,
             conditions,
+            conicities,
             causal,
             lagged,
             contact,
@@ -107,6 +120,34 @@ fn conditions(bank: &Bank, causal: &[&Entry]) -> Vec<f64> {
     c
 }
 
+/// The conicities of the causal entries, ascending; none in a bank without them.
+fn conicities(causal: &[&Entry]) -> Vec<f64> {
+    let mut c: Vec<f64> = causal.iter().filter_map(|e| e.conicity).collect();
+    c.sort_by(f64::total_cmp);
+    c.dedup();
+    c
+}
+
+/// The conditions a speed's windows are laid out by: conicity-major, then Kalker scale.
+struct Conditions<'a> {
+    kalker: &'a [f64],
+    conicities: &'a [f64],
+}
+
+/// How far apart two conditions are, for the stand-in of a condition left out at a speed: a
+/// conicity ratio of 1.5 counts as a Kalker-scale difference of 0.25 (one bank step of each).
+fn apart(e: &Entry, conicity: Option<f64>, kalker: Option<f64>) -> f64 {
+    let dk = match (e.condition, kalker) {
+        (Some(a), Some(b)) => (a - b).abs() / 0.25,
+        _ => 0.0,
+    };
+    let dc = match (e.conicity, conicity) {
+        (Some(a), Some(b)) => (a / b).ln().abs() / 1.5f64.ln(),
+        _ => 0.0,
+    };
+    dk + dc
+}
+
 /// The bank's fixed lag (grid points) nearest `choice.lag`, if within half a grid step.
 fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, LearnedError> {
     let want = choice.lag / bank.grid;
@@ -133,41 +174,49 @@ fn nearest_lag(bank: &Bank, choice: Choice) -> Result<usize, LearnedError> {
     }
 }
 
-/// The windows of `entries` by ascending speed, and per speed one per condition of
-/// `conditions` (the entry of the nearest condition at that speed), or the single entry of each
-/// speed when `conditions` is empty; `taps` names the entries in errors.
+/// The windows of `entries` by ascending speed, and per speed one per condition of `grid`
+/// (the entry of the nearest condition at that speed: a condition left out there, where the
+/// vehicle is unstable, has a stand-in), or the single entry of each speed without
+/// conditions; `taps` names the entries in errors.
 #[allow(clippy::type_complexity)]
 fn by_speed(
     entries: &[&Entry],
-    conditions: &[f64],
+    grid: &Conditions,
     taps: Taps,
 ) -> Result<(Vec<f64>, Vec<Vec<Windows>>), LearnedError> {
     let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
+    let kalker: Vec<Option<f64>> = if grid.kalker.is_empty() {
+        vec![None]
+    } else {
+        grid.kalker.iter().copied().map(Some).collect()
+    };
+    let conicities: Vec<Option<f64>> = if grid.conicities.is_empty() {
+        vec![None]
+    } else {
+        grid.conicities.iter().copied().map(Some).collect()
+    };
     let mut table = vec![];
     for v in &speeds {
         let at: Vec<&Entry> = entries.iter().copied().filter(|e| e.speed == *v).collect();
-        if conditions.is_empty() {
+        if grid.kalker.is_empty() && grid.conicities.is_empty() {
             if at.len() > 1 {
                 return Err(LearnedError::TwoEntries { taps, speed: *v });
             }
             table.push(vec![Windows::of(at[0])]);
             continue;
         }
-        let row = conditions
-            .iter()
-            .map(|c| {
+        let mut row = vec![];
+        for c in &conicities {
+            for k in &kalker {
                 let nearest = at
                     .iter()
-                    .min_by(|a, b| {
-                        let d = |e: &Entry| (e.condition.unwrap_or(f64::NAN) - c).abs();
-                        d(a).total_cmp(&d(b))
-                    })
+                    .min_by(|a, b| apart(a, *c, *k).total_cmp(&apart(b, *c, *k)))
                     .expect("an entry at this speed");
-                Windows::of(nearest)
-            })
-            .collect();
+                row.push(Windows::of(nearest));
+            }
+        }
         table.push(row);
     }
     Ok((speeds, table))

@@ -65,6 +65,11 @@ use std::sync::Arc;
 /// worse still (0.203), 1 / 0 0.135.
 pub const TAP_SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
 
+/// How far (as a ratio) the conicity may lie beyond the selected taps' conicities before
+/// `outside_training` sets: twice the conicity estimate's rms error on the validation runs
+/// (about 11 % at 20 m/s), so that an estimate's scatter about a bank conicity does not set it.
+pub const CONICITY_MARGIN: f64 = 1.25;
+
 /// `V^TAP_SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
     let v15 = v * v.sqrt();
@@ -86,6 +91,17 @@ pub struct Learned {
     moments: Option<Moments>,
     /// The estimated Kalker-coefficient scale (0 without a contact model).
     contact_scale: f64,
+    /// The conicity given by the user (`conicity` parameter), if any.
+    told_conicity: Option<f64>,
+    /// The conicity the taps are blended at: the one told or estimated (0 in a bank without
+    /// conicity conditions).
+    conicity: f64,
+    /// The features' novelty ([`super::contact::Condition::novelty`]; 0 in a bank without
+    /// conicity conditions, and before the features exist).
+    novelty: f64,
+    /// Whether the features fill enough of their memory to be judged
+    /// ([`super::contact::NOVELTY_FROM`]): `outside_training` waits for it.
+    judged: bool,
 }
 
 impl Learned {
@@ -96,6 +112,10 @@ impl Learned {
         Ok(Learned {
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
+            told_conicity: choice.conicity.filter(|c| *c > 0.0),
+            conicity: 0.0,
+            novelty: 0.0,
+            judged: false,
             grid: Grid::new(bank.grid, bank.kalman_highpass),
             history: History::new(selection.longest()),
             causal: Track::default(),
@@ -110,6 +130,52 @@ impl Learned {
     /// the last closed cell; 0 when the taps do not estimate it.
     pub fn contact_scale(&self) -> f64 {
         self.contact_scale
+    }
+
+    /// The wheels' equivalent conicity the taps are blended at: the one told, or estimated
+    /// from the sensors; 0 when the taps have no conicity conditions.
+    pub fn conicity(&self) -> f64 {
+        self.conicity
+    }
+
+    /// How far the sensors' features lie from what the taps were fitted on, in units of the
+    /// level exceeded on 0.2 % of the validation distance ([`super::contact::LEVEL_SHARE`]);
+    /// 0 when the taps have no conicity conditions, or before the features exist.
+    pub fn novelty(&self) -> f64 {
+        self.novelty
+    }
+
+    /// Whether the sensors are unlike what the selected taps were fitted on: the novelty
+    /// exceeds its level (1), or the conicity lies beyond the selected taps' conicities by more
+    /// than [`CONICITY_MARGIN`] (the four-sensor taps of `learned-conicity.taps` hold conicity 0.1 only,
+    /// while its contact model estimates 0.05-0.4).
+    pub fn outside_training(&self) -> bool {
+        self.judged && (self.beyond_conicities() || self.novelty > super::contact::NOVELTY_LEVEL)
+    }
+
+    /// Whether the conicity lies beyond the selected taps' conicities by more than
+    /// [`CONICITY_MARGIN`].
+    pub fn beyond_conicities(&self) -> bool {
+        let c = &self.selection.conicities;
+        match (c.first(), c.last()) {
+            (Some(lo), Some(hi)) if self.conicity > 0.0 => {
+                self.conicity < lo / CONICITY_MARGIN || self.conicity > hi * CONICITY_MARGIN
+            }
+            _ => false,
+        }
+    }
+
+    /// The conicities of the selected taps (empty without conicity conditions).
+    pub fn selected_conicities(&self) -> &[f64] {
+        &self.selection.conicities
+    }
+
+    /// The trained conicity range, in a bank fitted over conicities.
+    pub fn conicity_range(&self) -> Option<[f64; 2]> {
+        self.selection
+            .contact
+            .as_ref()
+            .and_then(|c| c.conicity_range)
     }
 
     /// The speed range the taps cover \[m/s\].
@@ -158,8 +224,24 @@ impl Learned {
             }
         }
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
-            // Nominal until the features exist (the first cells of a run).
-            self.contact_scale = model.estimate_from(m).unwrap_or(model.range[1]);
+            // Until the features exist (the first cells of a run): nominal contact, the
+            // conicity told or the trained range's geometric middle.
+            let start = model.conicity_range.map(|[lo, hi]| (lo * hi).sqrt());
+            match model.estimate(m, self.told_conicity) {
+                Some(c) => {
+                    self.contact_scale = c.kalker;
+                    self.conicity = c.conicity.unwrap_or(0.0);
+                    self.novelty = c.novelty.unwrap_or(0.0);
+                    self.judged = c.novelty.is_some();
+                }
+                None => {
+                    self.contact_scale = model.range[1];
+                    self.conicity = self.told_conicity.or(start).unwrap_or(0.0);
+                }
+            }
+            if model.conicity_range.is_none() {
+                self.conicity = 0.0;
+            }
         }
         let s = &self.selection.speeds;
         self.in_range = speed >= s[0] && speed <= s[s.len() - 1];
@@ -178,7 +260,14 @@ impl Learned {
             return;
         }
         let sel = &self.selection;
-        let blend = Blend::at(&sel.speeds, speed, &sel.conditions, self.contact_scale);
+        let blend = Blend::at(
+            &sel.speeds,
+            speed,
+            &sel.conditions,
+            self.contact_scale,
+            &sel.conicities,
+            self.conicity,
+        );
         let d = closed.distance;
         match blend.apply(&sel.causal, &self.history, &factors) {
             Some((value, std)) => {

@@ -30,6 +30,7 @@ fn three_sensors(bank: &Bank, lag: f64) -> Learned {
         Choice {
             roll_rate: false,
             lag,
+            conicity: None,
         },
     )
     .unwrap()
@@ -102,14 +103,21 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
     // The scale follows the first feature: 0.75 + 0.1 ln(M_11 / M_00).
     bank.contact = Some(ContactModel {
         band: [3.0, 25.0],
+        extra_bands: vec![],
         memory: 10.0,
         range: [0.5, 1.0],
         speeds: vec![SpeedModel {
             speed: 10.0,
             coefficients: vec![0.1, 0.0, 0.0, 0.0, 0.0, 0.75],
             rms_error: 0.1,
+            conicity: None,
+            kalker_by_conicity: vec![],
         }],
+        conicity_range: None,
     });
+    // Written and read back (the contact model's absent conicity parts included).
+    let back = Bank::parse(&bank.to_bytes(), std::path::Path::new("k.taps")).unwrap();
+    assert_eq!(back.contact, bank.contact);
     let mut l = three_sensors(&bank, 0.0);
     let mut grid = Grid::new(0.2, 500.0);
     let mut cells = vec![];
@@ -142,10 +150,143 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
         Choice {
             roll_rate: false,
             lag: 0.0,
+            conicity: None,
         },
     )
     .unwrap();
     assert_eq!(plain.contact_scale(), 0.0);
+}
+
+/// A bank of the sample's causal taps at conicity 0.05 and three times them at 0.2, one contact
+/// condition (Kalker 1), whose contact model reads `ln(conicity)` from the first feature
+/// (`ln(conicity) = f0 + ln(0.1 / 1.44)`: 0.1 for the test signal's `f0 = ln 1.44`) and judges
+/// the features against a forward model of zeros with unit precision over `level` 2.
+fn coned_bank() -> Bank {
+    use crate::learned::contact::{ConicityModel, ContactModel, FEATURES, SpeedModel};
+    let mut bank = sample_bank();
+    bank.entries.retain(|e| e.lag == 0 && e.speed == 10.0);
+    let mut more = bank.entries.clone();
+    for e in &mut bank.entries {
+        e.condition = Some(1.0);
+        e.conicity = Some(0.05);
+    }
+    for e in &mut more {
+        e.condition = Some(1.0);
+        e.conicity = Some(0.2);
+        for w in &mut e.windows {
+            w.taps.iter_mut().for_each(|t| *t *= 3.0);
+        }
+    }
+    bank.entries.extend(more);
+    let identity: Vec<f64> = (0..FEATURES * FEATURES)
+        .map(|i| if i % (FEATURES + 1) == 0 { 1.0 } else { 0.0 })
+        .collect();
+    bank.contact = Some(ContactModel {
+        band: [3.0, 25.0],
+        extra_bands: vec![],
+        memory: 10.0,
+        range: [0.5, 1.0],
+        speeds: vec![SpeedModel {
+            speed: 10.0,
+            coefficients: vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0],
+            rms_error: 0.1,
+            conicity: Some(ConicityModel {
+                coefficients: vec![1.0, 0.0, 0.0, 0.0, 0.0, (0.1f64 / 1.44).ln()],
+                rms_error: 0.1,
+                forward: vec![vec![0.0; 6]; FEATURES],
+                precision: identity,
+                level: 2.0,
+            }),
+            kalker_by_conicity: vec![],
+        }],
+        conicity_range: Some([0.05, 0.4]),
+    });
+    bank
+}
+
+#[test]
+fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
+    let bank = coned_bank();
+    let run = |told: Option<f64>| {
+        let mut l = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.0,
+                conicity: told,
+            },
+        )
+        .unwrap();
+        let mut grid = Grid::new(0.2, 500.0);
+        let (mut cells, mut d) = (vec![], 0.0);
+        for k in 0..400 {
+            d += 0.05;
+            let u = (k as f64 * 0.3).sin();
+            let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+            if let Some(c) = grid.add(d, &x) {
+                cells.extend(c.cells);
+            }
+            l.step(d, 10.0, &x, 0.0);
+        }
+        (l, cells)
+    };
+    let (lo, hi) = (&bank.entries[0], &bank.entries[1]);
+    for told in [None, Some(0.1), Some(0.3)] {
+        let (l, cells) = run(told);
+        let c = l.conicity();
+        match told {
+            Some(t) => assert_eq!(c, t),
+            // ln(M_11 / M_00) = ln 1.44 up to the band-pass: 0.1.
+            None => assert!((c / 0.1 - 1.0).abs() < 0.03, "{c}"),
+        }
+        let b = ((c / 0.05).ln() / 4f64.ln()).clamp(0.0, 1.0);
+        let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+        let (got, std) = l.causal(l.causal.points[1].distance).unwrap();
+        assert!(
+            (got - want).abs() < 1e-12 * want.abs().max(1.0),
+            "told {told:?}: {got} {want}"
+        );
+        // The novelty: the features' squared length over the level (forward model zero,
+        // unit precision), the memory full; alignment_std grown by its square root above 1.
+        let m = l.moments.as_ref().unwrap();
+        let f = m.features(0).unwrap();
+        let want = f.iter().map(|v| v * v).sum::<f64>() / 2.0;
+        assert!(
+            (l.novelty() - want).abs() < 1e-9 * want,
+            "{} {want}",
+            l.novelty()
+        );
+        // Told 0.3, beyond the bank's 0.2 by more than CONICITY_MARGIN: outside whatever the
+        // novelty says.
+        assert_eq!(l.outside_training(), want > 1.0 || told == Some(0.3));
+        let e = l.estimate(l.causal.points[1].distance, (0.0, 1.0));
+        assert!(
+            (e.std - std * want.max(1.0).sqrt()).abs() < 1e-15,
+            "{} {std}",
+            e.std
+        );
+    }
+    assert_eq!(l_range(&bank), Some([0.05, 0.4]));
+}
+
+fn l_range(bank: &Bank) -> Option<[f64; 2]> {
+    three_sensors(bank, 0.0).conicity_range()
+}
+
+#[test]
+fn a_bank_whose_entries_mix_conicities_and_none_is_refused() {
+    let mut bank = coned_bank();
+    bank.entries[0].conicity = None;
+    let e = Bank::parse(&bank.to_bytes(), std::path::Path::new("c.taps"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("conicity on every entry"), "{e}");
+    let mut bank = coned_bank();
+    bank.contact.as_mut().unwrap().speeds[0].conicity = None;
+    let e = Bank::parse(&bank.to_bytes(), std::path::Path::new("c.taps"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("conicity model missing"), "{e}");
 }
 
 #[test]
@@ -215,6 +356,7 @@ fn unavailable_choices_are_refused_by_name() {
         Choice {
             roll_rate: true,
             lag: 0.0,
+            conicity: None,
         },
     )
     .unwrap_err()
@@ -225,6 +367,7 @@ fn unavailable_choices_are_refused_by_name() {
         Choice {
             roll_rate: false,
             lag: 10.0,
+            conicity: None,
         },
     )
     .unwrap_err()

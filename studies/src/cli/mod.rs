@@ -166,6 +166,17 @@ pub fn lag(s: &str) -> Result<f64, String> {
     )
 }
 
+/// A wheels' equivalent conicity (`taps --conicities`): a finite number, not negative (0: the
+/// vehicle's own, no conicity conditions).
+pub fn conicity(s: &str) -> Result<f64, String> {
+    orchestrator::cli::number(
+        s,
+        |v| (0.0..=1.0).contains(&v),
+        "expected a finite conicity from 0 (the vehicle's own) to 1",
+        "expected a number",
+    )
+}
+
 /// A Kalker-coefficient scale (`--kalker-scales`): a finite number above zero (1: the vehicle's
 /// own coefficients).
 pub fn kalker_scale(s: &str) -> Result<f64, String> {

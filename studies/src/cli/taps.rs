@@ -4,6 +4,16 @@
 use super::{CALIBRATION_SEED, Report, StandardFmus};
 use crate::Error;
 use crate::study::learned::taps::Options;
+use fmu_estimator::learned::bank::Encoding;
+
+/// `--encoding`: `i16` or `f32`.
+fn encoding(s: &str) -> Result<Encoding, String> {
+    match s {
+        "i16" => Ok(Encoding::I16),
+        "f32" => Ok(Encoding::F32),
+        _ => Err(format!("expected i16 or f32, got '{s}'")),
+    }
+}
 use clap::Args;
 use std::path::PathBuf;
 
@@ -26,6 +36,14 @@ pub struct TapsArgs {
     /// own taps, blended at run time by the contact model fitted with them.
     #[arg(long, value_delimiter = ',', default_value = "1,0.75,0.5", allow_negative_numbers = true, value_parser = super::kalker_scale)]
     pub kalker_scales: Vec<f64>,
+    /// The wheels' equivalent conicities of the training runs, each with every Kalker scale:
+    /// each pair gets its own taps, blended at run time by the estimated (or given) conicity.
+    /// 0: the vehicle's own, no conicity conditions (as learned-nominal.taps).
+    #[arg(long, value_delimiter = ',', default_value = "0.05,0.075,0.1,0.15,0.2,0.3,0.4", value_parser = super::conicity)]
+    pub conicities: Vec<f64>,
+    /// The conicities (of --conicities) at which the four-sensor taps are fitted.
+    #[arg(long, value_delimiter = ',', default_value = "0.1", value_parser = super::conicity)]
+    pub roll_rate_conicities: Vec<f64>,
     /// One set of taps fitted on every condition's runs at once, no contact model.
     #[arg(long)]
     pub pooled: bool,
@@ -35,6 +53,13 @@ pub struct TapsArgs {
     /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).
     #[arg(long)]
     pub no_roll_rate: bool,
+    /// How the bank stores its taps: i16 (per channel a scale and 16-bit multiples of it, half
+    /// the size) or f32.
+    #[arg(long, default_value = "i16", value_parser = encoding)]
+    pub encoding: Encoding,
+    /// Keep this tap bank's taps and refit only its contact model (same runs, no tap solves).
+    #[arg(long, value_name = "BANK")]
+    pub taps_from: Option<PathBuf>,
     /// Track seed of the training runs.
     #[arg(long, default_value_t = CALIBRATION_SEED)]
     pub seed: u32,
@@ -42,7 +67,7 @@ pub struct TapsArgs {
     #[arg(long, value_delimiter = ',', default_value = "102,103,104,105,106")]
     pub validation_seeds: Vec<u32>,
     /// The file to write (a tap bank written before, such as the shipped one, is replaced).
-    #[arg(long, default_value = "fmu-estimator/resources/learned.taps")]
+    #[arg(long, default_value = "fmu-estimator/resources/learned-conicity.taps")]
     pub out: PathBuf,
     /// Replace an existing file at --out that this command did not write (never an input, a
     /// symlink, a FIFO or a directory).
@@ -56,34 +81,68 @@ const MARK: &[u8] = b"learned-taps ";
 /// The fit's options from the command line (the command line goes into the bank's provenance
 /// when they are not the shipped bank's), then the fit ([`crate::report::learned::taps`]).
 pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
-    let inputs = [a.fmus.vehicle.as_path(), a.fmus.estimator.as_path()];
+    let mut inputs = vec![a.fmus.vehicle.as_path(), a.fmus.estimator.as_path()];
+    inputs.extend(a.taps_from.as_deref());
     let guard = super::guard(&a.out, &inputs, a.force, Some(MARK))?;
     let mut o = Options::shipped();
     o.speeds = a.speeds.clone();
     o.kalker_scales = a.kalker_scales.clone();
     o.per_condition = !a.pooled;
+    // 0 alone: the vehicle's own conicity.
+    let own = |c: &[f64]| -> Result<Vec<f64>, Error> {
+        match c {
+            [z] if *z == 0.0 => Ok(vec![]),
+            _ if c.contains(&0.0) => Err(Error::input(
+                "--conicities 0 (the vehicle's own) cannot be combined with other conicities",
+            )),
+            _ => Ok(c.to_vec()),
+        }
+    };
+    o.conicities = own(&a.conicities)?;
+    o.roll_rate_conicities = if o.conicities.is_empty() {
+        vec![]
+    } else {
+        own(&a.roll_rate_conicities)?
+    };
     o.lags = a.lags.clone();
     o.roll_rate = !a.no_roll_rate;
     o.training_seed = a.seed;
+    o.encoding = a.encoding;
+    if let Some(p) = &a.taps_from {
+        o.taps_from = Some(
+            fmu_estimator::learned::bank::Bank::load(p).map_err(|e| Error::input(e.to_string()))?,
+        );
+    }
     o.validation_seeds = a.validation_seeds.clone();
     let defaults = Options::shipped();
-    if (
-        o.speeds.clone(),
-        o.kalker_scales.clone(),
-        o.per_condition,
-        o.lags.clone(),
-        o.roll_rate,
-        o.training_seed,
-        o.validation_seeds.clone(),
-    ) != (
-        defaults.speeds,
-        defaults.kalker_scales,
-        defaults.per_condition,
-        defaults.lags,
-        defaults.roll_rate,
-        defaults.training_seed,
-        defaults.validation_seeds,
-    ) {
+    if a.taps_from.is_some()
+        || (
+            o.conicities.clone(),
+            o.roll_rate_conicities.clone(),
+            o.encoding,
+        ) != (
+            defaults.conicities.clone(),
+            defaults.roll_rate_conicities.clone(),
+            defaults.encoding,
+        )
+        || (
+            o.speeds.clone(),
+            o.kalker_scales.clone(),
+            o.per_condition,
+            o.lags.clone(),
+            o.roll_rate,
+            o.training_seed,
+            o.validation_seeds.clone(),
+        ) != (
+            defaults.speeds,
+            defaults.kalker_scales,
+            defaults.per_condition,
+            defaults.lags,
+            defaults.roll_rate,
+            defaults.training_seed,
+            defaults.validation_seeds,
+        )
+    {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
     let mut report = crate::report::learned::taps(&a.fmus.fmus(), &o, &a.out, log)?;

@@ -30,14 +30,17 @@ pub enum Group {
     Resonance,
     /// The wheels' conicity 0.05-0.4 (worn wheels), for each estimator told it or not.
     Conicity,
+    /// Other vehicles: the Manchester Benchmark vehicle and ML95 variants.
+    Vehicles,
 }
 
 impl Group {
     /// Every group, in the order `all` runs and reports them.
-    pub const ALL: [Group; 4] = [
+    pub const ALL: [Group; 5] = [
         Group::Standard,
         Group::Robustness,
         Group::Conicity,
+        Group::Vehicles,
         Group::Resonance,
     ];
 
@@ -47,6 +50,7 @@ impl Group {
             Group::Robustness => "Robustness",
             Group::Resonance => "Resonance",
             Group::Conicity => "Conicity",
+            Group::Vehicles => "Vehicles",
         }
     }
 }
@@ -64,7 +68,7 @@ pub fn outputs(groups: &[Group], first_seed: u32) -> Vec<String> {
                 "standard_alignment.svg".into(),
                 "standard_spectra.svg".into(),
             ]),
-            Group::Robustness | Group::Resonance | Group::Conicity => {
+            Group::Robustness | Group::Resonance | Group::Conicity | Group::Vehicles => {
                 names.push(format!("{title}.svg"))
             }
         }
@@ -85,6 +89,9 @@ pub fn cases(
 ) -> Result<Report, Error> {
     evaluation.held_out()?;
     let seeds = &evaluation.seeds;
+    // The vehicle variants' files, for the runs' duration.
+    let variants =
+        tempfile::tempdir().map_err(|e| Error::input(format!("a temporary directory: {e}")))?;
     let mut plan: Vec<(Group, Vec<cases::Case>)> = vec![];
     for &g in groups {
         let group = match g {
@@ -100,11 +107,23 @@ pub fn cases(
                 ));
                 cases::resonance(mode.frequency, 20.0)
             }
-            Group::Conicity => cases::conicity_sweep(),
+            Group::Conicity => {
+                let bank = cases::conicity_bank()?;
+                for (c, k) in cases::left_out(&bank) {
+                    log(&format!(
+                        "conicity sweep: conicity {c} at Kalker {} % is outside the shipped taps' envelope up to {} m/s (the vehicle is unstable there), left out",
+                        k * 100.0,
+                        cases::SWEEP_SPEED
+                    ));
+                }
+                cases::conicity_sweep(&bank)
+            }
+            Group::Vehicles => crate::study::vehicles::cases(variants.path())?,
         };
         // A user who chose the estimator (--set estimator.estimator=N) gets that one only; the
         // conicity sweep names its estimators itself.
-        let group = if g == Group::Conicity || fmus.estimator_number("estimator").is_some() {
+        let names_its_estimators = matches!(g, Group::Conicity | Group::Vehicles);
+        let group = if names_its_estimators || fmus.estimator_number("estimator").is_some() {
             group
         } else {
             cases::with_learned(group)
@@ -136,7 +155,7 @@ pub fn cases(
             Group::Standard => {
                 md.push_str(&first_seed(seeds[0], out, fmus, &cases[0], &mut report)?)
             }
-            Group::Robustness | Group::Resonance | Group::Conicity => {
+            Group::Robustness | Group::Resonance | Group::Conicity | Group::Vehicles => {
                 let svg = format!("{}.svg", title.to_lowercase());
                 let path = out.join(&svg);
                 plot::case_bars(&path, slice, &format!("{title}: Jrel per band"))?;

@@ -96,6 +96,12 @@ pub fn taps(fmus: &Fmus, o: &Options, out: &Path, log: &dyn Fn(&str)) -> Result<
             "{:>5} m/s contact model: rms error of the Kalker scale on the validation runs {:.3}",
             m.speed, m.rms_error
         ));
+        if let Some(c) = &m.conicity {
+            lines.push(format!(
+                "{:>5} m/s conicity model: rms error of ln(conicity) on the validation runs {:.3}; novelty level (squared distance) {:.1}",
+                m.speed, c.rms_error, c.level
+            ));
+        }
     }
     for e in &bank.entries {
         let w = e.windows.last().expect("full window");

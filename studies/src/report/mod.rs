@@ -6,6 +6,7 @@
 
 pub mod calibration;
 pub mod cases;
+pub mod envelope;
 pub mod learned;
 pub mod standard;
 pub mod variants;

@@ -115,47 +115,130 @@ pub fn robustness(alpha: f64) -> Vec<Case> {
 }
 
 /// The wheel conicities of the conicity sweep: from new low-conicity profiles (0.05) to worn
-/// ones (0.3-0.4), the range issue 27 sets; 0.1 is the vehicle's (and the filter's) own.
-pub const SWEEP_CONICITIES: [f64; 7] = [0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4];
+/// ones (0.3-0.4), the range issue 27 sets; the shipped bank's conicities
+/// ([`SHIPPED_CONICITIES`](super::learned::taps::SHIPPED_CONICITIES)) and points between them,
+/// where its taps are blended; 0.1 is the vehicle's (and the paper's filter's) own.
+pub const SWEEP_CONICITIES: [f64; 11] = [
+    0.05, 0.06, 0.075, 0.1, 0.125, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4,
+];
+/// The tap bank fitted over conicities that the conicity sweep, the vehicles table and the
+/// envelope run the learned filter with (not yet the FMU's default, `learned.taps`).
+pub const CONICITY_BANK: &str = "learned-conicity.taps";
+
+/// The shipped bank fitted over conicities ([`CONICITY_BANK`], built into the library).
+pub fn conicity_bank() -> Result<fmu_estimator::learned::Bank, Error> {
+    fmu_estimator::learned::shipped_named(CONICITY_BANK)
+        .expect("a shipped name")
+        .map_err(|e| Error::input(e.to_string()))
+}
+
+/// The Kalker-coefficient scales of the conicity sweep: nominal, and worn wheels and rails.
+pub const SWEEP_KALKER: [f64; 3] = [1.0, 0.75, 0.5];
+/// The sweep's speed where the vehicle is stable there \[m/s\]: the standard case's.
+pub const SWEEP_SPEED: f64 = 20.0;
+
+/// The speed of a sweep case: [`SWEEP_SPEED`], or the highest speed below it at which the
+/// shipped tap bank holds the condition (its 10 km training run there is stable: the critical
+/// speed falls as the conicity rises and the creep falls). Between two of the bank's
+/// conicities, the higher one's (the lower critical speed); `None` if the bank holds the
+/// condition at no speed up to [`SWEEP_SPEED`].
+pub fn sweep_speed(bank: &fmu_estimator::learned::Bank, conicity: f64, kalker: f64) -> Option<f64> {
+    let three = |e: &&fmu_estimator::learned::bank::Entry| {
+        e.lag == 0 && !e.channels.iter().any(|c| c == "ws_roll_rate")
+    };
+    let mut nodes: Vec<f64> = bank
+        .entries
+        .iter()
+        .filter(three)
+        .filter_map(|e| e.conicity)
+        .collect();
+    nodes.sort_by(f64::total_cmp);
+    nodes.dedup();
+    // The bank's conicity at or above this one (the highest if beyond).
+    let node = nodes.iter().copied().find(|c| *c >= conicity - 1e-12);
+    let node = node.or(nodes.last().copied());
+    bank.entries
+        .iter()
+        .filter(three)
+        .filter(|e| e.speed <= SWEEP_SPEED + 1e-9)
+        .filter(|e| e.conicity == node && e.condition == Some(kalker))
+        .map(|e| e.speed)
+        .max_by(f64::total_cmp)
+}
 
 /// The conicity sweep (not in the paper): the vehicle's wheels at each of
-/// [`SWEEP_CONICITIES`], estimated three ways: the paper's filter told the conicity (`alpha`),
-/// the learned filter told it (its Kalman channel then differs from the one its taps were fitted
-/// with: `allow_other_kalman`), and the learned filter told nothing (the FMU's defaults, as a
-/// user who does not know the wheels' state runs it).
-pub fn conicity_sweep() -> Vec<Case> {
-    SWEEP_CONICITIES
-        .iter()
-        .flat_map(|&c| {
-            let vehicle = vec![set("conicity", Value::Real(c))];
-            let told = |estimator: i32| {
-                vec![
-                    set("estimator", Value::Integer(estimator)),
-                    set("alpha", Value::Real(c)),
-                    set("allow_other_kalman", Value::Boolean(true)),
-                ]
+/// [`SWEEP_CONICITIES`] and Kalker scales [`SWEEP_KALKER`], at the speed [`sweep_speed`] gives
+/// (the shipped bank `bank`'s envelope), estimated three ways: the paper's filter told the
+/// conicity (`alpha`), the learned filter with the bank over conicities ([`CONICITY_BANK`])
+/// told it (its `conicity` parameter: the taps are blended at it, the Kalman channel stays the
+/// one they were fitted with), and the same told nothing (the FMU's defaults, as a user who does not know the wheels' state runs
+/// it). A condition outside the envelope up to 20 m/s is left out (said in the name list of
+/// [`left_out`]).
+pub fn conicity_sweep(bank: &fmu_estimator::learned::Bank) -> Vec<Case> {
+    let mut out = vec![];
+    for &k in &SWEEP_KALKER {
+        for &c in &SWEEP_CONICITIES {
+            let Some(speed) = sweep_speed(bank, c, k) else {
+                continue;
             };
-            [
+            let mut vehicle = vec![set("conicity", Value::Real(c))];
+            if k != 1.0 {
+                vehicle.push(set("kalker_scale", Value::Real(k)));
+            }
+            if speed != SWEEP_SPEED {
+                vehicle.push(set("speed", Value::Real(speed)));
+            }
+            let at = format!(
+                "conicity {c}, Kalker {} %{}",
+                k * 100.0,
+                if speed == SWEEP_SPEED {
+                    String::new()
+                } else {
+                    format!(", {speed} m/s")
+                }
+            );
+            let estimator = |e: i32, told: &str| {
+                let mut v = vec![set("estimator", Value::Integer(e))];
+                if e == 2 {
+                    v.push(set("tap_file", Value::String(CONICITY_BANK.into())));
+                }
+                if !told.is_empty() {
+                    v.push(set(told, Value::Real(c)));
+                }
+                v
+            };
+            out.extend([
                 Case {
-                    name: format!("conicity {c}, paper's filter told it"),
+                    name: format!("{at}, paper's filter told it"),
                     vehicle: vehicle.clone(),
-                    estimator: told(1),
+                    estimator: estimator(1, "alpha"),
                     paper: None,
                 },
                 Case {
-                    name: format!("conicity {c}, learned filter told it"),
+                    name: format!("{at}, learned filter told it"),
                     vehicle: vehicle.clone(),
-                    estimator: told(2),
+                    estimator: estimator(2, "conicity"),
                     paper: None,
                 },
                 Case {
-                    name: format!("conicity {c}, learned filter told nothing"),
+                    name: format!("{at}, learned filter told nothing"),
                     vehicle,
-                    estimator: vec![set("estimator", Value::Integer(2))],
+                    estimator: estimator(2, ""),
                     paper: None,
                 },
-            ]
-        })
+            ]);
+        }
+    }
+    out
+}
+
+/// The sweep's conditions (conicity, Kalker scale) outside the shipped bank's envelope up to
+/// [`SWEEP_SPEED`]: left out of [`conicity_sweep`].
+pub fn left_out(bank: &fmu_estimator::learned::Bank) -> Vec<(f64, f64)> {
+    SWEEP_KALKER
+        .iter()
+        .flat_map(|k| SWEEP_CONICITIES.iter().map(move |c| (*c, *k)))
+        .filter(|(c, k)| sweep_speed(bank, *c, *k).is_none())
         .collect()
 }
 
@@ -393,27 +476,72 @@ mod tests {
 
     #[test]
     fn the_conicity_sweep_tells_each_filter_the_vehicle_s_conicity_or_nothing() {
-        let cases = conicity_sweep();
-        assert_eq!(cases.len(), 3 * SWEEP_CONICITIES.len());
-        for (triple, &c) in cases.chunks(3).zip(&SWEEP_CONICITIES) {
+        let bank = conicity_bank().unwrap();
+        let cases = conicity_sweep(&bank);
+        let kept = SWEEP_CONICITIES.len() * SWEEP_KALKER.len() - left_out(&bank).len();
+        assert_eq!(cases.len(), 3 * kept);
+        for triple in cases.chunks(3) {
+            let c = match triple[0].vehicle[0] {
+                (ref n, Value::Real(c)) if n == "conicity" => c,
+                _ => panic!("{:?}", triple[0].vehicle),
+            };
             for case in triple {
-                assert_eq!(case.vehicle, vec![set("conicity", Value::Real(c))]);
+                assert_eq!(case.vehicle, triple[0].vehicle);
             }
-            let alpha = |case: &Case| {
+            let told = |case: &Case, name: &str| {
                 case.estimator
                     .iter()
-                    .find(|(n, _)| n == "alpha")
+                    .find(|(n, _)| n == name)
                     .map(|(_, v)| v.clone())
             };
             let estimator = |case: &Case| case.estimator[0].clone();
             assert_eq!(estimator(&triple[0]), set("estimator", Value::Integer(1)));
             assert_eq!(estimator(&triple[1]), set("estimator", Value::Integer(2)));
             assert_eq!(estimator(&triple[2]), set("estimator", Value::Integer(2)));
-            assert_eq!(alpha(&triple[0]), Some(Value::Real(c)));
-            assert_eq!(alpha(&triple[1]), Some(Value::Real(c)));
-            assert_eq!(alpha(&triple[2]), None, "{}", triple[2].name);
+            assert_eq!(told(&triple[0], "alpha"), Some(Value::Real(c)));
+            assert_eq!(told(&triple[1], "conicity"), Some(Value::Real(c)));
+            assert_eq!(triple[2].estimator.len(), 2, "{}", triple[2].name);
+            assert_eq!(
+                told(&triple[2], "tap_file"),
+                Some(Value::String(CONICITY_BANK.into()))
+            );
             assert!(triple[1].name.contains("told it") && triple[2].name.contains("nothing"));
         }
+        // The nominal condition runs at the standard speed.
+        assert!(
+            cases
+                .iter()
+                .any(|c| c.name.starts_with("conicity 0.1, Kalker 100 %,")
+                    && !c.vehicle.iter().any(|(n, _)| n == "speed"))
+        );
+    }
+
+    #[test]
+    fn the_sweep_speed_is_the_highest_bank_speed_holding_the_condition() {
+        let mut bank = fmu_estimator::learned::shipped_named("learned-nominal.taps")
+            .unwrap()
+            .unwrap();
+        let template = bank.entries[0].clone();
+        assert_eq!(template.lag, 0);
+        bank.entries = [
+            (0.1, 1.0, 20.0),
+            (0.1, 1.0, 17.5),
+            (0.4, 1.0, 15.0),
+            (0.4, 0.5, 10.0),
+        ]
+        .iter()
+        .map(|&(c, k, v)| fmu_estimator::learned::bank::Entry {
+            speed: v,
+            conicity: Some(c),
+            condition: Some(k),
+            ..template.clone()
+        })
+        .collect();
+        assert_eq!(sweep_speed(&bank, 0.1, 1.0), Some(20.0));
+        // Between 0.1 and 0.4: the higher conicity's envelope.
+        assert_eq!(sweep_speed(&bank, 0.2, 1.0), Some(15.0));
+        assert_eq!(sweep_speed(&bank, 0.4, 0.5), Some(10.0));
+        assert_eq!(sweep_speed(&bank, 0.1, 0.5), None);
     }
 
     #[test]

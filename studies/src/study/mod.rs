@@ -13,3 +13,4 @@ pub mod runs;
 pub mod standard;
 pub mod standard_case;
 pub mod variants;
+pub mod vehicles;

@@ -22,6 +22,19 @@ pub struct Fmus {
     /// The user's estimator settings (a `calibration_file` brings its file's `[parameters]`
     /// along).
     pub estimator_settings: Settings,
+    /// The two FMUs opened once, held for the study's runs: each run's co-simulation then
+    /// shares them ([`fmi_import::Fmu::open_shared`]) instead of loading the libraries again.
+    _held: Held,
+}
+
+/// FMUs kept open (see [`Fmus`]).
+#[derive(Clone, Default)]
+struct Held(Vec<fmi_import::Fmu>);
+
+impl std::fmt::Debug for Held {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} FMUs held open", self.0.len())
+    }
 }
 
 /// The vehicle variables the studies set themselves (seeds and the cases' conditions), and
@@ -45,9 +58,17 @@ const FIXED_SPEED: &str = "speed";
 impl Fmus {
     /// The FMUs at `vehicle` and `estimator` with no settings of the user's.
     pub fn new(vehicle: PathBuf, estimator: PathBuf) -> Fmus {
+        // One that cannot be opened is not held: the first run that loads it says why.
+        let held = Held(
+            [&vehicle, &estimator]
+                .iter()
+                .filter_map(|p| fmi_import::Fmu::open_shared(p).ok())
+                .collect(),
+        );
         Fmus {
             vehicle,
             estimator,
+            _held: held,
             ..Fmus::default()
         }
     }
@@ -239,6 +260,17 @@ pub fn standard_run(
     estimator: Settings,
     stop: f64,
 ) -> Result<Table, Error> {
+    standard_run_recording(fmus, vehicle, estimator, stop, &[])
+}
+
+/// [`standard_run`] recording `extra` (`component.variable`) beside [`EVALUATED`].
+pub fn standard_run_recording(
+    fmus: &Fmus,
+    vehicle: Settings,
+    estimator: Settings,
+    stop: f64,
+    extra: &[&str],
+) -> Result<Table, Error> {
     let mut system = super::standard_case::system(&fmus.vehicle, &fmus.estimator)?;
     system.components[0].parameters = fmus
         .vehicle_settings
@@ -256,8 +288,9 @@ pub fn standard_run(
         .collect();
     let record = EVALUATED
         .iter()
-        .map(|e| Endpoint::parse(e).expect("constant names"))
-        .collect();
+        .chain(extra)
+        .map(|e| Endpoint::parse(e).map_err(Error::Input))
+        .collect::<Result<_, _>>()?;
     run(system, stop, record)
 }
 

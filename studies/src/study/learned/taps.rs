@@ -43,7 +43,7 @@ use crate::study::metrics::{BANDS, Band, band_labels, evaluate};
 use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
-use fmu_estimator::learned::bank::{Bank, Entry, Header, Provenance, Window};
+use fmu_estimator::learned::bank::{Bank, Encoding, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
 use fmu_estimator::learned::contract::Contract;
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
@@ -89,7 +89,11 @@ pub const BAND_WEIGHTS: [[f64; 4]; 3] = [
     [1.0, 10.0, 10.0, 1.0],
 ];
 /// Ridge values tried, relative to the mean diagonal of the normal equations.
-pub const RIDGES: [f64; 9] = [1e-6, 1e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1];
+///
+/// Until 2026-11-26 the list went on to 1e-2, 3e-2 and 1e-1; none of the 124 entries of the
+/// bank fitted over Kalker scales chose above 1e-3, so the bank over conicities (seven times the
+/// entries) tries up to 3e-3 only, and the entries it shares with that bank are unchanged.
+pub const RIDGES: [f64; 6] = [1e-6, 1e-5, 1e-4, 3e-4, 1e-3, 3e-3];
 /// Length of each training run \[m\] (10 km: 500 s at 20 m/s).
 pub const TRAINING_DISTANCE: f64 = 10_000.0;
 /// The longest training run \[s\] (bounds the low speeds' runs: 1000 s is 5 km at 5 m/s).
@@ -123,9 +127,39 @@ pub const SHORT_WEIGHT: f64 = 1.0;
 
 /// Band of the contact features \[m\] (D1, where the conditions differ most).
 pub const CONTACT_BAND: [f64; 2] = [3.0, 25.0];
+/// The further bands of the contact features in a bank fitted over conicities \[m\]: octaves
+/// around the wheelset's kinematic wavelength `2 pi sqrt(r0 l / conicity)` (ML95: 13 m at
+/// conicity 0.1; 6.5-18 m over 0.05-0.4, longer for a bogie), where the conicity shows.
+pub const CONICITY_BANDS: [[f64; 2]; 3] = [[5.0, 10.0], [10.0, 20.0], [20.0, 40.0]];
 /// Memory of the contact features \[m\]: on the validation seeds (20 m/s) 100 m gave a
 /// scale +-0.09 at the end of 800 m runs, 200 m +-0.06, 400 m +-0.06 with a slower start.
 pub const CONTACT_MEMORY: f64 = 200.0;
+
+/// The wheels' equivalent conicities of the shipped bank: from new low-conicity profiles (0.05)
+/// to worn ones (0.3-0.4), steps of about 1.5 (a kinematic wavelength ratio of 1.22, near the
+/// bank's speed steps' 1.13-1.5); the ML95's own 0.1 among them.
+pub const SHIPPED_CONICITIES: [f64; 7] = [0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4];
+/// The ML95's conicity (the paper's), at which the shipped bank's four-sensor taps are fitted.
+pub const NOMINAL_CONICITY: f64 = 0.1;
+
+/// A running condition of the training and validation runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Condition {
+    /// The Kalker-coefficient scale.
+    pub kalker: f64,
+    /// The wheels' equivalent conicity (`None`: the vehicle's own).
+    pub conicity: Option<f64>,
+}
+
+impl std::fmt::Display for Condition {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Kalker {} %", self.kalker * 100.0)?;
+        if let Some(c) = self.conicity {
+            write!(f, ", conicity {c}")?;
+        }
+        Ok(())
+    }
+}
 
 /// What to fit.
 #[derive(Debug, Clone)]
@@ -140,6 +174,13 @@ pub struct Options {
     /// model that blends them ([`fmu_estimator::learned::contact`]); false: one set of taps on
     /// all conditions' runs at once (pooled).
     pub per_condition: bool,
+    /// The wheels' equivalent conicities to run the vehicle at (its `conicity` parameter), each
+    /// with every Kalker scale: each pair gets its own taps, and the contact model estimates
+    /// the conicity too. Empty: the vehicle's own conicity, no conicity conditions.
+    pub conicities: Vec<f64>,
+    /// The conicities (of [`Self::conicities`]) the four-sensor entries are fitted at: the
+    /// roll-rate gyroscope's taps cost as much again per conicity.
+    pub roll_rate_conicities: Vec<f64>,
     /// Lags of the fixed-lag entries \[m\] (the causal entries are always fitted).
     pub lags: Vec<f64>,
     /// Fit the four-sensor entries too (the vehicle must have `ws_roll_rate`).
@@ -149,6 +190,12 @@ pub struct Options {
     /// Track seeds the ridge and band weights are chosen on and the windows' rms errors
     /// measured ([`VALIDATION_DISTANCE`] each); they must differ from the training seed.
     pub validation_seeds: Vec<u32>,
+    /// How the bank stores its taps ([`Encoding`]: `i16` halves the file).
+    pub encoding: Encoding,
+    /// Keep this bank's taps and fit only the contact model (the runs are made as for a full
+    /// fit, the tap solves skipped): a change to the contact model's fit without refitting
+    /// taps that do not depend on it.
+    pub taps_from: Option<Bank>,
     /// The command line, for the provenance.
     pub command: String,
 }
@@ -162,10 +209,14 @@ impl Options {
             ],
             kalker_scales: vec![1.0, 0.75, 0.5],
             per_condition: true,
+            conicities: SHIPPED_CONICITIES.to_vec(),
+            roll_rate_conicities: vec![NOMINAL_CONICITY],
             lags: vec![10.0],
             roll_rate: true,
             training_seed: 101,
             validation_seeds: vec![102, 103, 104, 105, 106],
+            encoding: Encoding::I16,
+            taps_from: None,
             command: "alignment-studies taps".into(),
         }
     }
@@ -241,7 +292,7 @@ pub const UNSTABLE_WS_Y: f64 = 0.03;
 fn run(
     fmus: &Fmus,
     seed: u32,
-    kalker: f64,
+    condition: Condition,
     speed: f64,
     distance: f64,
     roll: bool,
@@ -249,7 +300,10 @@ fn run(
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(MIN_STOP, MAX_STOP).round();
     let mut settings = seeded(seed);
-    settings.push(("kalker_scale".into(), Value::Real(kalker)));
+    settings.push(("kalker_scale".into(), Value::Real(condition.kalker)));
+    if let Some(c) = condition.conicity {
+        settings.push(("conicity".into(), Value::Real(c)));
+    }
     let (rec, table) = match record_table(
         fmus,
         settings,
@@ -493,66 +547,91 @@ fn rms_error(runs: &[GridRun], w: &window::Window, future: usize) -> f64 {
     (sq / n as f64).sqrt()
 }
 
-/// The runs of one speed, each with its Kalker-coefficient scale: the training runs on the
-/// training seed and the validation runs on every validation seed, under every contact
-/// condition in which the vehicle is stable at this speed ([`UNSTABLE_WS_Y`]).
+/// The bands of the contact features: [`CONTACT_BAND`], and [`CONICITY_BANDS`] over conicities.
+fn contact_bands(o: &Options) -> Vec<[f64; 2]> {
+    let mut bands = vec![CONTACT_BAND];
+    if !o.conicities.is_empty() {
+        bands.extend(CONICITY_BANDS);
+    }
+    bands
+}
+
+/// The running conditions of `o`: every conicity with every Kalker scale (conicity-major).
+fn conditions(o: &Options) -> Vec<Condition> {
+    let conicities: Vec<Option<f64>> = if o.conicities.is_empty() {
+        vec![None]
+    } else {
+        o.conicities.iter().copied().map(Some).collect()
+    };
+    conicities
+        .iter()
+        .flat_map(|c| {
+            o.kalker_scales.iter().map(|k| Condition {
+                kalker: *k,
+                conicity: *c,
+            })
+        })
+        .collect()
+}
+
+/// The runs of one speed, each with its condition: the training runs on the training seed and
+/// the validation runs on every validation seed, under every condition in which the vehicle is
+/// stable at this speed ([`UNSTABLE_WS_Y`]).
 #[allow(clippy::type_complexity)]
 fn speed_runs(
     fmus: &Fmus,
     o: &Options,
     speed: f64,
     progress: &dyn Fn(&str),
-) -> Result<(Vec<(f64, GridRun)>, Vec<(f64, GridRun)>), Error> {
-    let training: Vec<Option<GridRun>> = o
-        .kalker_scales
+) -> Result<(Vec<(Condition, GridRun)>, Vec<(Condition, GridRun)>), Error> {
+    let all = conditions(o);
+    let training: Vec<Option<GridRun>> = all
         .par_iter()
-        .map(|k| {
+        .map(|c| {
             run(
                 fmus,
                 o.training_seed,
-                *k,
+                *c,
                 speed,
                 TRAINING_DISTANCE,
                 o.roll_rate,
             )
         })
         .collect::<Result<_, _>>()?;
-    for (k, r) in o.kalker_scales.iter().zip(&training) {
+    for (c, r) in all.iter().zip(&training) {
         if r.is_none() {
             progress(&format!(
-                "  {speed} m/s, Kalker {} %: the vehicle is unstable (|ws_y| > {} mm), left out",
-                k * 100.0,
+                "  {speed} m/s, {c}: the vehicle is unstable (|ws_y| > {} mm), left out",
                 UNSTABLE_WS_Y * 1e3
             ));
         }
     }
-    let training: Vec<(f64, GridRun)> = o
-        .kalker_scales
+    let training: Vec<(Condition, GridRun)> = all
         .iter()
         .copied()
         .zip(training)
-        .filter_map(|(k, r)| r.map(|r| (k, r)))
+        .filter_map(|(c, r)| r.map(|r| (c, r)))
         .collect();
     if training.is_empty() {
         return Err(Error::input(format!(
-            "at {speed} m/s the vehicle is unstable under every training contact condition"
+            "at {speed} m/s the vehicle is unstable under every training condition"
         )));
     }
-    // Validated under every contact condition trained on: robust taps are chosen for all of them.
-    let cases: Vec<(u32, f64)> = o
+    // Validated under every condition trained on: robust taps are chosen for all of them.
+    let cases: Vec<(u32, Condition)> = o
         .validation_seeds
         .iter()
-        .flat_map(|s| training.iter().map(move |(k, _)| (*s, *k)))
+        .flat_map(|s| training.iter().map(move |(c, _)| (*s, *c)))
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
-        .map(|(s, k)| run(fmus, *s, *k, speed, VALIDATION_DISTANCE, o.roll_rate))
+        .map(|(s, c)| run(fmus, *s, *c, speed, VALIDATION_DISTANCE, o.roll_rate))
         .collect::<Result<_, _>>()?;
-    let validation: Vec<(f64, GridRun)> = cases
+    let validation: Vec<(Condition, GridRun)> = cases
         .iter()
-        .map(|(_, k)| *k)
+        .map(|(_, c)| *c)
         .zip(validation)
-        .filter_map(|(k, r)| r.map(|r| (k, r)))
+        .filter_map(|(c, r)| r.map(|r| (c, r)))
         .collect();
     if validation.is_empty() {
         return Err(Error::input(format!(
@@ -596,6 +675,7 @@ struct Group<'a> {
     speed: f64,
     channels: Vec<usize>,
     condition: Option<f64>,
+    conicity: Option<f64>,
     kalker_scales: Vec<f64>,
     train: &'a [GridRun],
     valid: &'a [GridRun],
@@ -638,6 +718,7 @@ impl Group<'_> {
                 validation_objective,
                 kalker_scales: self.kalker_scales.clone(),
                 condition: self.condition,
+                conicity: self.conicity,
                 windows,
             });
         }
@@ -645,8 +726,8 @@ impl Group<'_> {
     }
 }
 
-/// The entries of one speed: both sensor sets, causal and every lag; per contact condition
-/// with its contact model, or pooled over the conditions.
+/// The entries of one speed: both sensor sets, causal and every lag; per condition with its
+/// contact model, or pooled over the Kalker scales (one conicity only).
 fn fit_speed(
     fmus: &Fmus,
     o: &Options,
@@ -654,11 +735,11 @@ fn fit_speed(
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
     let (training, validation) = speed_runs(fmus, o, speed, progress)?;
-    let stable: Vec<f64> = training.iter().map(|(k, _)| *k).collect();
-    let per_condition = o.per_condition && o.kalker_scales.len() > 1;
-    // The groups fitted: each condition alone, or all pooled.
-    let groups: Vec<(Option<f64>, Vec<f64>)> = if per_condition {
-        stable.iter().map(|k| (Some(*k), vec![*k])).collect()
+    let stable: Vec<Condition> = training.iter().map(|(c, _)| *c).collect();
+    let per_condition = o.per_condition && conditions(o).len() > 1;
+    // The groups fitted: each condition alone, or all pooled (one conicity: checked in `fit`).
+    let groups: Vec<(Option<Condition>, Vec<Condition>)> = if per_condition {
+        stable.iter().map(|c| (Some(*c), vec![*c])).collect()
     } else {
         vec![(None, stable.clone())]
     };
@@ -669,11 +750,27 @@ fn fit_speed(
         &[false]
     };
     let mut entries = vec![];
-    for roll in sets {
-        for (condition, scales) in &groups {
-            let of = |runs: &[(f64, GridRun)]| -> Vec<GridRun> {
+    if let Some(bank) = &o.taps_from {
+        entries.extend(bank.entries.iter().filter(|e| e.speed == speed).cloned());
+        if entries.is_empty() {
+            return Err(Error::input(format!(
+                "--taps-from: the bank has no taps at {speed} m/s"
+            )));
+        }
+    }
+    for roll in sets.iter().filter(|_| o.taps_from.is_none()) {
+        for (condition, members) in &groups {
+            if *roll
+                && let Some(Condition {
+                    conicity: Some(c), ..
+                }) = condition
+                && !o.roll_rate_conicities.contains(c)
+            {
+                continue;
+            }
+            let of = |runs: &[(Condition, GridRun)]| -> Vec<GridRun> {
                 runs.iter()
-                    .filter(|(k, _)| scales.contains(k))
+                    .filter(|(c, _)| members.contains(c))
                     .map(|(_, r)| r.clone())
                     .collect()
             };
@@ -681,14 +778,16 @@ fn fit_speed(
             if valid.is_empty() {
                 continue;
             }
+            let scales: Vec<f64> = members.iter().map(|c| c.kalker).collect();
             let group = Group {
                 speed,
                 channels: channel_set(*roll),
-                condition: *condition,
-                kalker_scales: if condition.is_some() || *scales == o.kalker_scales {
+                condition: condition.map(|c| c.kalker),
+                conicity: condition.and_then(|c| c.conicity),
+                kalker_scales: if condition.is_some() || scales == o.kalker_scales {
                     vec![]
                 } else {
-                    scales.clone()
+                    scales
                 },
                 train: &train,
                 valid: &valid,
@@ -697,7 +796,12 @@ fn fit_speed(
         }
     }
     let model = if per_condition {
-        Some(super::contact::fit(speed, &training, &validation)?)
+        Some(super::contact::fit(
+            speed,
+            &training,
+            &validation,
+            &contact_bands(o),
+        )?)
     } else {
         None
     };
@@ -715,6 +819,27 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         return Err(Error::input(format!(
             "the speeds must be positive numbers of m/s; got {:?}",
             o.speeds
+        )));
+    }
+    if o.conicities.iter().any(|c| !(c.is_finite() && *c > 0.0)) {
+        return Err(Error::input(format!(
+            "the conicities must be positive numbers; got {:?}",
+            o.conicities
+        )));
+    }
+    if o.conicities.len() > 1 && !o.per_condition {
+        return Err(Error::input(
+            "taps over several conicities are fitted per condition (the runtime blends them by the estimated conicity); --pooled takes one conicity",
+        ));
+    }
+    if let Some(c) = o
+        .roll_rate_conicities
+        .iter()
+        .find(|c| !o.conicities.is_empty() && !o.conicities.contains(c))
+    {
+        return Err(Error::input(format!(
+            "the four-sensor taps' conicity {c} is not one of the conicities {:?}",
+            o.conicities
         )));
     }
     if o.lags
@@ -736,6 +861,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
     }
     let contact = (!models.is_empty()).then(|| ContactModel {
         band: CONTACT_BAND,
+        extra_bands: contact_bands(o)[1..].to_vec(),
         memory: CONTACT_MEMORY,
         range: [
             o.kalker_scales
@@ -747,6 +873,15 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
                 .copied()
                 .fold(f64::NEG_INFINITY, f64::max),
         ],
+        conicity_range: (!o.conicities.is_empty()).then(|| {
+            [
+                o.conicities.iter().copied().fold(f64::INFINITY, f64::min),
+                o.conicities
+                    .iter()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max),
+            ]
+        }),
         speeds: models,
     });
     let scales: Vec<String> = o
@@ -766,6 +901,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         contract,
         grid: BANK_GRID,
         kalman_highpass: KALMAN_HIGHPASS,
+        encoding: o.encoding,
         provenance: Provenance {
             vehicle: format!("RailVehicle FMU ({}), parameter set {}", fmus.vehicle.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(), fmus.vehicle_params().map(|p| p.name).unwrap_or_else(|_| DEFAULT_PARAMETER_SET.into())),
             training_seed: o.training_seed,
@@ -782,6 +918,13 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
                 "; each condition's taps fitted on its own runs and validated on its own validation runs, blended at run time by the contact model (features in 3-25 m, 200 m memory, least squares on the training runs)"
             } else {
                 "; the conditions' runs pooled into one fit"
+            } + &if o.conicities.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; conicities {:?}, each with every Kalker scale, the conicity estimated by the contact model (ln conicity linear in the features); four-sensor taps at conicity {:?} only",
+                    o.conicities, o.roll_rate_conicities
+                )
             },
             partner: "Kalman channel: the estimator FMU's filter with its default parameters and the shipped calibration (paper's random walk, time-varying gain), high-passed".into(),
             ridges: RIDGES.to_vec(),
@@ -912,6 +1055,7 @@ mod tests {
                 Choice {
                     roll_rate: false,
                     lag: lag_m,
+                    conicity: None,
                 },
             )
             .unwrap();
