@@ -71,7 +71,7 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
     study(
         "all",
         "the paper's cases on held-out track seeds",
-        "about 20 s",
+        "about 40 s",
     )?;
     study(
         "variants",
