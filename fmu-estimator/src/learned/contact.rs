@@ -78,7 +78,6 @@ pub const MIN_SPEED: f64 = 1.0;
 /// fields (absent in banks before format 4) are never skipped when written: the FMU's state
 /// serializes it with postcard, which reads fields by position (a skipped one made every
 /// genuine state of a bank without conicities undecodable).
-///
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ContactModel {
     /// Shortest and longest wavelength of the features' band \[m\].
@@ -315,12 +314,6 @@ impl ContactModel {
             return Err(ContactProblem::Conicity { speed: s.speed });
         }
         Ok(())
-    }
-
-    /// The Kalker-coefficient scale the moments indicate ([`Self::estimate`] without a
-    /// conicity told).
-    pub fn estimate_from(&self, moments: &Moments) -> Option<f64> {
-        self.estimate(moments, None).map(|c| c.kalker)
     }
 
     /// The condition the moments indicate: each speed's models applied to the features of the
@@ -616,7 +609,7 @@ mod tests {
         let m = model();
         m.check().unwrap();
         let mut moments = m.moments(0.2);
-        assert_eq!(m.estimate_from(&moments), None);
+        assert_eq!(m.estimate(&moments, None).map(|c| c.kalker), None);
         // Outside the model's speeds (and at no speed) the cells are not counted.
         let mut outside = m.moments(0.2);
         for v in [5.0, 25.0, f64::NAN, -10.0] {
@@ -624,7 +617,7 @@ mod tests {
                 outside.push(&[k as f64, 2.0, 3.0 * k as f64, 0.0, 0.0], v);
             }
         }
-        assert_eq!(m.estimate_from(&outside), None);
+        assert_eq!(m.estimate(&outside, None).map(|c| c.kalker), None);
         let mut noise = uniform(7);
         // Yaw rate 3 (at 10 m/s) and 2 (at 20 m/s) times the wheelset acceleration, each
         // scaled as the speed scales them (CONTACT_SPEED_POWER): ln(M11/M00) = ln 9, then ln 4.
@@ -646,13 +639,13 @@ mod tests {
         let r10 = r20 * d.powi(n);
         let (e10, e20) = (0.1 * f0(0) + 0.5, 0.2 * f0(1) + 0.5);
         let want = (r10 * e10 + r20 * e20) / (r10 + r20);
-        let got = m.estimate_from(&moments).unwrap();
+        let got = m.estimate(&moments, None).map(|c| c.kalker).unwrap();
         assert!((got - want).abs() < 1e-9, "{got} {want}");
         // Clamped to the trained range.
         let mut high = m.clone();
         high.speeds[1].coefficients[FEATURES] = 5.0;
         high.speeds[0].coefficients[FEATURES] = 5.0;
-        assert_eq!(high.estimate_from(&moments), Some(1.0));
+        assert_eq!(high.estimate(&moments, None).map(|c| c.kalker), Some(1.0));
         let mut bad = m.clone();
         bad.speeds[0].coefficients.pop();
         assert!(

@@ -147,8 +147,8 @@ impl Learned {
 
     /// Whether the sensors are unlike what the selected taps were fitted on: the novelty
     /// exceeds its level (1), or the conicity lies beyond the selected taps' conicities by more
-    /// than [`CONICITY_MARGIN`] (the four-sensor taps of `learned-conicity.taps` hold conicity 0.1 only,
-    /// while its contact model estimates 0.05-0.4).
+    /// than [`CONICITY_MARGIN`] (the four-sensor taps of `learned-conicity.taps` hold conicity
+    /// 0.1 only, while its contact model estimates 0.05-0.4).
     pub fn outside_training(&self) -> bool {
         self.judged && (self.beyond_conicities() || self.novelty > super::contact::NOVELTY_LEVEL)
     }
@@ -168,14 +168,6 @@ impl Learned {
     /// The conicities of the selected taps (empty without conicity conditions).
     pub fn selected_conicities(&self) -> &[f64] {
         &self.selection.conicities
-    }
-
-    /// The trained conicity range, in a bank fitted over conicities.
-    pub fn conicity_range(&self) -> Option<[f64; 2]> {
-        self.selection
-            .contact
-            .as_ref()
-            .and_then(|c| c.conicity_range)
     }
 
     /// The speed range the taps cover \[m/s\].
@@ -224,9 +216,6 @@ impl Learned {
             }
         }
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
-            // Until the features exist (the first cells of a run): nominal contact, the
-            // conicity told or the trained range's geometric middle.
-            let start = model.conicity_range.map(|[lo, hi]| (lo * hi).sqrt());
             match model.estimate(m, self.told_conicity) {
                 Some(c) => {
                     self.contact_scale = c.kalker;
@@ -234,13 +223,14 @@ impl Learned {
                     self.novelty = c.novelty.unwrap_or(0.0);
                     self.judged = c.novelty.is_some();
                 }
+                // Until the features exist (the first cells of a run): nominal contact, and
+                // in a bank over conicities the conicity told or the range's geometric middle.
                 None => {
                     self.contact_scale = model.range[1];
-                    self.conicity = self.told_conicity.or(start).unwrap_or(0.0);
+                    self.conicity = model.conicity_range.map_or(0.0, |[lo, hi]| {
+                        self.told_conicity.unwrap_or((lo * hi).sqrt())
+                    });
                 }
-            }
-            if model.conicity_range.is_none() {
-                self.conicity = 0.0;
             }
         }
         let s = &self.selection.speeds;

@@ -266,11 +266,10 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
             e.std
         );
     }
-    assert_eq!(l_range(&bank), Some([0.05, 0.4]));
-}
-
-fn l_range(bank: &Bank) -> Option<[f64; 2]> {
-    three_sensors(bank, 0.0).conicity_range()
+    assert_eq!(
+        three_sensors(&bank, 0.0).selected_conicities(),
+        &[0.05, 0.2]
+    );
 }
 
 #[test]

@@ -4,8 +4,9 @@
 //!
 //! Each condition runs [`DISTANCE`] of track per held-out seed at 20 m/s (or the highest bank
 //! speed below it where the bank holds the condition), the estimator FMU's learned filter with
-//! the bank over conicities (`tap_file = learned-conicity.taps`), nothing told. Per run: the whole-band Jrel of `alignment`, the share of
-//! the distance with `novelty` above 1, and the first distance at which it set.
+//! the bank over conicities (`tap_file = learned-conicity.taps`), nothing told. Per run: the
+//! whole-band Jrel of `alignment`, the share of the distance with `outside_training` set, and
+//! the first distance at which it set.
 
 use super::{Evaluation, Report};
 use crate::Error;
@@ -104,9 +105,15 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<Option<RunFigures>, 
     let table = match standard_run_recording(
         fmus,
         vehicle,
-        vec![("estimator".into(), Value::Integer(2))],
+        vec![
+            ("estimator".into(), Value::Integer(2)),
+            (
+                "tap_file".into(),
+                Value::String(crate::study::cases::CONICITY_BANK.into()),
+            ),
+        ],
         stop,
-        &["estimator.novelty"],
+        &["estimator.outside_training"],
     ) {
         Ok(t) => t,
         Err(e) if e.is_derailment() => return Ok(None),
@@ -116,13 +123,16 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<Option<RunFigures>, 
         .map_err(|e| Error::Input(format!("{}, seed {seed}: {e}", c.name)))?
         .whole
         .jrel;
-    let novelty = table.require("estimator.novelty").map_err(Error::Input)?;
+    // The FMU's own flag (recorded as 1 or 0), not a threshold of `novelty` taken again here.
+    let outside = table
+        .require("estimator.outside_training")
+        .map_err(Error::Input)?;
     let distance = table.require("estimator.distance").map_err(Error::Input)?;
-    let flagged = novelty.iter().filter(|n| **n > 1.0).count() as f64 / novelty.len() as f64;
-    let first = novelty
+    let flagged = outside.iter().filter(|o| **o != 0.0).count() as f64 / outside.len() as f64;
+    let first = outside
         .iter()
         .zip(distance)
-        .find(|(n, _)| **n > 1.0)
+        .find(|(o, _)| **o != 0.0)
         .map(|(_, d)| *d);
     Ok(Some(RunFigures {
         whole,
@@ -139,7 +149,7 @@ pub fn envelope(
     log: &dyn Fn(&str),
 ) -> Result<Report, Error> {
     evaluation.held_out()?;
-    let bank = fmu_estimator::learned::shipped().map_err(|e| Error::input(e.to_string()))?;
+    let bank = crate::study::cases::conicity_bank()?;
     let dir =
         tempfile::tempdir().map_err(|e| Error::input(format!("a temporary directory: {e}")))?;
     let conditions = conditions(&bank, dir.path())?;
@@ -162,7 +172,7 @@ pub fn envelope(
         "# The outside_training flag over {} km per run\n\n\
          Held-out seeds {seeds:?}; the learned filter with `tap_file = learned-conicity.taps`, nothing told. \
          Per condition: mean whole Jrel of `alignment` over the run, the share of the distance \
-         with `novelty` above 1 (mean and largest over the seeds), and where it first set \
+         with `outside_training` set (mean and largest over the seeds), and where it first set \
          (earliest and latest seed; never: not in any). Trained: the shipped bank was fitted for \
          the condition, so a set flag is a false alarm.\n\n\
          | condition | speed (m/s) | trained | whole Jrel | flagged (mean / max) | first set (m) |\n\

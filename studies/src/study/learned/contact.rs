@@ -59,6 +59,21 @@ fn least_squares(rows: &[Vec<f64>], y: &[f64], speed: f64, what: &str) -> Result
         .collect())
 }
 
+/// The root-mean-square of `model(features) - truth(condition)` over `cells` (0 without any):
+/// a model's error on the validation cells.
+fn rms_error<'a>(
+    cells: impl Iterator<Item = &'a (Condition, Vec<f64>)>,
+    model: impl Fn(&[f64]) -> f64,
+    truth: impl Fn(&Condition) -> f64,
+) -> f64 {
+    let (mut sq, mut n) = (0.0, 0usize);
+    for (c, f) in cells {
+        sq += (model(f) - truth(c)).powi(2);
+        n += 1;
+    }
+    (sq / n.max(1) as f64).sqrt()
+}
+
 /// The features of every run past its warm-up, each with its run's condition.
 fn labelled(
     runs: &[(Condition, GridRun)],
@@ -86,14 +101,7 @@ pub(super) fn fit(
         .collect();
     let k: Vec<f64> = train.iter().map(|(c, _)| c.kalker).collect();
     let coefficients = least_squares(&rows, &k, speed, "conditions")?;
-    let rms = |model: &dyn Fn(&[f64]) -> f64, truth: &dyn Fn(&Condition) -> f64| {
-        let sq: f64 = valid
-            .iter()
-            .map(|(c, f)| (model(f) - truth(c)).powi(2))
-            .sum();
-        (sq / valid.len().max(1) as f64).sqrt()
-    };
-    let rms_error = rms(&|f| linear(&coefficients, f), &|c| c.kalker);
+    let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), |c| c.kalker);
     let coned = train.iter().all(|(c, _)| c.conicity.is_some());
     let conicity = if coned {
         Some(conicity_model(speed, &train, &valid, &rows, &coefficients)?)
@@ -133,13 +141,11 @@ fn by_conicity(
             let rows: Vec<Vec<f64>> = train.iter().filter(at).map(|(_, f)| first(f)).collect();
             let k: Vec<f64> = train.iter().filter(at).map(|(c, _)| c.kalker).collect();
             let coefficients = least_squares(&rows, &k, speed, "Kalker scales")?;
-            let errors: Vec<f64> = valid
-                .iter()
-                .filter(at)
-                .map(|(c, f)| linear(&coefficients, &f[..FEATURES]) - c.kalker)
-                .collect();
-            let rms_error =
-                (errors.iter().map(|e| e * e).sum::<f64>() / errors.len().max(1) as f64).sqrt();
+            let rms_error = rms_error(
+                valid.iter().filter(at),
+                |f| linear(&coefficients, &f[..FEATURES]),
+                |c| c.kalker,
+            );
             Ok(NodeModel {
                 conicity: n,
                 coefficients,
@@ -160,11 +166,7 @@ fn conicity_model(
     let ln = |c: &Condition| c.conicity.expect("a bank over conicities").ln();
     let x: Vec<f64> = train.iter().map(|(c, _)| ln(c)).collect();
     let coefficients = least_squares(rows, &x, speed, "conicities")?;
-    let sq: f64 = valid
-        .iter()
-        .map(|(c, f)| (linear(&coefficients, f) - ln(c)).powi(2))
-        .sum();
-    let rms_error = (sq / valid.len().max(1) as f64).sqrt();
+    let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), ln);
     // The forward model at the runs' own conditions, one feature at a time.
     let terms: Vec<Vec<f64>> = train
         .iter()
