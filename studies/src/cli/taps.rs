@@ -60,6 +60,15 @@ pub struct TapsArgs {
     /// Keep this tap bank's taps and refit only its contact model (same runs, no tap solves).
     #[arg(long, value_name = "BANK")]
     pub taps_from: Option<PathBuf>,
+    /// Spread every condition's runs over the vehicle and this many random variants of it
+    /// (masses, inertias, wheelbase, bogie spacing, suspension stiffness and damping within
+    /// about +-40 %, wheel radius +-15 %; `studies/src/study/vehicles.rs`): taps that hold for
+    /// a family of vehicles, not one. 0: the vehicle alone.
+    #[arg(long, default_value_t = 0)]
+    pub vehicle_family: usize,
+    /// The seed that draws the --vehicle-family variants.
+    #[arg(long, default_value_t = 1)]
+    pub family_seed: u64,
     /// Track seed of the training runs.
     #[arg(long, default_value_t = CALIBRATION_SEED)]
     pub seed: u32,
@@ -143,6 +152,19 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             defaults.validation_seeds,
         )
     {
+        o.command = std::env::args().collect::<Vec<_>>().join(" ");
+    }
+    // The family's vehicle files live until the fit ends.
+    let family_dir = tempfile::tempdir().map_err(|e| Error::input(e.to_string()))?;
+    if a.vehicle_family > 0 {
+        let base = a.fmus.fmus().vehicle_params()?;
+        let mut members = vec![base.clone()];
+        members.extend(crate::study::vehicles::family(
+            &base,
+            a.family_seed,
+            a.vehicle_family,
+        ));
+        o.vehicles = crate::study::vehicles::write(&members, family_dir.path(), "vehicle")?;
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
     let mut report = crate::report::learned::taps(&a.fmus.fmus(), &o, &a.out, log)?;

@@ -69,6 +69,92 @@ pub const VARIANTS: [Variant; 5] = [
     },
 ];
 
+/// A family of random ML95 variants for training or validation: every mass and inertia
+/// group, the bogie wheelbase, the bogie spacing, the primary and secondary stiffnesses and
+/// dampings scaled independently by factors drawn log-uniform in `[1/SPREAD, SPREAD]` (about
+/// -30 to +40 %), the
+/// wheel radius in `[1/1.15, 1.15]` (a wheel's diameter ranges less than a spring's rate). The
+/// family's `seed` decides it; `name` says which member each is. No member is one of
+/// [`VARIANTS`]: they change one kind at a time, these all at once.
+pub fn family(base: &VehicleParams, seed: u64, n: usize) -> Vec<VehicleParams> {
+    // splitmix64: a fixed, documented stream, so a family is the same on every machine.
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
+    let mut uniform = move || {
+        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut factor = move |spread: f64| spread.powf(2.0 * uniform() - 1.0);
+    (0..n)
+        .map(|i| {
+            let mut p = base.clone();
+            p.name = format!("{} variant {seed}.{i}", base.name);
+            let w = factor(SPREAD);
+            let ws = &mut p.wheelset;
+            for x in [
+                &mut ws.mass,
+                &mut ws.yaw_inertia,
+                &mut ws.roll_inertia,
+                &mut ws.spin_inertia,
+            ] {
+                *x *= w;
+            }
+            ws.rolling_radius *= factor(RADIUS_SPREAD);
+            let (b, base_length) = (factor(SPREAD), factor(SPREAD));
+            let bg = &mut p.bogie;
+            bg.mass *= b;
+            bg.roll_inertia *= b;
+            bg.semi_wheelbase *= base_length;
+            bg.pitch_inertia *= b * base_length * base_length;
+            bg.yaw_inertia *= b * base_length * base_length;
+            let c = factor(SPREAD);
+            let cb = &mut p.car_body;
+            for x in [
+                &mut cb.mass,
+                &mut cb.roll_inertia,
+                &mut cb.pitch_inertia,
+                &mut cb.yaw_inertia,
+            ] {
+                *x *= c;
+            }
+            cb.semi_bogie_distance *= factor(SPREAD);
+            for s in [&mut p.primary, &mut p.secondary] {
+                s.kx *= factor(SPREAD);
+                s.ky *= factor(SPREAD);
+                s.cx *= factor(SPREAD);
+                s.cy *= factor(SPREAD);
+            }
+            p.secondary.yaw_stiffness *= factor(SPREAD);
+            p
+        })
+        .collect()
+}
+
+/// The family's spread of masses, stiffnesses and lengths: +-40 %, as the issue sets.
+pub const SPREAD: f64 = 1.4;
+/// The family's spread of wheel radius.
+pub const RADIUS_SPREAD: f64 = 1.15;
+
+/// Writes `vehicles` as vehicle files `{stem}{i}.toml` into `dir`: their absolute paths, the
+/// vehicle FMU's `vehicle` parameter.
+pub fn write(vehicles: &[VehicleParams], dir: &Path, stem: &str) -> Result<Vec<String>, Error> {
+    vehicles
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            p.check().map_err(Error::Input)?;
+            let file = dir.join(format!("{stem}{i}.toml"));
+            let text = toml::to_string(p).map_err(|e| Error::input(e.to_string()))?;
+            std::fs::write(&file, text)
+                .map_err(|e| Error::input(format!("{}: {e}", file.display())))?;
+            Ok(file.to_string_lossy().into_owned())
+        })
+        .collect()
+}
+
 /// The table's cases, each vehicle estimated three ways as in the conicity sweep: the paper's
 /// filter told the vehicle's conicity (`alpha`; its other parameters stay the ML95
 /// calibration's), the learned filter told it (`conicity`), and the learned filter told
@@ -82,20 +168,17 @@ pub fn cases(dir: &Path) -> Result<Vec<Case>, Error> {
             VehicleParams::manchester().wheelset.conicity,
         ),
     ];
-    for (i, v) in VARIANTS.iter().enumerate() {
-        let mut p = VehicleParams::ml95();
-        (v.change)(&mut p);
-        p.name = v.name.to_string();
-        p.check().map_err(Error::Input)?;
-        let file = dir.join(format!("variant{i}.toml"));
-        let text = toml::to_string(&p).map_err(|e| Error::input(e.to_string()))?;
-        std::fs::write(&file, text)
-            .map_err(|e| Error::input(format!("{}: {e}", file.display())))?;
-        vehicles.push((
-            v.name.to_string(),
-            Some(file.to_string_lossy().into_owned()),
-            p.wheelset.conicity,
-        ));
+    let variants: Vec<VehicleParams> = VARIANTS
+        .iter()
+        .map(|v| {
+            let mut p = VehicleParams::ml95();
+            (v.change)(&mut p);
+            p.name = v.name.to_string();
+            p
+        })
+        .collect();
+    for (p, file) in variants.iter().zip(write(&variants, dir, "variant")?) {
+        vehicles.push((p.name.clone(), Some(file), p.wheelset.conicity));
     }
     let mut out = vec![];
     for (name, file, conicity) in vehicles {
@@ -134,6 +217,48 @@ pub fn cases(dir: &Path) -> Result<Vec<Case>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_family_is_reproducible_within_its_spread_and_every_member_differs() {
+        let base = VehicleParams::ml95();
+        let a = family(&base, 1, 6);
+        assert_eq!(
+            a,
+            family(&base, 1, 6),
+            "the same seed draws the same family"
+        );
+        assert_ne!(a, family(&base, 2, 6), "another seed another family");
+        let within =
+            |x: f64, b: f64, s: f64| x / b <= s * (1.0 + 1e-12) && b / x <= s * (1.0 + 1e-12);
+        for (i, p) in a.iter().enumerate() {
+            p.check().unwrap();
+            assert!(within(p.wheelset.mass, base.wheelset.mass, SPREAD));
+            assert!(within(p.primary.ky, base.primary.ky, SPREAD));
+            assert!(within(
+                p.bogie.semi_wheelbase,
+                base.bogie.semi_wheelbase,
+                SPREAD
+            ));
+            assert!(within(
+                p.wheelset.rolling_radius,
+                base.wheelset.rolling_radius,
+                RADIUS_SPREAD
+            ));
+            // The bogie's yaw inertia follows its mass and the square of its wheelbase.
+            let l = p.bogie.semi_wheelbase / base.bogie.semi_wheelbase;
+            let m = p.bogie.mass / base.bogie.mass;
+            assert!((p.bogie.yaw_inertia / base.bogie.yaw_inertia - m * l * l).abs() < 1e-9);
+            // What is not drawn stays.
+            assert_eq!(p.wheelset.conicity, base.wheelset.conicity);
+            assert_eq!(p.wheelset.half_gauge, base.wheelset.half_gauge);
+            for q in &a[..i] {
+                assert_ne!(p.primary.ky, q.primary.ky);
+            }
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let files = write(&a, dir.path(), "m").unwrap();
+        assert_eq!(VehicleParams::named(&files[3], None).unwrap(), a[3]);
+    }
 
     #[test]
     fn each_variant_is_written_as_a_vehicle_file_the_fmu_reads_back() {

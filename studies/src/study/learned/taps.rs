@@ -196,6 +196,10 @@ pub struct Options {
     /// fit, the tap solves skipped): a change to the contact model's fit without refitting
     /// taps that do not depend on it.
     pub taps_from: Option<Bank>,
+    /// Vehicle files (the vehicle FMU's `vehicle` parameter) the runs of every condition are
+    /// spread over: each gets `1/n` of the training distance, and the validation seeds take
+    /// them in turn. Empty: the vehicle FMU's own vehicle.
+    pub vehicles: Vec<String>,
     /// The command line, for the provenance.
     pub command: String,
 }
@@ -217,6 +221,7 @@ impl Options {
             validation_seeds: vec![102, 103, 104, 105, 106],
             encoding: Encoding::I16,
             taps_from: None,
+            vehicles: vec![],
             command: "alignment-studies taps".into(),
         }
     }
@@ -293,6 +298,7 @@ fn run(
     fmus: &Fmus,
     seed: u32,
     condition: Condition,
+    vehicle: Option<&str>,
     speed: f64,
     distance: f64,
     roll: bool,
@@ -300,6 +306,9 @@ fn run(
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(MIN_STOP, MAX_STOP).round();
     let mut settings = seeded(seed);
+    if let Some(v) = vehicle {
+        settings.push(("vehicle".into(), Value::String(v.into())));
+    }
     settings.push(("kalker_scale".into(), Value::Real(condition.kalker)));
     if let Some(c) = condition.conicity {
         settings.push(("conicity".into(), Value::Real(c)));
@@ -585,30 +594,32 @@ fn speed_runs(
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<(Condition, GridRun)>, Vec<(Condition, GridRun)>), Error> {
     let all = conditions(o);
-    let training: Vec<Option<GridRun>> = all
+    let vehicles: Vec<Option<&str>> = if o.vehicles.is_empty() {
+        vec![None]
+    } else {
+        o.vehicles.iter().map(|v| Some(v.as_str())).collect()
+    };
+    let share = TRAINING_DISTANCE / vehicles.len() as f64;
+    let jobs: Vec<(Condition, Option<&str>)> = all
+        .iter()
+        .flat_map(|c| vehicles.iter().map(move |v| (*c, *v)))
+        .collect();
+    let training: Vec<Option<GridRun>> = jobs
         .par_iter()
-        .map(|c| {
-            run(
-                fmus,
-                o.training_seed,
-                *c,
-                speed,
-                TRAINING_DISTANCE,
-                o.roll_rate,
-            )
-        })
+        .map(|(c, v)| run(fmus, o.training_seed, *c, *v, speed, share, o.roll_rate))
         .collect::<Result<_, _>>()?;
-    for (c, r) in all.iter().zip(&training) {
+    for ((c, v), r) in jobs.iter().zip(&training) {
         if r.is_none() {
             progress(&format!(
-                "  {speed} m/s, {c}: the vehicle is unstable (|ws_y| > {} mm), left out",
+                "  {speed} m/s, {c}{}: the vehicle is unstable (|ws_y| > {} mm), left out",
+                v.map(|v| format!(", {v}")).unwrap_or_default(),
                 UNSTABLE_WS_Y * 1e3
             ));
         }
     }
-    let training: Vec<(Condition, GridRun)> = all
+    let training: Vec<(Condition, GridRun)> = jobs
         .iter()
-        .copied()
+        .map(|(c, _)| *c)
         .zip(training)
         .filter_map(|(c, r)| r.map(|r| (c, r)))
         .collect();
@@ -617,19 +628,29 @@ fn speed_runs(
             "at {speed} m/s the vehicle is unstable under every training condition"
         )));
     }
-    // Validated under every condition trained on: robust taps are chosen for all of them.
-    let cases: Vec<(u32, Condition)> = o
+    // Validated under every condition trained on: robust taps are chosen for all of them. The
+    // seeds take the vehicles in turn, shifted by the condition.
+    let mut stable: Vec<Condition> = training.iter().map(|(c, _)| *c).collect();
+    stable.dedup();
+    let cases: Vec<(u32, Condition, Option<&str>)> = o
         .validation_seeds
         .iter()
-        .flat_map(|s| training.iter().map(move |(c, _)| (*s, *c)))
+        .enumerate()
+        .flat_map(|(j, s)| {
+            let vehicles = &vehicles;
+            stable
+                .iter()
+                .enumerate()
+                .map(move |(k, c)| (*s, *c, vehicles[(j + k) % vehicles.len()]))
+        })
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
-        .map(|(s, c)| run(fmus, *s, *c, speed, VALIDATION_DISTANCE, o.roll_rate))
+        .map(|(s, c, v)| run(fmus, *s, *c, *v, speed, VALIDATION_DISTANCE, o.roll_rate))
         .collect::<Result<_, _>>()?;
     let validation: Vec<(Condition, GridRun)> = cases
         .iter()
-        .map(|(_, c)| *c)
+        .map(|(_, c, _)| *c)
         .zip(validation)
         .filter_map(|(c, r)| r.map(|r| (c, r)))
         .collect();
@@ -735,7 +756,8 @@ fn fit_speed(
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<Entry>, Option<SpeedModel>), Error> {
     let (training, validation) = speed_runs(fmus, o, speed, progress)?;
-    let stable: Vec<Condition> = training.iter().map(|(c, _)| *c).collect();
+    let mut stable: Vec<Condition> = training.iter().map(|(c, _)| *c).collect();
+    stable.dedup();
     let per_condition = o.per_condition && conditions(o).len() > 1;
     // The groups fitted: each condition alone, or all pooled (one conicity: checked in `fit`).
     let groups: Vec<(Option<Condition>, Vec<Condition>)> = if per_condition {
