@@ -74,18 +74,25 @@ def shipped_calibration_with(path, old: str, new: str):
     return path
 
 
-def test_a_calibration_file_made_for_other_parameters_is_flagged(make_slave, tmp_path):
-    """The FMU reads only Q and R from `calibration_file` at run time; when the file's
-    [parameters] (the model its Q and R were made with) differ from the FMU's, it must say so,
-    and stop saying so once the importer sets them to the file's values."""
+def test_a_calibration_file_brings_its_parameters_unless_the_importer_set_others(make_slave, tmp_path):
+    """A calibration file's [parameters] are the model its Q and R were made with: naming the
+    file is enough to get them where the importer left the parameters at their defaults (said
+    at fmi2OK); a parameter the importer set to another value stays, with a warning; one set
+    to the file's value is not flagged."""
     path = shipped_calibration_with(tmp_path / "other.toml", "m = 1.109e3", "m = 1.813e3")
 
     # The paper's filter alone: with the learned filter another calibration is another Kalman
     # channel than its tap bank's, an error of its own (below).
-    s = make_slave("other-calibration")
-    assert s.initialize({"estimator": 1}, strings={"calibration_file": str(path)}) in (OK, WARNING)
-    flagged = [r.message for r in s.log.records if r.status == WARNING and "other model parameters" in r.message]
-    assert len(flagged) == 1 and "m = 1813 (here 1109)" in flagged[0], s.log.records
+    s = make_slave("other-calibration", logging_on=True)
+    assert s.initialize({"estimator": 1}, strings={"calibration_file": str(path)}) == OK
+    assert not any(r.status == WARNING for r in s.log.records), s.log.records
+    taken = [r.message for r in s.log.records if "model parameters from" in r.message]
+    assert len(taken) == 1 and "m = 1813" in taken[0], s.log.records
+
+    kept = make_slave("kept-parameter")
+    assert kept.initialize({"m": 1500.0, "estimator": 1}, strings={"calibration_file": str(path)}) in (OK, WARNING)
+    flagged = [r.message for r in kept.log.records if r.status == WARNING and "other model parameters" in r.message]
+    assert len(flagged) == 1 and "m = 1813 (here 1500)" in flagged[0], kept.log.records
 
     matched = make_slave("matched-calibration")
     assert matched.initialize({"m": 1813.0, "estimator": 1}, strings={"calibration_file": str(path)}) == OK

@@ -95,23 +95,42 @@ pub fn params_from(v: &Values) -> Params {
 
 pub use crate::variables::DEFAULT_CALIBRATION_FILE;
 
-/// Where the calibration file named by the parameters is, if anywhere.
-fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
-    let name = PathBuf::from(&v.string[vr::CALIBRATION_FILE as usize]);
-    if name.is_absolute() {
-        Some(name)
-    } else {
-        resources.map(|d| d.join(&name))
+/// Where a file the user names (`calibration_file`, `tap_file`) is: an absolute path as it
+/// is; a relative one in the FMU's resources (the shipped files) if it is there, else relative
+/// to the process's working directory (a file the user fitted, named as on their command
+/// line), else where the resources would hold it (for the error). `None`: relative, with no
+/// resources directory and not in the working directory.
+pub fn user_file(name: &str, resources: Option<&Path>) -> Option<PathBuf> {
+    let path = Path::new(name);
+    if path.is_absolute() {
+        return Some(path.to_path_buf());
+    }
+    let shipped = resources.map(|d| d.join(path));
+    if shipped.as_ref().is_some_and(|p| p.exists()) {
+        return shipped;
+    }
+    match std::path::absolute(path) {
+        Ok(here) if here.is_file() => Some(here),
+        _ => shipped,
     }
 }
 
-/// The parameters whose value in a calibration file's `[parameters]` (the model its Q and R were
-/// computed with) differs from the FMU's current value, as `name = file (here current)`. The FMU
-/// reads only Q and R from the file at run time (the parameters are its build-time defaults),
-/// so Q and R from a file made for another vehicle would otherwise meet this build's model
-/// silently.
-pub fn parameter_mismatches(v: &Values, file: &BTreeMap<String, f64>) -> Vec<String> {
-    let mut differ = vec![];
+/// Where the calibration file named by the parameters is, if anywhere.
+fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
+    user_file(&v.string[vr::CALIBRATION_FILE as usize], resources)
+}
+
+/// The values with a calibration file's `[parameters]` (the model its Q and R were computed
+/// with) taken over where the FMU's value is still its default, so that naming another vehicle's
+/// file is enough; and the parameters the user set to something else, as
+/// `name = file (here current)`, which keep the user's value (Q and R then meet another model
+/// than theirs, which the caller warns of).
+pub fn adopt_file_parameters(
+    v: &Values,
+    file: &BTreeMap<String, f64>,
+) -> (Values, Vec<String>, Vec<String>) {
+    let mut out = v.clone();
+    let (mut adopted, mut differ) = (vec![], vec![]);
     for (name, &value) in file {
         let Some(spec) = crate::variables::VARIABLES
             .iter()
@@ -120,17 +139,110 @@ pub fn parameter_mismatches(v: &Values, file: &BTreeMap<String, f64>) -> Vec<Str
             continue;
         };
         let here = v.real[spec.vr as usize];
-        if (here - value).abs() > 1e-9 * value.abs() {
-            differ.push(format!("{name} = {value} (here {here})"));
+        if (here - value).abs() <= 1e-9 * value.abs() {
+            continue;
+        }
+        match spec.start {
+            fmi_abi::variables::Start::Real(default) if here == default => {
+                out.real[spec.vr as usize] = value;
+                adopted.push(format!("{name} = {value}"));
+            }
+            _ => differ.push(format!("{name} = {value} (here {here})")),
         }
     }
-    differ
+    (out, adopted, differ)
+}
+
+/// The calibration file the values name, loaded, if they ask for one (`use_calibration_file`);
+/// what was found goes into `notes`.
+fn calibration_of(
+    v: &Values,
+    resources: Option<&Path>,
+    notes: &mut Vec<Note>,
+) -> Result<Option<Calibration>, Error> {
+    if !v.boolean[vr::USE_CALIBRATION_FILE as usize] {
+        return Ok(None);
+    }
+    match calibration_path(v, resources) {
+        Some(path) if path.exists() => match calibration::load(&path)? {
+            Some(c) => {
+                notes.push(Note::Info(format!(
+                    "Q and R from {} ({})",
+                    path.display(),
+                    c.status
+                )));
+                Ok(Some(c))
+            }
+            None => {
+                notes.push(Note::Info(format!(
+                    "{} holds no matrices: using the diagonal noise model",
+                    path.display()
+                )));
+                Ok(None)
+            }
+        },
+        // A file the user named must exist: running on without it would give results
+        // for a calibration they did not ask for.
+        Some(path) if v.string[vr::CALIBRATION_FILE as usize] != DEFAULT_CALIBRATION_FILE => {
+            Err(SettingError::CalibrationMissing {
+                name: v.string[vr::CALIBRATION_FILE as usize].clone(),
+                path,
+            }
+            .into())
+        }
+        Some(path) => {
+            notes.push(Note::Warning(format!(
+                "calibration file {} not found: using the diagonal noise model from the FMI parameters",
+                path.display()
+            )));
+            Ok(None)
+        }
+        None => {
+            notes.push(Note::Warning(
+                "no resources directory: using the diagonal noise model from the FMI parameters"
+                    .into(),
+            ));
+            Ok(None)
+        }
+    }
+}
+
+/// The values with the calibration's parameters adopted ([`adopt_file_parameters`]), the
+/// adoption and any conflict noted.
+pub(crate) fn with_file_parameters(
+    v: &Values,
+    c: &Calibration,
+    what: &str,
+    notes: &mut Vec<Note>,
+) -> Values {
+    let (adopted, taken, differ) = adopt_file_parameters(v, &c.parameters);
+    if !taken.is_empty() {
+        notes.push(Note::Info(format!(
+            "model parameters from {what} (left at their defaults here): {}",
+            taken.join(", ")
+        )));
+    }
+    if !differ.is_empty() {
+        notes.push(Note::Warning(format!(
+            "calibration {what} was made with other model parameters than those set here ({}): its Q and R meet another model",
+            differ.join(", ")
+        )));
+    }
+    adopted
 }
 
 impl Config {
     /// The configuration from the FMI values; `resources` is the FMU's resources directory.
     pub fn from_values(v: &Values, resources: Option<&Path>) -> Result<(Config, Vec<Note>), Error> {
         let mut notes = Vec::new();
+        let calibrated = calibration_of(v, resources, &mut notes)?;
+        let adopted = calibrated.as_ref().map(|c| {
+            let what = calibration_path(v, resources)
+                .map(|p| p.display().to_string())
+                .unwrap_or_default();
+            with_file_parameters(v, c, &what, &mut notes)
+        });
+        let v = adopted.as_ref().unwrap_or(v);
         let params = params_from(v);
         params.check()?;
         let r = |i: u32| v.real[i as usize];
@@ -163,45 +275,6 @@ impl Config {
             r(vr::Q_XI),
         ];
         let body_noise = BodyNoise::Rate(SMatrix::from_diagonal(&Vec7::from_fn(|i, _| q[i])));
-        let mut calibrated: Option<Calibration> = None;
-        if v.boolean[vr::USE_CALIBRATION_FILE as usize] {
-            match calibration_path(v, resources) {
-                Some(path) if path.exists() => match calibration::load(&path)? {
-                    Some(c) => {
-                        notes.push(Note::Info(format!("Q and R from {} ({})", path.display(), c.status)));
-                        let differ = parameter_mismatches(v, &c.parameters);
-                        if !differ.is_empty() {
-                            notes.push(Note::Warning(format!(
-                                "calibration file {} was made with other model parameters ({}): the FMU takes only Q and R from it at run time, so set those parameters to the file's values if it is meant for them",
-                                path.display(),
-                                differ.join(", ")
-                            )));
-                        }
-                        calibrated = Some(c);
-                    }
-                    None => notes.push(Note::Info(format!(
-                        "{} holds no matrices: using the diagonal noise model",
-                        path.display()
-                    ))),
-                },
-                // A file the user named must exist: running on without it would give results
-                // for a calibration they did not ask for.
-                Some(path) if v.string[vr::CALIBRATION_FILE as usize] != DEFAULT_CALIBRATION_FILE => {
-                    return Err(SettingError::CalibrationMissing {
-                        name: v.string[vr::CALIBRATION_FILE as usize].clone(),
-                        path,
-                    }
-                    .into());
-                }
-                Some(path) => notes.push(Note::Warning(format!(
-                    "calibration file {} not found: using the diagonal noise model from the FMI parameters",
-                    path.display()
-                ))),
-                None => notes.push(Note::Warning(
-                    "no resources directory: using the diagonal noise model from the FMI parameters".into(),
-                )),
-            }
-        }
         if calibrated.is_none() && sig.iter().any(|s| !(*s > 0.0)) {
             return Err(SettingError::Sigmas.into());
         }
@@ -295,30 +368,83 @@ impl Config {
 mod tests {
     use super::*;
 
-    fn warnings(calibration_text: &str) -> Vec<String> {
+    /// The configuration and notes with the calibration file `calibration_text`, the wheelset
+    /// mass set to `m` first if given.
+    fn with_file(calibration_text: &str, m: Option<f64>) -> (Config, Vec<Note>) {
         let path = calibration::tests::write("config", calibration_text);
         let mut v = Values::from_table(crate::variables::VARIABLES);
         v.string[vr::CALIBRATION_FILE as usize] = path.to_str().unwrap().into();
-        let (_, notes) = Config::from_values(&v, None).unwrap();
+        if let Some(m) = m {
+            v.real[vr::M as usize] = m;
+        }
+        Config::from_values(&v, None).unwrap()
+    }
+
+    fn warnings(notes: &[Note]) -> Vec<String> {
         notes
-            .into_iter()
+            .iter()
             .filter_map(|n| match n {
-                Note::Warning(m) => Some(m),
+                Note::Warning(m) => Some(m.clone()),
                 Note::Info(_) => None,
             })
             .collect()
     }
 
     #[test]
-    fn a_calibration_made_for_other_parameters_is_flagged() {
+    fn a_calibration_made_for_other_parameters_brings_them_unless_the_user_set_them() {
         // Oracle: the shipped file was made with this build's defaults, so it agrees.
-        assert!(warnings(calibration::SHIPPED).is_empty());
+        let (shipped, notes) = with_file(calibration::SHIPPED, None);
+        assert!(warnings(&notes).is_empty());
+        assert_eq!(shipped.params.m, 1109.0);
         // The same Q and R with another wheelset mass in [parameters], as a file made for
-        // another vehicle would have: the FMU keeps its own m, and says so.
+        // another vehicle has: naming the file is enough, the FMU takes its m.
         let other = calibration::SHIPPED.replacen("m = 1.109e3", "m = 1.813e3", 1);
         assert_ne!(other, calibration::SHIPPED);
-        let w = warnings(&other);
+        let (taken, notes) = with_file(&other, None);
+        assert_eq!(taken.params.m, 1813.0);
+        assert!(warnings(&notes).is_empty(), "{notes:?}");
+        assert!(
+            notes
+                .iter()
+                .any(|n| matches!(n, Note::Info(m) if m.contains("m = 1813"))),
+            "{notes:?}"
+        );
+        // The user's own m stays, and the mismatch is said.
+        let (kept, notes) = with_file(&other, Some(1500.0));
+        assert_eq!(kept.params.m, 1500.0);
+        let w = warnings(&notes);
         assert_eq!(w.len(), 1, "{w:?}");
-        assert!(w[0].contains("m = 1813 (here 1109)"), "{}", w[0]);
+        assert!(w[0].contains("m = 1813 (here 1500)"), "{}", w[0]);
+    }
+
+    #[test]
+    fn a_relative_file_is_looked_for_in_the_resources_then_the_working_directory() {
+        let resources = tempfile::tempdir().unwrap();
+        std::fs::write(resources.path().join("mine.taps"), "x").unwrap();
+        // In the resources: there.
+        assert_eq!(
+            user_file("mine.taps", Some(resources.path())),
+            Some(resources.path().join("mine.taps"))
+        );
+        // Not there but in the working directory (cargo runs the tests in the crate's):
+        // there, made absolute.
+        let here = std::path::absolute("resources/learned.taps").unwrap();
+        assert!(here.is_file());
+        assert_eq!(
+            user_file("resources/learned.taps", Some(resources.path())),
+            Some(here)
+        );
+        // Nowhere: where the resources would hold it, so the error names that; without
+        // resources, none.
+        assert_eq!(
+            user_file("absent.taps", Some(resources.path())),
+            Some(resources.path().join("absent.taps"))
+        );
+        assert_eq!(user_file("absent.taps", None), None);
+        // Absolute: as given.
+        assert_eq!(
+            user_file("/x/y.taps", None),
+            Some(PathBuf::from("/x/y.taps"))
+        );
     }
 }

@@ -174,9 +174,10 @@ pub enum SettingError {
         /// Where it was looked for (resolved against the resources directory).
         path: PathBuf,
     },
-    /// A relative `tap_file` with no resources directory to resolve it against.
+    /// A relative `tap_file` that is no shipped bank and no file in the working directory, with
+    /// no resources directory to look in.
     #[error(
-        "tap_file '{name}' is relative and the FMU has no resources directory: give an absolute path or a shipped bank ({})",
+        "tap_file '{name}' is relative, not in the working directory, and the FMU has no resources directory: give an absolute path or a shipped bank ({})",
         crate::learned::SHIPPED.join(", ")
     )]
     TapFileRelative {

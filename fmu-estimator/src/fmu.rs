@@ -383,15 +383,15 @@ pub fn learned_from_values(
         return Err(SettingError::Lag(lag).into());
     }
     let name = v.string[vr::TAP_FILE as usize].trim().to_string();
-    let bank = match resources {
-        _ if std::path::Path::new(&name).is_absolute() => {
-            Bank::load(std::path::Path::new(&name)).map_err(Error::Bank)?
-        }
-        Some(dir) => Bank::load(&dir.join(&name)).map_err(Error::Bank)?,
-        None => match crate::learned::shipped_named(&name) {
-            Some(bank) => bank.map_err(Error::Bank)?,
-            None => return Err(SettingError::TapFileRelative { name }.into()),
-        },
+    // Without resources (the offline path) a shipped name is the bank built into the library.
+    let builtin = resources
+        .is_none()
+        .then(|| crate::learned::shipped_named(&name))
+        .flatten();
+    let bank = match (builtin, crate::config::user_file(&name, resources)) {
+        (Some(bank), _) => bank.map_err(Error::Bank)?,
+        (None, Some(path)) => Bank::load(&path).map_err(Error::Bank)?,
+        (None, None) => return Err(SettingError::TapFileRelative { name }.into()),
     };
     check_contract(v, &bank, config, &name, log)?;
     let conicity = v.real[vr::CONICITY as usize];

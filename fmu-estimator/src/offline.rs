@@ -247,20 +247,30 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
     let use_file = values.boolean[vr::USE_CALIBRATION_FILE as usize];
     let mut v = values.clone();
     v.boolean[vr::USE_CALIBRATION_FILE as usize] = false;
-    // The diagonal model's sigmas must be valid even when a calibration replaces them.
-    let (mut config, mut notes) = Config::from_values(&v, None)?;
-    if use_file {
-        let c = match calibration {
+    let mut notes = vec![];
+    let c = if use_file {
+        match calibration {
             Some(path) => calibration::load(path)?,
             None => calibration::parse(SHIPPED, Path::new("calibration.toml (built in)"))?,
-        };
-        if let Some(c) = c {
-            notes.push(Note::Info(format!(
-                "Q and R from the calibration ({})",
-                c.status
-            )));
-            config = config.with_calibration(c);
         }
+    } else {
+        None
+    };
+    if let Some(c) = &c {
+        let what = calibration
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "calibration.toml (built in)".into());
+        v = crate::config::with_file_parameters(&v, c, &what, &mut notes);
+    }
+    // The diagonal model's sigmas must be valid even when a calibration replaces them.
+    let (mut config, more) = Config::from_values(&v, None)?;
+    notes.extend(more);
+    if let Some(c) = c {
+        notes.push(Note::Info(format!(
+            "Q and R from the calibration ({})",
+            c.status
+        )));
+        config = config.with_calibration(c);
     }
     Ok((config, notes))
 }

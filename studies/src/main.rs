@@ -11,7 +11,7 @@
 use alignment_studies::Error;
 use alignment_studies::cli::cases::Group;
 use alignment_studies::cli::{
-    StudyArgs, calibrate, cases, learn, orchestrator_summary, run, smooth, taps, variants,
+    StudyArgs, calibrate, cases, fit, learn, orchestrator_summary, run, smooth, taps, variants,
 };
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -59,6 +59,12 @@ enum Command {
     /// the fixed lags; ridge chosen on validation seeds (rebuild the FMU afterwards: cargo
     /// xtask fmu).
     Taps(taps::TapsArgs),
+    /// Fit the estimator to a vehicle FMU in one directory: the simplified model's
+    /// identification and Q/R calibration, the tap bank over speeds and contact conditions
+    /// with that calibration, and report.md with the validation figures, the bank's envelope
+    /// and the standard case on held-out seeds (use them with estimator.tap_file and
+    /// estimator.calibration_file).
+    Fit(fit::FitArgs),
     /// Filter and smooth recorded sensor signals offline with the estimator (RTS smoother): a
     /// CSV with time, speed, ws_acc_y, ws_yaw_rate, frame_acc_y (e.g. a run's results.csv).
     Smooth(smooth::SmoothArgs),
@@ -89,6 +95,11 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Variants(a) => variants::execute(&a, &say)?,
         Command::Learn(a) => learn::execute(&a)?,
         Command::Taps(a) => taps::execute(&a, &|m| eprintln!("{m}"))?,
+        Command::Fit(a) => {
+            let md = fit::execute(&a, &|m| eprintln!("{m}"))?;
+            println!("{md}");
+            return Ok(());
+        }
     };
     report.write()
 }

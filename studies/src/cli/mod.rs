@@ -5,6 +5,7 @@
 
 pub mod calibrate;
 pub mod cases;
+pub mod fit;
 pub mod learn;
 pub mod run;
 pub mod smooth;

@@ -7,6 +7,7 @@
 pub mod calibration;
 pub mod cases;
 pub mod envelope;
+pub mod fit;
 pub mod learned;
 pub mod standard;
 pub mod variants;

@@ -4,6 +4,7 @@
 pub mod calibrate;
 pub mod cases;
 pub mod identify;
+pub mod interface;
 pub mod learned;
 pub mod metrics;
 pub mod optimize;

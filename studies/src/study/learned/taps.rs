@@ -43,6 +43,7 @@ use crate::study::metrics::{BANDS, Band, band_labels, evaluate};
 use crate::study::records::{Record, record_table};
 use crate::study::runs::{Fmus, STEP, seeded};
 use crate::study::standard::{DS, TRIM};
+use fmu_estimator::config::Config;
 use fmu_estimator::learned::bank::{Bank, Encoding, Entry, Header, Provenance, Window};
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
 use fmu_estimator::learned::contract::Contract;
@@ -52,6 +53,7 @@ use fmu_estimator::offline;
 use nalgebra::{DMatrix, DVector};
 use orchestrator::system::Value;
 use rayon::prelude::*;
+use std::path::PathBuf;
 
 /// The shortest training or validation run \[s\]: the standard case's 20 s.
 const MIN_STOP: f64 = 20.0;
@@ -200,6 +202,10 @@ pub struct Options {
     /// spread over: each gets `1/n` of the training distance, and the validation seeds take
     /// them in turn. Empty: the vehicle FMU's own vehicle.
     pub vehicles: Vec<String>,
+    /// The calibration file of the Kalman channel the taps are fitted with (its model
+    /// parameters and Q and R; `calibrate`'s output for another vehicle). `None`: the
+    /// estimator's built-in one. The FMU must be given the same file.
+    pub calibration: Option<PathBuf>,
     /// The command line, for the provenance.
     pub command: String,
 }
@@ -222,6 +228,7 @@ impl Options {
             encoding: Encoding::I16,
             taps_from: None,
             vehicles: vec![],
+            calibration: None,
             command: "alignment-studies taps".into(),
         }
     }
@@ -294,8 +301,10 @@ const WS_Y: &str = "ws_y";
 pub const UNSTABLE_WS_Y: f64 = 0.03;
 
 /// One run on the grid; `None` if the vehicle is unstable in it ([`UNSTABLE_WS_Y`]).
+#[allow(clippy::too_many_arguments)]
 fn run(
     fmus: &Fmus,
+    config: &Config,
     seed: u32,
     condition: Condition,
     vehicle: Option<&str>,
@@ -332,16 +341,15 @@ fn run(
     if ws_y.iter().any(|y| !(y.abs() <= UNSTABLE_WS_Y)) {
         return Ok(None);
     }
-    Ok(Some(on_grid(&rec)?))
+    Ok(Some(on_grid(&rec, config)?))
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
 /// The channel is the time-varying filter's ([`offline::process`] runs the Kalman filter with
 /// its own gain), as the shipped taps were fitted; the FMU's scheduled steady-state channel
 /// equals it at the training's constant speeds once the start-up has passed.
-fn on_grid(rec: &Record) -> Result<GridRun, Error> {
-    let config = kalman_config()?;
-    let out = offline::process(&config, STEP, &rec.samples, false)?;
+fn on_grid(rec: &Record, config: &Config) -> Result<GridRun, Error> {
+    let out = offline::process(config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
         .samples
         .iter()
@@ -362,9 +370,9 @@ fn on_grid(rec: &Record) -> Result<GridRun, Error> {
 
 /// The Kalman channel the taps are fitted with: the estimator's defaults and its built-in
 /// calibration, as the bank's contract states ([`Contract::expected`]).
-fn kalman_config() -> Result<fmu_estimator::config::Config, Error> {
+fn kalman_config(o: &Options) -> Result<Config, Error> {
     let values = offline::settings(&[])?;
-    Ok(offline::config(&values, None)?.0)
+    Ok(offline::config(&values, o.calibration.as_deref())?.0)
 }
 
 /// The channel indices ([`CHANNELS`]) of a sensor set.
@@ -593,6 +601,7 @@ fn speed_runs(
     speed: f64,
     progress: &dyn Fn(&str),
 ) -> Result<(Vec<(Condition, GridRun)>, Vec<(Condition, GridRun)>), Error> {
+    let config = kalman_config(o)?;
     let all = conditions(o);
     let vehicles: Vec<Option<&str>> = if o.vehicles.is_empty() {
         vec![None]
@@ -606,7 +615,18 @@ fn speed_runs(
         .collect();
     let training: Vec<Option<GridRun>> = jobs
         .par_iter()
-        .map(|(c, v)| run(fmus, o.training_seed, *c, *v, speed, share, o.roll_rate))
+        .map(|(c, v)| {
+            run(
+                fmus,
+                &config,
+                o.training_seed,
+                *c,
+                *v,
+                speed,
+                share,
+                o.roll_rate,
+            )
+        })
         .collect::<Result<_, _>>()?;
     for ((c, v), r) in jobs.iter().zip(&training) {
         if r.is_none() {
@@ -646,7 +666,18 @@ fn speed_runs(
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
-        .map(|(s, c, v)| run(fmus, *s, *c, *v, speed, VALIDATION_DISTANCE, o.roll_rate))
+        .map(|(s, c, v)| {
+            run(
+                fmus,
+                &config,
+                *s,
+                *c,
+                *v,
+                speed,
+                VALIDATION_DISTANCE,
+                o.roll_rate,
+            )
+        })
         .collect::<Result<_, _>>()?;
     let validation: Vec<(Condition, GridRun)> = cases
         .iter()
@@ -832,6 +863,24 @@ fn fit_speed(
 
 /// Fits the bank (speeds one after the other, each speed's runs and solves in parallel).
 pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Error> {
+    fit_each(fmus, o, progress, &|_| {})
+}
+
+/// The simulated seconds of the runs at `speed` per condition and vehicle: what the speed's
+/// share of a fit's time goes with, for a progress bar's estimate of the time left.
+pub fn speed_cost(o: &Options, speed: f64) -> f64 {
+    let stop = |d: f64| (d / speed).clamp(MIN_STOP, MAX_STOP).round();
+    let n = o.vehicles.len().max(1) as f64;
+    stop(TRAINING_DISTANCE / n) * n + o.validation_seeds.len() as f64 * stop(VALIDATION_DISTANCE)
+}
+
+/// [`fit`], calling `done` with each speed when its entries are fitted.
+pub fn fit_each(
+    fmus: &Fmus,
+    o: &Options,
+    progress: &dyn Fn(&str),
+    done: &dyn Fn(f64),
+) -> Result<Bank, Error> {
     if o.validation_seeds.contains(&o.training_seed) {
         return Err(Error::input(
             "the validation seeds must differ from the training seed",
@@ -880,6 +929,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         let (e, m) = fit_speed(fmus, o, *v, progress)?;
         entries.extend(e);
         models.extend(m);
+        done(*v);
     }
     let contact = (!models.is_empty()).then(|| ContactModel {
         band: CONTACT_BAND,
@@ -912,7 +962,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
         .map(|k| format!("{}", k * 100.0))
         .collect();
     let contract = Contract::expected(
-        &kalman_config()?,
+        &kalman_config(o)?,
         BANK_GRID,
         KALMAN_HIGHPASS,
         contact.as_ref().map(|c| c.band),
