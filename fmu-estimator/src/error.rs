@@ -151,6 +151,11 @@ pub enum SettingError {
     /// `conicity` is negative or not finite (the value given).
     #[error("parameter 'conicity' = {0} must be 0 (estimate it) or a positive equivalent conicity")]
     TapConicity(f64),
+    /// `kalker_scale` is negative or not finite (the value given).
+    #[error(
+        "parameter 'kalker_scale' = {0} must be 0 (estimate it) or a positive Kalker-coefficient scale"
+    )]
+    TapKalker(f64),
     /// `design_speed` \[m/s\] is negative or not finite (the value given).
     #[error(
         "parameter 'design_speed' = {0} must be 0 (follow the speed input) or a positive speed"

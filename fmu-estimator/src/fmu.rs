@@ -398,10 +398,15 @@ pub fn learned_from_values(
     if !(conicity >= 0.0 && conicity.is_finite()) {
         return Err(SettingError::TapConicity(conicity).into());
     }
+    let kalker = v.real[vr::KALKER_SCALE as usize];
+    if !(kalker >= 0.0 && kalker.is_finite()) {
+        return Err(SettingError::TapKalker(kalker).into());
+    }
     let choice = Choice {
         roll_rate: v.boolean[vr::USE_ROLL_RATE as usize],
         lag,
         conicity: (conicity > 0.0).then_some(conicity),
+        kalker: (kalker > 0.0).then_some(kalker),
     };
     let learned = Learned::new(&bank, choice).map_err(|source| Error::TapFile {
         tap_file: name.clone(),

@@ -329,6 +329,18 @@ impl ContactModel {
     /// A young set's novelty is scaled by how full its memory is: the features' scatter about
     /// the training surface shrinks as the memory fills, and the level was set on full ones.
     pub fn estimate(&self, moments: &Moments, told: Option<f64>) -> Option<Condition> {
+        self.estimate_told(moments, told, None)
+    }
+
+    /// [`Self::estimate`] with the Kalker scale told too (`kalker_scale` parameter): the
+    /// condition's Kalker scale is then the one told (clamped to the trained range), and the
+    /// novelty is judged at it.
+    pub fn estimate_told(
+        &self,
+        moments: &Moments,
+        told: Option<f64>,
+        told_kalker: Option<f64>,
+    ) -> Option<Condition> {
         let ln_range = self.conicity_range.map(|[lo, hi]| [lo.ln(), hi.ln()]);
         let (mut k_sum, mut k_weight) = (0.0, 0.0);
         let (mut c_sum, mut c_weight) = (0.0, 0.0);
@@ -363,6 +375,7 @@ impl ContactModel {
                 }
                 _ => (linear(&m.coefficients, f), m.rms_error),
             };
+            let k = told_kalker.unwrap_or(k);
             if !k.is_finite() {
                 continue;
             }

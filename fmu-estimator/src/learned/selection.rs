@@ -18,6 +18,10 @@ pub struct Choice {
     /// The wheels' equivalent conicity, when known (`conicity` parameter): the taps are
     /// blended at it instead of at the one estimated from the sensors. `None` or 0: estimate.
     pub conicity: Option<f64>,
+    /// The wheel-rail contact's Kalker-coefficient scale, when known (`kalker_scale`
+    /// parameter): the taps are blended at it instead of at the estimated `contact_scale`.
+    /// `None` or 0: estimate.
+    pub kalker: Option<f64>,
 }
 
 /// The bank's entries for one sensor set and lag, by speed, then by contact condition.

@@ -93,6 +93,8 @@ pub struct Learned {
     contact_scale: f64,
     /// The conicity given by the user (`conicity` parameter), if any.
     told_conicity: Option<f64>,
+    /// The Kalker scale given by the user (`kalker_scale` parameter), if any.
+    told_kalker: Option<f64>,
     /// The conicity the taps are blended at: the one told or estimated (0 in a bank without
     /// conicity conditions).
     conicity: f64,
@@ -113,6 +115,7 @@ impl Learned {
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
             told_conicity: choice.conicity.filter(|c| *c > 0.0),
+            told_kalker: choice.kalker.filter(|k| *k > 0.0),
             conicity: 0.0,
             novelty: 0.0,
             judged: false,
@@ -216,7 +219,7 @@ impl Learned {
             }
         }
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
-            match model.estimate(m, self.told_conicity) {
+            match model.estimate_told(m, self.told_conicity, self.told_kalker) {
                 Some(c) => {
                     self.contact_scale = c.kalker;
                     self.conicity = c.conicity.unwrap_or(0.0);
@@ -226,7 +229,9 @@ impl Learned {
                 // Until the features exist (the first cells of a run): nominal contact, and
                 // in a bank over conicities the conicity told or the range's geometric middle.
                 None => {
-                    self.contact_scale = model.range[1];
+                    self.contact_scale = self
+                        .told_kalker
+                        .map_or(model.range[1], |k| k.clamp(model.range[0], model.range[1]));
                     self.conicity = model.conicity_range.map_or(0.0, |[lo, hi]| {
                         self.told_conicity.unwrap_or((lo * hi).sqrt())
                     });

@@ -31,6 +31,7 @@ fn three_sensors(bank: &Bank, lag: f64) -> Learned {
             roll_rate: false,
             lag,
             conicity: None,
+            kalker: None,
         },
     )
     .unwrap()
@@ -84,7 +85,7 @@ fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
 }
 
 #[test]
-fn per_condition_taps_are_blended_by_the_estimated_contact() {
+fn per_condition_taps_are_blended_by_the_estimated_or_told_contact() {
     use crate::learned::contact::{ContactModel, SpeedModel};
     let mut bank = sample_bank();
     // Two conditions at each speed: the sample taps (0.5) and their negatives (1.0).
@@ -144,6 +145,39 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
         (got - want).abs() < 1e-12 * want.abs().max(1.0),
         "{got} {want}"
     );
+    // Told the Kalker scale: blended at it from the first cell (clamped to the trained range).
+    for (told, at) in [(0.6, 0.6), (2.0, 1.0)] {
+        let mut t = Learned::new(
+            &bank,
+            Choice {
+                roll_rate: false,
+                lag: 0.0,
+                conicity: None,
+                kalker: Some(told),
+            },
+        )
+        .unwrap();
+        let mut d = 0.0;
+        let mut first = None;
+        for k in 0..400 {
+            d += 0.05;
+            let u = (k as f64 * 0.3).sin();
+            let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+            t.step(d, 10.0, &x, 0.0);
+            if first.is_none() && t.contact_scale() > 0.0 {
+                first = Some(t.contact_scale());
+            }
+        }
+        assert_eq!(first, Some(at), "told {told}");
+        assert_eq!(t.contact_scale(), at);
+        let b = (at - 0.5) / 0.5;
+        let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+        let (got, _) = t.causal(t.causal.points[1].distance).unwrap();
+        assert!(
+            (got - want).abs() < 1e-12 * want.abs().max(1.0),
+            "told {told}: {got} {want}"
+        );
+    }
     // A bank without a contact model reports no scale.
     let plain = Learned::new(
         &sample_bank(),
@@ -151,6 +185,7 @@ fn per_condition_taps_are_blended_by_the_estimated_contact() {
             roll_rate: false,
             lag: 0.0,
             conicity: None,
+            kalker: None,
         },
     )
     .unwrap();
@@ -214,6 +249,7 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
                 roll_rate: false,
                 lag: 0.0,
                 conicity: told,
+                kalker: None,
             },
         )
         .unwrap();
@@ -356,6 +392,7 @@ fn unavailable_choices_are_refused_by_name() {
             roll_rate: true,
             lag: 0.0,
             conicity: None,
+            kalker: None,
         },
     )
     .unwrap_err()
@@ -367,6 +404,7 @@ fn unavailable_choices_are_refused_by_name() {
             roll_rate: false,
             lag: 10.0,
             conicity: None,
+            kalker: None,
         },
     )
     .unwrap_err()

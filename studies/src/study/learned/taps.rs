@@ -1128,6 +1128,7 @@ mod tests {
                     roll_rate: false,
                     lag: lag_m,
                     conicity: None,
+                    kalker: None,
                 },
             )
             .unwrap();
