@@ -7,7 +7,7 @@
 
 use super::{CALIBRATION_SEED, StudyFmus};
 use crate::Error;
-use crate::report::fit::{FILES, FitOptions};
+use crate::report::fit::FitOptions;
 use crate::study::learned::taps::Options;
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -54,9 +54,35 @@ pub struct FitArgs {
     /// Held-out track seeds of the standard case in report.md.
     #[arg(long, value_delimiter = ',', default_value = "1,2,3,4,5")]
     pub evaluation_seeds: Vec<u32>,
+    /// Fit from these recorded passes of an instrumented train instead of from the vehicle
+    /// FMU (the recording format of docs/python.md, CSV or Parquet, at 1 ms), against
+    /// --reference.
+    #[arg(long, num_args = 1.., requires = "reference", conflicts_with_all = ["set", "speeds", "kalker_scales", "conicities", "evaluation_seeds", "validation_seeds", "seed"])]
+    pub recordings: Vec<PathBuf>,
+    /// The reference alignment of the recordings' line (CSV or Parquet: distance, alignment),
+    /// a track recording car's.
+    #[arg(long, requires = "recordings")]
+    pub reference: Option<PathBuf>,
+    /// With --recordings: the share of the line, at its end, that validates (the rest trains).
+    #[arg(long, default_value_t = 0.3, requires = "recordings", value_parser = share)]
+    pub validation_share: f64,
+    /// With --recordings: the calibration of the Kalman channel the taps are fitted with
+    /// (another vehicle's, from `fit` or `calibrate`); default the estimator's built-in one.
+    #[arg(long, requires = "recordings")]
+    pub calibration: Option<PathBuf>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// `--validation-share`: strictly between 0 and 1.
+fn share(s: &str) -> Result<f64, String> {
+    orchestrator::cli::number(
+        s,
+        |v| v > 0.0 && v < 1.0,
+        "expected a share strictly between 0 and 1",
+        "expected a number",
+    )
 }
 
 /// Checks everything, fits into a staging directory beside `--out`, and renames it into place;
@@ -68,6 +94,9 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
         )));
     }
     check_out(&a.out)?;
+    if !a.recordings.is_empty() {
+        return from_recordings(a, log);
+    }
     let fmus = a.fmus.fmus()?;
     let interface = crate::study::interface::check(&fmus.vehicle)?;
     let mut taps = Options::shipped();
@@ -110,7 +139,60 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
         evaluation_seeds: a.evaluation_seeds.clone(),
         final_dir: a.out.clone(),
     };
-    let parent = match a.out.parent() {
+    let bar = bar(a.quiet);
+    let md = staged(&a.out, log, |dir| {
+        crate::report::fit::fit(&fmus, &o, dir, &|l| bar.suspend(|| log(l)), &|f| {
+            bar.set_position((f * 1000.0).round() as u64)
+        })
+    });
+    bar.finish_and_clear();
+    md
+}
+
+/// `fit --recordings`: reads and checks every input, then fits in a staged directory.
+fn from_recordings(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
+    let reference = reference(a)?;
+    let passes: Vec<_> = a
+        .recordings
+        .iter()
+        .map(|p| crate::study::learned::recorded::read_pass(p))
+        .collect::<Result<_, _>>()?;
+    let mut taps = Options::shipped();
+    taps.conicities = vec![];
+    taps.roll_rate_conicities = vec![];
+    taps.kalker_scales = vec![1.0];
+    taps.roll_rate = false;
+    taps.lags = a.lags.clone();
+    taps.calibration = a.calibration.clone();
+    taps.command = std::env::args().collect::<Vec<_>>().join(" ");
+    if let Some(c) = &a.calibration {
+        fmu_estimator::calibration::load(c)
+            .map_err(|e| Error::Input(format!("--calibration {}: {e}", c.display())))?;
+    }
+    let fmus = a.fmus.fmus()?;
+    let share = a.validation_share;
+    staged(&a.out, log, |dir| {
+        crate::report::fit::from_recordings(&fmus, &taps, &passes, &reference, share, dir, log)
+    })
+}
+
+/// The reference named by --reference.
+fn reference(a: &FitArgs) -> Result<crate::study::learned::recorded::Reference, Error> {
+    let path = a
+        .reference
+        .as_deref()
+        .ok_or_else(|| Error::input("--recordings needs --reference"))?;
+    crate::study::learned::recorded::read_reference(path)
+}
+
+/// Runs `work` in a hidden directory beside `out` and renames it to `out` when it succeeds;
+/// on failure the hidden directory is removed.
+fn staged(
+    out: &Path,
+    log: &dyn Fn(&str),
+    work: impl FnOnce(&Path) -> Result<String, Error>,
+) -> Result<String, Error> {
+    let parent = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
@@ -125,30 +207,29 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
                 parent.display()
             ))
         })?;
-    let bar = bar(a.quiet);
-    let md = crate::report::fit::fit(
-        &fmus,
-        &o,
-        staging.path(),
-        &|l| bar.suspend(|| log(l)),
-        &|f| bar.set_position((f * 1000.0).round() as u64),
-    )?;
-    bar.finish_and_clear();
+    let md = work(staging.path())?;
     // Checked again: the directory may have appeared during the fit.
-    check_out(&a.out)?;
-    if a.out.exists() {
-        std::fs::remove_dir(&a.out)
-            .map_err(|e| Error::Io(format!("cannot replace the empty {}: {e}", a.out.display())))?;
+    check_out(out)?;
+    if out.exists() {
+        std::fs::remove_dir(out)
+            .map_err(|e| Error::Io(format!("cannot replace the empty {}: {e}", out.display())))?;
     }
+    let written: Vec<String> = std::fs::read_dir(staging.path())
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
     let staged = staging.keep();
-    std::fs::rename(&staged, &a.out).map_err(|e| {
+    std::fs::rename(&staged, out).map_err(|e| {
         Error::Io(format!(
             "the fit is complete in {} but cannot be moved to {}: {e}",
             staged.display(),
-            a.out.display()
+            out.display()
         ))
     })?;
-    log(&format!("wrote {} ({})", a.out.display(), FILES.join(", ")));
+    log(&format!("wrote {} ({})", out.display(), written.join(", ")));
     Ok(md)
 }
 

@@ -323,3 +323,69 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     std::fs::write(path, bytes)
         .map_err(|e| Error::Io(format!("cannot write {}: {e}", path.display())))
 }
+
+/// Fits a bank from recorded passes into `dir` ([`crate::study::learned::recorded`]): the bank
+/// and `report.md` (the passes' placements, the speeds covered, the entries' validation
+/// figures). Returns the report's text.
+pub fn from_recordings(
+    fmus: &Fmus,
+    o: &Options,
+    passes: &[crate::study::learned::recorded::Pass],
+    reference: &crate::study::learned::recorded::Reference,
+    validation_share: f64,
+    dir: &Path,
+    log: &dyn Fn(&str),
+) -> Result<String, Error> {
+    let started = std::time::Instant::now();
+    let fitted =
+        crate::study::learned::recorded::fit(fmus, o, passes, reference, validation_share, log)?;
+    write(&dir.join(TAPS), &fitted.bank.to_bytes())?;
+    let mut md = format!(
+        "# Estimator fit from recordings\n\nMade by `{}` in {:.0} s: {} passes against a reference of {:.0}-{:.0} m; validation from {:.0} m on.\n",
+        o.command,
+        started.elapsed().as_secs_f64(),
+        passes.len(),
+        reference.distance[0],
+        reference.distance[reference.distance.len() - 1],
+        fitted.cut
+    );
+    md.push_str(&format!(
+        "\n## Use\n\n```\norchestrator run standard.ssd --set estimator.tap_file={TAPS}{}\n```\n",
+        o.calibration
+            .as_ref()
+            .map(|c| format!(" --set estimator.calibration_file={}", c.display()))
+            .unwrap_or_default()
+    ));
+    md.push_str("\n## Passes\n\nReference position = offset + scale x odometry (the pass's integrated speed from its first `distance`), found by correlating the shipped default's estimate with the reference (3-200 m).\n\n| pass | offset (m) | scale - 1 (%) | correlation | mean speed (m/s) | trains (m/s) |\n|---|---|---|---|---|---|\n");
+    for (file, at, v, bank) in &fitted.passes {
+        md.push_str(&format!(
+            "| {} | {:+.2} | {:+.3} | {:.3} | {v:.1} | {bank} |\n",
+            file.display(),
+            at.offset,
+            (at.scale - 1.0) * 100.0,
+            at.correlation
+        ));
+    }
+    let mut speeds: Vec<f64> = fitted.bank.entries.iter().map(|e| e.speed).collect();
+    speeds.dedup();
+    md.push_str(&format!(
+        "\nBank speeds {speeds:?} m/s, the recordings' own contact and wheels, three sensors. Outside {:?}-{:?} m/s the estimator falls back to the paper's filter; between them it blends.\n",
+        speeds.first().copied().unwrap_or(0.0),
+        speeds.last().copied().unwrap_or(0.0)
+    ));
+    md.push_str("\n| speed (m/s) | lag (m) | ridge | band weights | validation objective | rms error (mm) |\n|---|---|---|---|---|---|\n");
+    for e in &fitted.bank.entries {
+        let w = e.windows.last().expect("full window");
+        md.push_str(&format!(
+            "| {} | {} | {:.0e} | {:?} | {:.4} | {:.3} |\n",
+            e.speed,
+            e.lag as f64 * fitted.bank.grid,
+            e.ridge,
+            e.band_weights.unwrap_or([1.0; 4]),
+            e.validation_objective,
+            w.rms_error * 1e3
+        ));
+    }
+    write(&dir.join(REPORT), md.as_bytes())?;
+    Ok(md)
+}

@@ -62,6 +62,7 @@
 
 pub(crate) mod contact;
 mod fir;
+pub mod recorded;
 pub mod spectra;
 mod split;
 pub mod taps;

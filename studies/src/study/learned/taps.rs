@@ -48,6 +48,7 @@ use fmu_estimator::learned::bank::{Bank, Encoding, Entry, Header, Provenance, Wi
 use fmu_estimator::learned::contact::{ContactModel, SpeedModel};
 use fmu_estimator::learned::contract::Contract;
 use fmu_estimator::learned::grid::{CHANNELS, GridRecord, ROLL_RATE, decimate};
+use fmu_estimator::learned::stream::TAP_SPEED_POWER;
 use fmu_estimator::learned::window::{self, History};
 use fmu_estimator::offline;
 use nalgebra::{DMatrix, DVector};
@@ -236,7 +237,7 @@ impl Options {
 
 /// One run on the grid: cells, each cell's target (the truth where it closed) and position.
 #[derive(Clone)]
-pub(super) struct GridRun {
+pub struct GridRun {
     pub(super) cells: GridRecord,
     /// The cells per channel ([`CHANNELS`] order): the history the shared window code reads.
     columns: Vec<Vec<f64>>,
@@ -349,6 +350,13 @@ fn run(
 /// its own gain), as the shipped taps were fitted; the FMU's scheduled steady-state channel
 /// equals it at the training's constant speeds once the start-up has passed.
 fn on_grid(rec: &Record, config: &Config) -> Result<GridRun, Error> {
+    on_grid_at(rec, config, None)
+}
+
+/// [`on_grid`], each cell rescaled from the speed of the sample that closed it to `speed` as
+/// the runtime's history rescales it ([`TAP_SPEED_POWER`]): a recorded pass whose speed
+/// varies, or differs from the bank speed it trains, gives cells as at that bank speed.
+fn on_grid_at(rec: &Record, config: &Config, speed: Option<f64>) -> Result<GridRun, Error> {
     let out = offline::process(config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
         .samples
@@ -356,7 +364,15 @@ fn on_grid(rec: &Record, config: &Config) -> Result<GridRun, Error> {
         .zip(&out.filtered)
         .map(|(s, k)| fmu_estimator::learned::channels(s, k.0))
         .collect();
-    let cells = decimate(&out.distance, &x, BANK_GRID, KALMAN_HIGHPASS);
+    let mut cells = decimate(&out.distance, &x, BANK_GRID, KALMAN_HIGHPASS);
+    if let Some(v) = speed {
+        for (cell, k) in cells.cells.iter_mut().zip(&cells.closed_by) {
+            let own = rec.samples[*k].speed.max(MIN_RECORDED_SPEED);
+            for (x, p) in cell.iter_mut().zip(TAP_SPEED_POWER) {
+                *x *= (v / own).powf(p);
+            }
+        }
+    }
     let target = cells.closed_by.iter().map(|k| rec.alignment[*k]).collect();
     let position = cells.closed_by.iter().map(|k| out.distance[*k]).collect();
     Ok(GridRun::new(
@@ -861,6 +877,52 @@ fn fit_speed(
     Ok((entries, model))
 }
 
+/// The slowest speed a recorded cell is rescaled from \[m/s\]: a train standing in a recording
+/// would otherwise blow its cells up.
+const MIN_RECORDED_SPEED: f64 = 1.0;
+
+/// A recorded pass (its samples, odometry distance, and the reference alignment at the
+/// pass's positions) on the grid at bank speed `speed`, for a fit from recordings.
+pub fn recorded_run(rec: &Record, config: &Config, speed: f64) -> Result<GridRun, Error> {
+    on_grid_at(rec, config, Some(speed))
+}
+
+/// The Kalman channel the taps of `o` are fitted with ([`Options::calibration`]).
+pub fn channel(o: &Options) -> Result<Config, Error> {
+    kalman_config(o)
+}
+
+/// A bank fitted from recorded passes: per bank speed, its training and validation runs
+/// ([`recorded_run`]); one condition (the recordings' own), three sensors, causal and
+/// `o.lags`. `fmus` names the provenance only.
+pub fn fit_recorded(
+    fmus: &Fmus,
+    o: &Options,
+    runs: &[(f64, Vec<GridRun>, Vec<GridRun>)],
+    progress: &dyn Fn(&str),
+) -> Result<Bank, Error> {
+    let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
+    let mut entries = vec![];
+    for (speed, train, valid) in runs {
+        progress(&format!(
+            "fitting the taps at {speed} m/s from {} training and {} validation stretches",
+            train.len(),
+            valid.len()
+        ));
+        let group = Group {
+            speed: *speed,
+            channels: channel_set(false),
+            condition: None,
+            conicity: None,
+            kalker_scales: vec![],
+            train,
+            valid,
+        };
+        entries.extend(group.entries(&lags)?);
+    }
+    assemble(fmus, o, entries, vec![])
+}
+
 /// Fits the bank (speeds one after the other, each speed's runs and solves in parallel).
 pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Error> {
     fit_each(fmus, o, progress, &|_| {})
@@ -931,6 +993,17 @@ pub fn fit_each(
         models.extend(m);
         done(*v);
     }
+    assemble(fmus, o, entries, models)
+}
+
+/// The bank of `entries` and the contact `models` fitted with options `o`: header, contract
+/// and provenance.
+fn assemble(
+    fmus: &Fmus,
+    o: &Options,
+    entries: Vec<Entry>,
+    models: Vec<SpeedModel>,
+) -> Result<Bank, Error> {
     let contact = (!models.is_empty()).then(|| ContactModel {
         band: CONTACT_BAND,
         extra_bands: contact_bands(o)[1..].to_vec(),

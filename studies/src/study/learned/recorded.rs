@@ -1,0 +1,383 @@
+//! A tap bank fitted from recordings of an instrumented train against a reference alignment of
+//! the same line (a track recording car's), the deployment path of `alignment-studies fit
+//! --recordings`.
+//!
+//! | step | how |
+//! |---|---|
+//! | odometry | each pass's distance is the rectangle rule of its `speed` (as the estimator integrates it), from its first `distance` value when it has that column |
+//! | placement | the reference position of odometry `s` is `offset + scale * s`: found by the correlation of the shipped default's estimate with the reference in the whole band (3-200 m, zero phase), over offsets within [`SEARCH_OFFSET`] and scales within [`SEARCH_SCALE`], then refined (parabola through the best offset's neighbours; scales in steps of [`FINE_SCALE_STEP`]) |
+//! | split | by reference position: the last `validation_share` of the line validates (ridge, band weights, the report's figures), the rest trains; each pass is cut there |
+//! | speeds | each pass trains the bank speed (a multiple of 2.5 m/s) nearest its mean speed; its cells are rescaled from their own speed to it as the runtime rescales its history |
+//! | taps | [`super::taps::fit_recorded`]: one condition (the recordings' own), three sensors, causal and fixed-lag, on the Kalman channel of the given calibration |
+
+use super::taps::{GridRun, Options, channel, fit_recorded, recorded_run};
+use crate::Error;
+use crate::smooth::read_samples;
+use crate::study::metrics::{BANDS, bandpass, resample};
+use crate::study::records::Record;
+use crate::study::runs::{Fmus, STEP};
+use fmu_estimator::learned::bank::Bank;
+use fmu_estimator::offline::{self, Sample};
+use std::path::{Path, PathBuf};
+
+/// How far a pass's start may be from where its odometry says \[m\].
+pub const SEARCH_OFFSET: f64 = 30.0;
+/// How far a pass's distance scale may be from 1.
+pub const SEARCH_SCALE: f64 = 0.01;
+/// The coarse scale step of the search.
+const COARSE_SCALE_STEP: f64 = 0.001;
+/// The fine scale step of the search.
+pub const FINE_SCALE_STEP: f64 = 0.0001;
+/// Rounds of the placement's refinement between the search's grid points.
+const REFINEMENTS: usize = 4;
+/// The grid the placement correlates on \[m\].
+const PLACE_GRID: f64 = 0.25;
+/// A pass's first metres, left out of the placement (the estimator's start).
+const PLACE_SKIP: f64 = 100.0;
+/// A reference step this many times its median is a gap.
+pub const GAP_FACTOR: f64 = 5.0;
+/// The bank speeds a pass is assigned to are multiples of this \[m/s\].
+pub const SPEED_GRID: f64 = 2.5;
+
+/// A reference alignment of the line.
+#[derive(Debug, Clone)]
+pub struct Reference {
+    /// Position along the line \[m\], increasing.
+    pub distance: Vec<f64>,
+    /// Lateral alignment \[m\].
+    pub alignment: Vec<f64>,
+}
+
+/// Reads a reference (CSV or Parquet with columns `distance` and `alignment`): increasing
+/// distance, no gaps (a step over [`GAP_FACTOR`] times the median), finite values; errors name
+/// the file and the line.
+pub fn read_reference(path: &Path) -> Result<Reference, Error> {
+    let cols = orchestrator::csv::Csv::read_any(path)
+        .map_err(|e| Error::Input(format!("reference {e}")))?;
+    let col = |name: &str| {
+        cols.column(&[name])
+            .map(|c| c.to_vec())
+            .map_err(|m| Error::Input(format!("reference {}: {m}", path.display())))
+    };
+    let (distance, alignment) = (col("distance")?, col("alignment")?);
+    let place = |k: usize| {
+        let n = cols.lines.get(k).copied().unwrap_or(k + 1);
+        if cols.header_line == 0 {
+            format!("row {n}")
+        } else {
+            format!("line {n}")
+        }
+    };
+    if distance.len() < 2 {
+        return Err(Error::Input(format!(
+            "reference {}: fewer than 2 rows",
+            path.display()
+        )));
+    }
+    for k in 0..distance.len() {
+        if !(distance[k].is_finite() && alignment[k].is_finite()) {
+            return Err(Error::Input(format!(
+                "reference {}: a value at {} is not a finite number",
+                path.display(),
+                place(k)
+            )));
+        }
+    }
+    let mut steps: Vec<f64> = distance.windows(2).map(|w| w[1] - w[0]).collect();
+    if let Some(k) = steps.iter().position(|d| !(*d > 0.0)) {
+        return Err(Error::Input(format!(
+            "reference {}: distance does not increase at {}",
+            path.display(),
+            place(k + 1)
+        )));
+    }
+    let raw = steps.clone();
+    steps.sort_by(f64::total_cmp);
+    let median = steps[steps.len() / 2];
+    if let Some(k) = raw.iter().position(|d| *d > GAP_FACTOR * median) {
+        return Err(Error::Input(format!(
+            "reference {}: a gap of {:.3} m before {} (the steps are {median} m): the reference must cover the line without gaps",
+            path.display(),
+            raw[k],
+            place(k + 1)
+        )));
+    }
+    Ok(Reference {
+        distance,
+        alignment,
+    })
+}
+
+/// One recorded pass.
+#[derive(Debug, Clone)]
+pub struct Pass {
+    /// The file.
+    pub file: PathBuf,
+    /// The samples, one per millisecond.
+    pub samples: Vec<Sample>,
+    /// Where the odometry starts \[m\] (the first `distance`, else 0).
+    pub start: f64,
+}
+
+/// Reads a pass (the recording format of docs/python.md); its step must be the estimator's
+/// 1 ms, which the tap bank's grid and contract are made for.
+pub fn read_pass(path: &Path) -> Result<Pass, Error> {
+    let (_, h, samples) = read_samples(path).map_err(|e| Error::Input(e.to_string()))?;
+    if (h - STEP).abs() > 1e-9 {
+        return Err(Error::Input(format!(
+            "{}: the step is {h} s; a tap bank is fitted from recordings at the estimator's {STEP} s",
+            path.display()
+        )));
+    }
+    let cols = orchestrator::csv::Csv::read_any(path).map_err(Error::Input)?;
+    let start = cols
+        .column(&["distance"])
+        .ok()
+        .and_then(|d| d.first().copied())
+        .unwrap_or(0.0);
+    Ok(Pass {
+        file: path.to_path_buf(),
+        samples,
+        start,
+    })
+}
+
+/// Where a pass lies on the reference: reference position = `offset + scale * odometry`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// \[m\].
+    pub offset: f64,
+    /// The odometry's scale (1: exact).
+    pub scale: f64,
+    /// The correlation of the estimate with the reference there.
+    pub correlation: f64,
+}
+
+/// The correlation of `e` (band-passed estimate at odometry `s`) with the band-passed
+/// reference `r` (on the grid from `r0` every [`PLACE_GRID`]) at `offset`, `scale`.
+fn correlation(s: &[f64], e: &[f64], r0: f64, r: &[f64], offset: f64, scale: f64) -> f64 {
+    let (mut se, mut sr, mut ser, mut see, mut srr, mut n) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for (si, ei) in s.iter().zip(e) {
+        let x = (offset + scale * si - r0) / PLACE_GRID;
+        if x < 0.0 || x >= (r.len() - 1) as f64 {
+            continue;
+        }
+        let j = x.floor() as usize;
+        let f = x - j as f64;
+        let ri = r[j] * (1.0 - f) + r[j + 1] * f;
+        se += ei;
+        sr += ri;
+        ser += ei * ri;
+        see += ei * ei;
+        srr += ri * ri;
+        n += 1.0;
+    }
+    if n < 100.0 {
+        return f64::NEG_INFINITY;
+    }
+    let cov = ser / n - se / n * sr / n;
+    let ve = see / n - (se / n).powi(2);
+    let vr = srr / n - (sr / n).powi(2);
+    cov / (ve * vr).sqrt()
+}
+
+/// Places a pass whose estimate is `estimate` at odometry `odometry` (from its start) on the
+/// reference.
+pub fn place(
+    odometry: &[f64],
+    estimate: &[f64],
+    reference: &Reference,
+    file: &Path,
+) -> Result<Placement, Error> {
+    let band = &BANDS[0];
+    let last = odometry[odometry.len() - 1];
+    if last < PLACE_SKIP + 200.0 {
+        return Err(Error::Input(format!(
+            "{}: {last:.0} m long; a pass must be over {} m to be placed on the reference",
+            file.display(),
+            PLACE_SKIP + 200.0
+        )));
+    }
+    let n = ((last - PLACE_SKIP) / PLACE_GRID).floor() as usize;
+    let s: Vec<f64> = (0..n).map(|i| PLACE_SKIP + i as f64 * PLACE_GRID).collect();
+    let e = bandpass(&resample(odometry, estimate, &s), PLACE_GRID, band)
+        .map_err(|m| Error::Input(format!("{}: {m}", file.display())))?;
+    let r0 = reference.distance[0];
+    let rn =
+        ((reference.distance[reference.distance.len() - 1] - r0) / PLACE_GRID).floor() as usize;
+    let grid: Vec<f64> = (0..rn).map(|i| r0 + i as f64 * PLACE_GRID).collect();
+    let r = bandpass(
+        &resample(&reference.distance, &reference.alignment, &grid),
+        PLACE_GRID,
+        band,
+    )
+    .map_err(|m| Error::Input(format!("reference: {m}")))?;
+    let best = |scales: &[f64], offsets: &[f64]| {
+        let mut b = (f64::NEG_INFINITY, 0.0, 1.0);
+        for &k in scales {
+            for &a in offsets {
+                let c = correlation(&s, &e, r0, &r, a, k);
+                if c > b.0 {
+                    b = (c, a, k);
+                }
+            }
+        }
+        b
+    };
+    let steps = |lo: f64, hi: f64, step: f64| -> Vec<f64> {
+        let n = ((hi - lo) / step).round() as usize;
+        (0..=n).map(|i| lo + i as f64 * step).collect()
+    };
+    let coarse = best(
+        &steps(1.0 - SEARCH_SCALE, 1.0 + SEARCH_SCALE, COARSE_SCALE_STEP),
+        &steps(-SEARCH_OFFSET, SEARCH_OFFSET, PLACE_GRID),
+    );
+    let fine = best(
+        &steps(
+            coarse.2 - COARSE_SCALE_STEP,
+            coarse.2 + COARSE_SCALE_STEP,
+            FINE_SCALE_STEP,
+        ),
+        &steps(coarse.1 - 2.0, coarse.1 + 2.0, PLACE_GRID / 5.0),
+    );
+    // The peak between the grid's points: offset and scale in turn, each by a parabola through
+    // the best and its neighbours (the two trade against each other over a pass's length).
+    let c = |a: f64, k: f64| correlation(&s, &e, r0, &r, a, k);
+    let vertex = |x: f64, h: f64, f: &dyn Fn(f64) -> f64| -> f64 {
+        let (m, z, p) = (f(x - h), f(x), f(x + h));
+        let curvature = m - 2.0 * z + p;
+        if curvature < 0.0 {
+            x + (0.5 * (m - p) / curvature).clamp(-1.0, 1.0) * h
+        } else {
+            x
+        }
+    };
+    let (mut a, mut k) = (fine.1, fine.2);
+    for _ in 0..REFINEMENTS {
+        a = vertex(a, PLACE_GRID / 5.0, &|x| c(x, k));
+        k = vertex(k, FINE_SCALE_STEP, &|x| c(a, x));
+    }
+    let shift = a - fine.1;
+    let fine = (c(a, k), fine.1, k);
+    if !(fine.0 > 0.3) {
+        return Err(Error::Input(format!(
+            "{}: no overlap with the reference found (best correlation {:.2} within {SEARCH_OFFSET} m and {} % of the odometry)",
+            file.display(),
+            fine.0,
+            SEARCH_SCALE * 100.0
+        )));
+    }
+    Ok(Placement {
+        offset: fine.1 + shift,
+        scale: fine.2,
+        correlation: fine.0,
+    })
+}
+
+/// What a fit from recordings found and made.
+pub struct Fitted {
+    /// The bank.
+    pub bank: Bank,
+    /// Each pass: its file, placement (offset relative to its recorded start), mean speed and
+    /// the bank speed it trained.
+    pub passes: Vec<(PathBuf, Placement, f64, f64)>,
+    /// The reference position where validation begins \[m\].
+    pub cut: f64,
+}
+
+/// Fits a bank from `passes` against `reference` (see the module's table); the last
+/// `validation_share` of the reference validates. `o` gives the lags, seeds for the
+/// provenance, encoding and calibration.
+pub fn fit(
+    fmus: &Fmus,
+    o: &Options,
+    passes: &[Pass],
+    reference: &Reference,
+    validation_share: f64,
+    progress: &dyn Fn(&str),
+) -> Result<Fitted, Error> {
+    let config = channel(o)?;
+    let defaults = offline::settings(&[])?;
+    let (default_config, _) = offline::config(&defaults, None)?;
+    let r_end = reference.distance[reference.distance.len() - 1];
+    let r0 = reference.distance[0];
+    let cut = r_end - validation_share * (r_end - r0);
+    let mut placed = vec![];
+    let mut runs: Vec<(f64, Vec<GridRun>, Vec<GridRun>)> = vec![];
+    for p in passes {
+        // The shipped default's estimate, to place the pass.
+        let learned = offline::learned(&defaults, &default_config)?;
+        let out = offline::process_learned(&default_config, learned, STEP, &p.samples, false)?;
+        let estimate: Vec<f64> = match &out.learned {
+            Some(l) => l.iter().map(|e| e.alignment).collect(),
+            None => out.filtered.iter().map(|k| k.0).collect(),
+        };
+        let odometry: Vec<f64> = out.distance.iter().map(|d| p.start + d).collect();
+        let at = place(&odometry, &estimate, reference, &p.file)?;
+        let mean_speed = out.distance[out.distance.len() - 1] / (p.samples.len() as f64 * STEP);
+        let speed = (mean_speed / SPEED_GRID).round().max(1.0) * SPEED_GRID;
+        progress(&format!(
+            "{}: offset {:+.2} m, distance scale {:+.3} %, correlation {:.2}; mean speed {mean_speed:.1} m/s, trains {speed} m/s",
+            p.file.display(),
+            at.offset,
+            (at.scale - 1.0) * 100.0,
+            at.correlation
+        ));
+        // The pass cut at the validation's start, each part a record with the reference as
+        // its target.
+        let position = |k: usize| at.offset + at.scale * odometry[k];
+        let split = (0..p.samples.len())
+            .find(|k| position(*k) >= cut)
+            .unwrap_or(p.samples.len());
+        let part = |from: usize, to: usize| -> Option<Record> {
+            if to <= from + 1 {
+                return None;
+            }
+            let base = if from == 0 {
+                0.0
+            } else {
+                out.distance[from - 1]
+            };
+            let positions: Vec<f64> = (from..to).map(position).collect();
+            let inside = positions[0] >= r0 && positions[positions.len() - 1] <= r_end;
+            inside.then(|| Record {
+                samples: p.samples[from..to].to_vec(),
+                distance: out.distance[from..to].iter().map(|d| d - base).collect(),
+                alignment: resample(&reference.distance, &reference.alignment, &positions),
+            })
+        };
+        let slot = match runs.iter().position(|r| r.0 == speed) {
+            Some(i) => i,
+            None => {
+                runs.push((speed, vec![], vec![]));
+                runs.len() - 1
+            }
+        };
+        if let Some(r) = part(0, split) {
+            runs[slot].1.push(recorded_run(&r, &config, speed)?);
+        }
+        if let Some(r) = part(split, p.samples.len()) {
+            runs[slot].2.push(recorded_run(&r, &config, speed)?);
+        }
+        placed.push((p.file.clone(), at, mean_speed, speed));
+    }
+    runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (speed, train, valid) in &runs {
+        if train.is_empty() || valid.is_empty() {
+            return Err(Error::Input(format!(
+                "the passes at {speed} m/s cover only the {} stretch of the line (training before {cut:.0} m, validation after): give passes over both",
+                if train.is_empty() {
+                    "validation"
+                } else {
+                    "training"
+                }
+            )));
+        }
+    }
+    let bank = fit_recorded(fmus, o, &runs, progress)?;
+    Ok(Fitted {
+        bank,
+        passes: placed,
+        cut,
+    })
+}

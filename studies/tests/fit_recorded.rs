@@ -1,0 +1,199 @@
+//! `alignment-studies fit --recordings` end to end on passes of the vehicle FMU with odometry
+//! errors of their own (a start offset and a distance scale, as a real train's): the placement
+//! recovers them, the bank fitted from the passes beats the paper's filter on a held-out track,
+//! and bad input (a reference with a gap, passes that do not overlap the reference) stops with
+//! the file named and nothing written.
+
+mod common;
+
+use alignment_studies::study::cases::{Case, run_seed};
+use alignment_studies::study::records::{Record, record};
+use alignment_studies::study::runs::{Fmus, seeded};
+use fmu_estimator::learned::bank::Bank;
+use orchestrator::system::Value;
+use std::fmt::Write;
+use std::path::Path;
+use std::process::Command;
+
+fn fmus() -> Fmus {
+    Fmus::new(
+        common::fmu("RailVehicle"),
+        common::fmu("AlignmentEstimator"),
+    )
+}
+
+/// A run of `seconds` at 20 m/s on track `seed` with sensor noise `noise`.
+fn run(seed: u32, noise: i32, seconds: f64) -> Record {
+    let mut s = seeded(seed);
+    s[1].1 = Value::Integer(noise);
+    record(&fmus(), s, seconds, None).unwrap()
+}
+
+/// The pass as an instrumented train records it: speed `scale` times the true one, the
+/// distance column from `offset`.
+fn write_pass(r: &Record, offset: f64, scale: f64, path: &Path) {
+    let mut t = String::from("time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y,distance\n");
+    for (k, (s, d)) in r.samples.iter().zip(&r.distance).enumerate() {
+        writeln!(
+            t,
+            "{},{},{},{},{},{}",
+            (k + 1) as f64 * 1e-3,
+            s.speed * scale,
+            s.ws_acc_y,
+            s.ws_yaw_rate,
+            s.frame_acc_y,
+            offset + scale * d
+        )
+        .unwrap();
+    }
+    std::fs::write(path, t).unwrap();
+}
+
+/// The track's alignment every 0.25 m (a recording car's output), without the rows in `gap`.
+fn write_reference(r: &Record, gap: Option<(f64, f64)>, path: &Path) {
+    let mut t = String::from("distance,alignment\n");
+    let mut next = 0.0;
+    for (d, a) in r.distance.iter().zip(&r.alignment) {
+        if *d >= next {
+            if !gap.is_some_and(|(lo, hi)| *d > lo && *d < hi) {
+                writeln!(t, "{d},{a}").unwrap();
+            }
+            next += 0.25;
+        }
+    }
+    std::fs::write(path, t).unwrap();
+}
+
+fn fit(args: &[&std::ffi::OsStr]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_alignment-studies"))
+        .args(["fit", "--quiet"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |n: &str| dir.path().join(n);
+    // The line: track seed 101 (training), 2.6 km; two passes with their own noise.
+    let truth = run(101, 5001, 130.0);
+    write_reference(&truth, None, &p("reference.csv"));
+    let odometry = [(12.3, 1.004), (-7.9, 0.997)];
+    for (i, (offset, scale)) in odometry.iter().enumerate() {
+        let pass = run(101, 6000 + i as i32, 120.0);
+        write_pass(&pass, *offset, *scale, &p(&format!("pass{i}.csv")));
+    }
+    let out = p("fitted");
+    let o = fit(&[
+        "--recordings".as_ref(),
+        p("pass0.csv").as_os_str(),
+        p("pass1.csv").as_os_str(),
+        "--reference".as_ref(),
+        p("reference.csv").as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The placements: reference = offset + scale x odometry, where the recorded odometry is
+    // offset + scale x truth: the fit must find offset -offset/scale... as the report states
+    // it, the truth's own: position = (odometry - offset) / scale.
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for (i, (offset, scale)) in odometry.iter().enumerate() {
+        let row = report
+            .lines()
+            .find(|l| l.starts_with("| ") && l.contains(&format!("pass{i}.csv")))
+            .unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let (found_offset, found_scale): (f64, f64) =
+            (cells[2].parse().unwrap(), cells[3].parse().unwrap());
+        // Recorded start `offset` at true 0, recorded steps `scale` times the true: the true
+        // position of odometry s is (s - offset) / scale.
+        let want_offset = -offset / scale;
+        let want_scale = (1.0 / scale - 1.0) * 100.0;
+        assert!(
+            (found_offset - want_offset).abs() < 0.5,
+            "{row}: offset {want_offset}"
+        );
+        assert!(
+            (found_scale - want_scale).abs() < 0.02,
+            "{row}: scale {want_scale} %"
+        );
+    }
+    let bank = Bank::load(&out.join("learned.taps")).unwrap();
+    assert!(bank.entries.iter().all(|e| e.speed == 20.0));
+
+    // The bank on a held-out track, against the paper's filter.
+    let fmus = fmus();
+    let case = |estimator: Vec<(String, Value)>| Case {
+        name: "recorded".into(),
+        vehicle: vec![],
+        estimator,
+        paper: None,
+    };
+    let tap_file = Value::String(out.join("learned.taps").to_string_lossy().into_owned());
+    let learned = run_seed(
+        &fmus,
+        &case(vec![
+            ("estimator".into(), Value::Integer(2)),
+            ("tap_file".into(), tap_file),
+        ]),
+        3,
+    )
+    .unwrap();
+    let paper = run_seed(
+        &fmus,
+        &case(vec![("estimator".into(), Value::Integer(1))]),
+        3,
+    )
+    .unwrap();
+    let whole = |m: &alignment_studies::study::metrics::BandMetrics| m.get("whole").unwrap().jrel;
+    assert!(
+        whole(&learned) < 0.6 * whole(&paper),
+        "{} vs {}",
+        whole(&learned),
+        whole(&paper)
+    );
+
+    // A reference with a gap is named with its line; nothing is written.
+    write_reference(&truth, Some((1000.0, 1010.0)), &p("gap.csv"));
+    let o = fit(&[
+        "--recordings".as_ref(),
+        p("pass0.csv").as_os_str(),
+        "--reference".as_ref(),
+        p("gap.csv").as_os_str(),
+        "--out".as_ref(),
+        p("gap-out").as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("gap.csv") && err.contains("gap of") && err.contains("line"),
+        "{err}"
+    );
+    assert!(!p("gap-out").exists());
+    // Passes of another line: no overlap found, named; nothing written.
+    let other = run(7, 5001, 130.0);
+    write_reference(&other, None, &p("other.csv"));
+    let o = fit(&[
+        "--recordings".as_ref(),
+        p("pass0.csv").as_os_str(),
+        "--reference".as_ref(),
+        p("other.csv").as_os_str(),
+        "--out".as_ref(),
+        p("other-out").as_os_str(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("pass0.csv") && err.contains("no overlap"),
+        "{err}"
+    );
+    assert!(!p("other-out").exists());
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".fit-"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}
