@@ -7,11 +7,11 @@
 mod common;
 
 use alignment_studies::study::cases::{Case, run_seed};
+use alignment_studies::study::learned::recorded::synthetic::{write_pass, write_reference};
 use alignment_studies::study::records::{Record, record};
 use alignment_studies::study::runs::{Fmus, seeded};
 use fmu_estimator::learned::bank::Bank;
 use orchestrator::system::Value;
-use std::fmt::Write;
 use std::path::Path;
 use std::process::Command;
 
@@ -29,41 +29,6 @@ fn run(seed: u32, noise: i32, seconds: f64) -> Record {
     record(&fmus(), s, seconds, None).unwrap()
 }
 
-/// The pass as an instrumented train records it: speed `scale` times the true one, the
-/// distance column from `offset`.
-fn write_pass(r: &Record, offset: f64, scale: f64, path: &Path) {
-    let mut t = String::from("time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y,distance\n");
-    for (k, (s, d)) in r.samples.iter().zip(&r.distance).enumerate() {
-        writeln!(
-            t,
-            "{},{},{},{},{},{}",
-            (k + 1) as f64 * 1e-3,
-            s.speed * scale,
-            s.ws_acc_y,
-            s.ws_yaw_rate,
-            s.frame_acc_y,
-            offset + scale * d
-        )
-        .unwrap();
-    }
-    std::fs::write(path, t).unwrap();
-}
-
-/// The track's alignment every 0.25 m (a recording car's output), without the rows in `gap`.
-fn write_reference(r: &Record, gap: Option<(f64, f64)>, path: &Path) {
-    let mut t = String::from("distance,alignment\n");
-    let mut next = 0.0;
-    for (d, a) in r.distance.iter().zip(&r.alignment) {
-        if *d >= next {
-            if !gap.is_some_and(|(lo, hi)| *d > lo && *d < hi) {
-                writeln!(t, "{d},{a}").unwrap();
-            }
-            next += 0.25;
-        }
-    }
-    std::fs::write(path, t).unwrap();
-}
-
 fn fit(args: &[&std::ffi::OsStr]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_alignment-studies"))
         .args(["fit", "--quiet"])
@@ -78,11 +43,11 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
     let p = |n: &str| dir.path().join(n);
     // The line: track seed 101 (training), 2.6 km; two passes with their own noise.
     let truth = run(101, 5001, 130.0);
-    write_reference(&truth, None, &p("reference.csv"));
+    write_reference(&truth, None, &p("reference.csv")).unwrap();
     let odometry = [(12.3, 1.004), (-7.9, 0.997)];
     for (i, (offset, scale)) in odometry.iter().enumerate() {
         let pass = run(101, 6000 + i as i32, 120.0);
-        write_pass(&pass, *offset, *scale, &p(&format!("pass{i}.csv")));
+        write_pass(&pass, *offset, *scale, &p(&format!("pass{i}.csv"))).unwrap();
     }
     let out = p("fitted");
     let o = fit(&[
@@ -95,9 +60,8 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         out.as_os_str(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // The placements: reference = offset + scale x odometry, where the recorded odometry is
-    // offset + scale x truth: the fit must find offset -offset/scale... as the report states
-    // it, the truth's own: position = (odometry - offset) / scale.
+    // The placements: reference position = offset + scale x odometry, and the recorded
+    // odometry is offset + scale x the true position.
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     for (i, (offset, scale)) in odometry.iter().enumerate() {
         let row = report
@@ -156,7 +120,7 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
     );
 
     // A reference with a gap is named with its line; nothing is written.
-    write_reference(&truth, Some((1000.0, 1010.0)), &p("gap.csv"));
+    write_reference(&truth, Some((1000.0, 1010.0)), &p("gap.csv")).unwrap();
     let o = fit(&[
         "--recordings".as_ref(),
         p("pass0.csv").as_os_str(),
@@ -174,7 +138,7 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
     assert!(!p("gap-out").exists());
     // Passes of another line: no overlap found, named; nothing written.
     let other = run(7, 5001, 130.0);
-    write_reference(&other, None, &p("other.csv"));
+    write_reference(&other, None, &p("other.csv")).unwrap();
     let o = fit(&[
         "--recordings".as_ref(),
         p("pass0.csv").as_os_str(),

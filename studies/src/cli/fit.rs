@@ -172,7 +172,15 @@ fn from_recordings(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     let fmus = a.fmus.fmus()?;
     let share = a.validation_share;
     staged(&a.out, log, |dir| {
-        crate::report::fit::from_recordings(&fmus, &taps, &passes, &reference, share, dir, log)
+        crate::report::fit::from_recordings(
+            &fmus,
+            &taps,
+            &passes,
+            &reference,
+            share,
+            (dir, &a.out),
+            log,
+        )
     })
 }
 

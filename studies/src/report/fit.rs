@@ -333,7 +333,7 @@ pub fn from_recordings(
     passes: &[crate::study::learned::recorded::Pass],
     reference: &crate::study::learned::recorded::Reference,
     validation_share: f64,
-    dir: &Path,
+    (dir, final_dir): (&Path, &Path),
     log: &dyn Fn(&str),
 ) -> Result<String, Error> {
     let started = std::time::Instant::now();
@@ -350,7 +350,8 @@ pub fn from_recordings(
         fitted.cut
     );
     md.push_str(&format!(
-        "\n## Use\n\n```\norchestrator run standard.ssd --set estimator.tap_file={TAPS}{}\n```\n",
+        "\n## Use\n\n```\norchestrator run standard.ssd --set estimator.tap_file={}/{TAPS}{}\n```\n",
+        final_dir.display(),
         o.calibration
             .as_ref()
             .map(|c| format!(" --set estimator.calibration_file={}", c.display()))

@@ -381,3 +381,52 @@ pub fn fit(
         cut,
     })
 }
+
+/// Recordings made from runs of the vehicle FMU, for testing and demonstrating a fit from
+/// recordings: a pass with the odometry errors of a real train, and a reference.
+pub mod synthetic {
+    use crate::study::records::Record;
+    use std::fmt::Write;
+    use std::path::Path;
+
+    /// Writes `r` as an instrumented train records it (the recording format): its speed
+    /// `scale` times the true one, its `distance` column starting at `offset` and growing
+    /// `scale` times the true distance. The true position of odometry `s` is then
+    /// `(s - offset) / scale`.
+    pub fn write_pass(r: &Record, offset: f64, scale: f64, path: &Path) -> std::io::Result<()> {
+        let mut t = String::from("time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y,distance\n");
+        for (k, (s, d)) in r.samples.iter().zip(&r.distance).enumerate() {
+            let _ = writeln!(
+                t,
+                "{},{},{},{},{},{}",
+                (k + 1) as f64 * 1e-3,
+                s.speed * scale,
+                s.ws_acc_y,
+                s.ws_yaw_rate,
+                s.frame_acc_y,
+                offset + scale * d
+            );
+        }
+        std::fs::write(path, t)
+    }
+
+    /// Writes the true alignment of `r` every 0.25 m as a reference (`distance,alignment`),
+    /// without the rows inside `gap` (to test the check).
+    pub fn write_reference(
+        r: &Record,
+        gap: Option<(f64, f64)>,
+        path: &Path,
+    ) -> std::io::Result<()> {
+        let mut t = String::from("distance,alignment\n");
+        let mut next = 0.0;
+        for (d, a) in r.distance.iter().zip(&r.alignment) {
+            if *d >= next {
+                if !gap.is_some_and(|(lo, hi)| *d > lo && *d < hi) {
+                    let _ = writeln!(t, "{d},{a}");
+                }
+                next += 0.25;
+            }
+        }
+        std::fs::write(path, t)
+    }
+}
