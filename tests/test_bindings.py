@@ -213,3 +213,51 @@ def test_bad_input_raises_with_the_librarys_message(call, message):
     with pytest.raises(ValueError) as e:
         call(z)
     assert message in str(e.value)
+
+
+def _write_recording(path, out, offset: float, scale: float) -> None:
+    """A vehicle run as an instrumented train records it: speed and distance `scale` times the
+    true ones, the distance from `offset` (the recording format of docs/python.md)."""
+    n = len(out["time"]) - 1
+    cols = {
+        "time": (np.arange(n) + 1) * H,
+        "speed": out["forward_speed"][1:] * scale,
+        **{s: out[s][1:] for s in SENSORS},
+        "distance": offset + scale * out["distance"][1:],
+    }
+    np.savetxt(path, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="")
+
+
+def test_fit_from_recordings_is_the_command_lines(tmp_path):
+    """track_alignment.fit runs `alignment-studies fit` with its parser and checks: a pass
+    placed on the reference (its odometry errors recovered), a bank written; bad input raises
+    ValueError naming the file, and leaves nothing at `out`."""
+    run = track_alignment.simulate(
+        packaged_fmus()["RailVehicle"], 100.0, step=H, parameters={"track_seed": 101},
+        variables=[*SENSORS, "forward_speed", "distance", "alignment"],
+    )
+    keep = np.searchsorted(run["distance"], np.arange(0.0, run["distance"][-1], 0.25))
+    np.savetxt(tmp_path / "reference.csv", np.column_stack([run["distance"][keep], run["alignment"][keep]]),
+               delimiter=",", header="distance,alignment", comments="")
+    _write_recording(tmp_path / "pass.csv", run, offset=11.0, scale=1.004)
+    report = track_alignment.fit(tmp_path / "fitted", recordings=[tmp_path / "pass.csv"],
+                                 reference=tmp_path / "reference.csv")
+    row = next(line for line in report.splitlines() if line.startswith("| ") and "pass.csv" in line)
+    offset, scale = (float(c) for c in row.split("|")[2:4])
+    # Recorded odometry = 11 + 1.004 x true position: true = (odometry - 11) / 1.004.
+    assert abs(offset - (-11.0 / 1.004)) < 0.5, row
+    assert abs(scale - (1 / 1.004 - 1) * 100) < 0.02, row
+    assert sorted(p.name for p in (tmp_path / "fitted").iterdir()) == ["learned.taps", "report.md"]
+    assert (tmp_path / "fitted" / "report.md").read_text() == report
+
+    # A reference with a gap: named, with its line; nothing written.
+    lines = (tmp_path / "reference.csv").read_text().splitlines()
+    (tmp_path / "gap.csv").write_text("\n".join(lines[:2000] + lines[2100:]) + "\n")
+    with pytest.raises(ValueError) as e:
+        track_alignment.fit(tmp_path / "gap-out", recordings=[tmp_path / "pass.csv"], reference=tmp_path / "gap.csv")
+    assert "gap.csv" in str(e.value) and "gap of" in str(e.value), e.value
+    assert not (tmp_path / "gap-out").exists()
+    # An option the command refuses, by the command's own parser.
+    with pytest.raises(ValueError) as e:
+        track_alignment.fit(tmp_path / "x", recordings=[tmp_path / "pass.csv"])
+    assert "--reference" in str(e.value), e.value

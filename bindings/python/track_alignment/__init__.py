@@ -8,7 +8,9 @@ co-simulation master), called over numpy arrays without copying them:
 - :func:`parameters`: the estimator's parameters, their types and defaults;
 - :func:`band_metrics` and :func:`bandpass`: the EN 13848 band metrics of the studies, and
   :data:`BANDS`, their wavelength edges;
-- :func:`simulate`: one FMU (the RailVehicle FMU) run by the master, returned as arrays.
+- :func:`simulate`: one FMU (the RailVehicle FMU) run by the master, returned as arrays;
+- :func:`fit`: ``alignment-studies fit``, the estimator fitted to a vehicle FMU or to
+  recordings against a reference, into a new directory.
 
 Bad input raises ``ValueError`` with the library's message; a failed run ``RuntimeError``.
 The fleet pipeline on Dask is :mod:`track_alignment.fleet`.
@@ -21,11 +23,12 @@ from ._native import (
     band_metrics,
     bandpass,
     estimate,
+    fit,
     parameters,
     simulate,
 )
 
 __all__ = [
-    "BANDS", "EstimatorState", "__version__", "band_metrics", "bandpass", "estimate", "parameters",
+    "BANDS", "EstimatorState", "__version__", "band_metrics", "bandpass", "estimate", "fit", "parameters",
     "simulate",
 ]

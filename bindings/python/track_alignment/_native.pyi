@@ -81,3 +81,30 @@ def simulate(
 ) -> dict[str, npt.NDArray[np.float64]]:
     """One FMU run by the co-simulation master from 0 to ``stop_time``: ``{"time", variable...}``
     for ``variables`` (default: every output)."""
+
+def fit(
+    out: str | PathLike[str],
+    *,
+    vehicle: str | PathLike[str] | None = None,
+    estimator: str | PathLike[str] | None = None,
+    vehicle_settings: Mapping[str, Setting] | None = None,
+    recordings: Sequence[str | PathLike[str]] | None = None,
+    reference: str | PathLike[str] | None = None,
+    speeds: Sequence[float] | None = None,
+    kalker_scales: Sequence[float] | None = None,
+    conicities: Sequence[float] | None = None,
+    lags: Sequence[float] | None = None,
+    roll_rate: bool = True,
+    seed: int | None = None,
+    validation_seeds: Sequence[int] | None = None,
+    evaluation_seeds: Sequence[int] | None = None,
+    validation_share: float | None = None,
+    calibration: str | PathLike[str] | None = None,
+) -> str:
+    """``alignment-studies fit`` (docs/studies.md): the estimator fitted to the vehicle FMU
+    ``vehicle`` (with ``vehicle_settings``, its parameters), or to ``recordings`` of an
+    instrumented train against the line's ``reference`` alignment, written into the new
+    directory ``out`` (``learned.taps``, ``report.md``; from the FMU also ``calibration.toml``
+    and ``model_adjustment.svg``). The options are the command's, checked by its parser; bad
+    input raises ``ValueError`` naming the file or option, and leaves nothing at ``out``.
+    Returns the report (Markdown)."""

@@ -36,6 +36,9 @@ const PLACE_GRID: f64 = 0.25;
 const PLACE_SKIP: f64 = 100.0;
 /// A reference step this many times its median is a gap.
 pub const GAP_FACTOR: f64 = 5.0;
+/// The fewest samples a training or validation part of a pass has (20 s at 1 ms, the standard
+/// case's length; a shorter piece is left out).
+const MIN_PART: usize = 20_000;
 /// The bank speeds a pass is assigned to are multiples of this \[m/s\].
 pub const SPEED_GRID: f64 = 2.5;
 
@@ -329,8 +332,11 @@ pub fn fit(
         let split = (0..p.samples.len())
             .find(|k| position(*k) >= cut)
             .unwrap_or(p.samples.len());
+        // Each part keeps the samples the reference covers.
         let part = |from: usize, to: usize| -> Option<Record> {
-            if to <= from + 1 {
+            let from = (from..to).find(|k| position(*k) >= r0)?;
+            let to = (from..to).rev().find(|k| position(*k) <= r_end)? + 1;
+            if to < from + MIN_PART {
                 return None;
             }
             let base = if from == 0 {
@@ -339,8 +345,7 @@ pub fn fit(
                 out.distance[from - 1]
             };
             let positions: Vec<f64> = (from..to).map(position).collect();
-            let inside = positions[0] >= r0 && positions[positions.len() - 1] <= r_end;
-            inside.then(|| Record {
+            Some(Record {
                 samples: p.samples[from..to].to_vec(),
                 distance: out.distance[from..to].iter().map(|d| d - base).collect(),
                 alignment: resample(&reference.distance, &reference.alignment, &positions),
