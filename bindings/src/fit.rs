@@ -94,9 +94,10 @@ pub fn fit(
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let args =
         FitArgs::from_arg_matches(&matches).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    py.detach(|| execute(&args, &|_| {}))
-        .map_err(|e| match e.exit_code() {
-            2 => PyValueError::new_err(e.to_string()),
-            _ => PyRuntimeError::new_err(e.to_string()),
+    // The error as its exit code and message: a small value to carry out of the GIL-free part.
+    py.detach(|| execute(&args, &|_| {}).map_err(|e| (e.exit_code(), e.to_string())))
+        .map_err(|(code, message)| match code {
+            2 => PyValueError::new_err(message),
+            _ => PyRuntimeError::new_err(message),
         })
 }

@@ -1,3 +1,4 @@
+#![allow(clippy::result_large_err)]
 //! Synthetic recordings for `alignment-studies fit --recordings`: passes of the vehicle FMU
 //! over one line (track seed 101) at mixed speeds, each with a start offset and a distance
 //! scale error of its own, and the line's reference alignment.

@@ -12,7 +12,6 @@ use alignment_studies::study::records::{Record, record};
 use alignment_studies::study::runs::{Fmus, seeded};
 use fmu_estimator::learned::bank::Bank;
 use orchestrator::system::Value;
-use std::path::Path;
 use std::process::Command;
 
 fn fmus() -> Fmus {
