@@ -29,6 +29,17 @@ pub struct Csv {
 }
 
 impl Csv {
+    /// Data row `k` (0-based) as a user finds it: `line N` of a CSV file (its own line number,
+    /// blank and comment lines counted), `row N` of a Parquet file (read with header line 0).
+    pub fn place(&self, k: usize) -> String {
+        let n = self.lines.get(k).copied().unwrap_or(k + 1);
+        if self.header_line == 0 {
+            format!("row {n}")
+        } else {
+            format!("line {n}")
+        }
+    }
+
     /// Reads `path` (a regular file of at most [`crate::input::CSV_LIMIT`] bytes); errors name
     /// the file, and the line and column where the content is wrong.
     pub fn read(path: &Path) -> Result<Csv, String> {
@@ -229,6 +240,8 @@ mod tests {
         assert_eq!(c.columns[1], [1.5, 2.0]);
         assert!(c.columns[2][0].is_nan() && c.columns[2][1] == 1.0);
         assert_eq!(c.lines, [4, 5]);
+        // A row is named by the file's own line, the comment and blank lines counted.
+        assert_eq!(c.place(0), "line 4");
         assert_eq!(c.column(&["ws_acc_y"]).unwrap(), [1.5, 2.0]);
         assert_eq!(c.find("time").unwrap(), Some(0));
         assert_eq!(c.find("nope").unwrap(), None);

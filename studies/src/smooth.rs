@@ -95,16 +95,7 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
     if time.len() < 2 {
         return Err(RecordingError::FewRows { file: file() });
     }
-    // Row k's place as the user finds it: the file's own line (the reader skips blank and
-    // comment lines but keeps their numbers), or the row of a Parquet file (header line 0).
-    let place = |k: usize| {
-        let n = cols.lines.get(k).copied().unwrap_or(k + 1);
-        if cols.header_line == 0 {
-            format!("row {n}")
-        } else {
-            format!("line {n}")
-        }
-    };
+    let place = |k: usize| cols.place(k);
     if let Some(k) = time.iter().position(|t| !t.is_finite()) {
         return Err(RecordingError::TimeNotFinite {
             file: file(),

@@ -63,14 +63,7 @@ pub fn read_reference(path: &Path) -> Result<Reference, Error> {
             .map_err(|m| Error::Input(format!("reference {}: {m}", path.display())))
     };
     let (distance, alignment) = (col("distance")?, col("alignment")?);
-    let place = |k: usize| {
-        let n = cols.lines.get(k).copied().unwrap_or(k + 1);
-        if cols.header_line == 0 {
-            format!("row {n}")
-        } else {
-            format!("line {n}")
-        }
-    };
+    let place = |k: usize| cols.place(k);
     if distance.len() < 2 {
         return Err(Error::Input(format!(
             "reference {}: fewer than 2 rows",
