@@ -244,10 +244,10 @@ def test_fit_from_recordings_is_the_command_lines(tmp_path):
                                  reference=tmp_path / "reference.csv")
     row = next(line for line in report.splitlines() if line.startswith("| ") and "pass.csv" in line)
     offset, scale = (float(c) for c in row.split("|")[2:4])
-    # Recorded odometry = 11 + 1.004 x true position: true = (odometry - 11) / 1.004.
-    assert abs(offset - (-11.0 / 1.004)) < 0.5, row
+    # Recorded odometry = 11 + 1.004 x true position: true = start - 11 + (odometry - start) / 1.004.
+    assert abs(offset - (-11.0)) < 0.5, row
     assert abs(scale - (1 / 1.004 - 1) * 100) < 0.02, row
-    assert sorted(p.name for p in (tmp_path / "fitted").iterdir()) == ["learned.taps", "report.md"]
+    assert sorted(p.name for p in (tmp_path / "fitted").iterdir()) == ["fitted.taps", "report.md"]
     assert (tmp_path / "fitted" / "report.md").read_text() == report
 
     # A reference with a gap: named, with its line; nothing written.

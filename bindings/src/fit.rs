@@ -53,11 +53,16 @@ pub fn fit(
     validation_share: Option<f64>,
     calibration: Option<PathBuf>,
 ) -> PyResult<String> {
-    let mut argv: Vec<OsString> = vec!["fit".into(), "--quiet".into(), "--out".into(), out.into()];
+    // `--name=value`: a path that starts with '-' stays a value.
+    let with = |name: &str, p: PathBuf| -> OsString {
+        let mut a = OsString::from(format!("--{name}="));
+        a.push(p.as_os_str());
+        a
+    };
+    let mut argv: Vec<OsString> = vec!["fit".into(), "--quiet".into(), with("out", out)];
     let mut path = |name: &str, p: Option<PathBuf>| {
         if let Some(p) = p {
-            argv.push(format!("--{name}").into());
-            argv.push(p.into());
+            argv.push(with(name, p));
         }
     };
     path("vehicle", vehicle);
@@ -68,9 +73,8 @@ pub fn fit(
         argv.push("--set".into());
         argv.push(format!("vehicle.{name}={text}").into());
     }
-    if let Some(r) = recordings {
-        argv.push("--recordings".into());
-        argv.extend(r.into_iter().map(OsString::from));
+    for r in recordings.unwrap_or_default() {
+        argv.push(with("recordings", r));
     }
     list(&mut argv, "speeds", speeds);
     list(&mut argv, "kalker-scales", kalker_scales);

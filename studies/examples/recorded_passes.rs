@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let file = dir.join(format!("pass{i}.csv"));
         write_pass(&run(*speed, 6000 + i as i32, 0.0)?, *offset, *scale, &file)?;
         println!(
-            "{}: {speed} m/s, true position = (odometry - {offset}) / {scale}",
+            "{}: {speed} m/s, true position = recorded start - {offset} + (odometry from the start) / {scale}",
             file.display()
         );
     }

@@ -59,8 +59,8 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         out.as_os_str(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    // The placements: reference position = offset + scale x odometry, and the recorded
-    // odometry is offset + scale x the true position.
+    // The placements: reference position = recorded start + offset + scale x odometry from
+    // the start, and the recorded odometry is offset + scale x the true position.
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     for (i, (offset, scale)) in odometry.iter().enumerate() {
         let row = report
@@ -71,8 +71,8 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         let (found_offset, found_scale): (f64, f64) =
             (cells[2].parse().unwrap(), cells[3].parse().unwrap());
         // Recorded start `offset` at true 0, recorded steps `scale` times the true: the true
-        // position of odometry s is (s - offset) / scale.
-        let want_offset = -offset / scale;
+        // position is the recorded start - offset + (odometry from the start) / scale.
+        let want_offset = -offset;
         let want_scale = (1.0 / scale - 1.0) * 100.0;
         assert!(
             (found_offset - want_offset).abs() < 0.5,
@@ -83,8 +83,20 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
             "{row}: scale {want_scale} %"
         );
     }
-    let bank = Bank::load(&out.join("learned.taps")).unwrap();
-    assert!(bank.entries.iter().all(|e| e.speed == 20.0));
+    let bank = Bank::load(&out.join("fitted.taps")).unwrap();
+    // Passes at 20 m/s: the 20 m/s taps, held over 18.75-21.25 m/s (no neighbouring speed).
+    let mut speeds: Vec<f64> = bank.entries.iter().map(|e| e.speed).collect();
+    speeds.dedup();
+    assert_eq!(speeds, [18.75, 20.0, 21.25]);
+    let taps = |v: f64| -> Vec<Vec<f64>> {
+        bank.entries
+            .iter()
+            .filter(|e| e.speed == v)
+            .map(|e| e.windows.last().unwrap().taps.clone())
+            .collect()
+    };
+    assert_eq!(taps(18.75), taps(20.0));
+    assert_eq!(taps(21.25), taps(20.0));
 
     // The bank on a held-out track, against the paper's filter.
     let fmus = fmus();
@@ -94,7 +106,7 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         estimator,
         paper: None,
     };
-    let tap_file = Value::String(out.join("learned.taps").to_string_lossy().into_owned());
+    let tap_file = Value::String(out.join("fitted.taps").to_string_lossy().into_owned());
     let learned = run_seed(
         &fmus,
         &case(vec![

@@ -104,7 +104,7 @@ def fit(
     """``alignment-studies fit`` (docs/studies.md): the estimator fitted to the vehicle FMU
     ``vehicle`` (with ``vehicle_settings``, its parameters), or to ``recordings`` of an
     instrumented train against the line's ``reference`` alignment, written into the new
-    directory ``out`` (``learned.taps``, ``report.md``; from the FMU also ``calibration.toml``
+    directory ``out`` (``fitted.taps``, ``report.md``; from the FMU also ``fitted-calibration.toml``
     and ``model_adjustment.svg``). The options are the command's, checked by its parser; bad
     input raises ``ValueError`` naming the file or option, and leaves nothing at ``out``.
     Returns the report (Markdown)."""

@@ -19,7 +19,7 @@ pub struct FitArgs {
     /// vehicle.vehicle=manchester.toml) and the estimator FMU.
     #[command(flatten)]
     pub fmus: StudyFmus,
-    /// The directory to write: calibration.toml, learned.taps, model_adjustment.svg,
+    /// The directory to write: fitted-calibration.toml, fitted.taps, model_adjustment.svg,
     /// report.md. It must not exist, or be empty.
     #[arg(long)]
     pub out: PathBuf,
@@ -94,6 +94,12 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
         )));
     }
     check_out(&a.out)?;
+    let window = crate::study::learned::taps::BANK_WINDOW;
+    if let Some(l) = a.lags.iter().find(|l| !(**l > 0.0 && **l <= window)) {
+        return Err(Error::Input(format!(
+            "--lags {l}: a lag must lie in (0, {window}] m (the causal taps are always fitted)"
+        )));
+    }
     if !a.recordings.is_empty() {
         return from_recordings(a, log);
     }
@@ -116,7 +122,7 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     taps.roll_rate = !a.no_roll_rate && interface.roll_rate;
     taps.training_seed = a.seed;
     taps.validation_seeds = a.validation_seeds.clone();
-    taps.command = std::env::args().collect::<Vec<_>>().join(" ");
+    taps.command = command_line();
     if !interface.kalker_scale && taps.kalker_scales != [1.0] {
         return Err(Error::input(format!(
             "{}: the vehicle FMU has no parameter kalker_scale, so only its own contact can be fitted: give --kalker-scales 1",
@@ -164,7 +170,7 @@ fn from_recordings(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     taps.roll_rate = false;
     taps.lags = a.lags.clone();
     taps.calibration = a.calibration.clone();
-    taps.command = std::env::args().collect::<Vec<_>>().join(" ");
+    taps.command = command_line();
     if let Some(c) = &a.calibration {
         fmu_estimator::calibration::load(c)
             .map_err(|e| Error::Input(format!("--calibration {}: {e}", c.display())))?;
@@ -216,11 +222,25 @@ fn staged(
             ))
         })?;
     let md = work(staging.path())?;
+    // From here on the fit is complete: a failure keeps it where it is and says so.
+    let keep = |staging: tempfile::TempDir, why: String| {
+        let kept = staging.keep();
+        Error::Io(format!(
+            "the fit is complete in {} but {why}",
+            kept.display()
+        ))
+    };
     // Checked again: the directory may have appeared during the fit.
-    check_out(out)?;
-    if out.exists() {
-        std::fs::remove_dir(out)
-            .map_err(|e| Error::Io(format!("cannot replace the empty {}: {e}", out.display())))?;
+    if let Err(e) = check_out(out) {
+        return Err(keep(staging, e.to_string()));
+    }
+    if out.exists()
+        && let Err(e) = std::fs::remove_dir(out)
+    {
+        return Err(keep(
+            staging,
+            format!("the empty {} cannot be replaced: {e}", out.display()),
+        ));
     }
     let written: Vec<String> = std::fs::read_dir(staging.path())
         .map(|d| {
@@ -280,4 +300,12 @@ fn bar(quiet: bool) -> indicatif::ProgressBar {
     );
     bar.enable_steady_tick(std::time::Duration::from_secs(1));
     bar
+}
+
+/// The command line, for the report and the bank's provenance (not UTF-8 parts replaced).
+fn command_line() -> String {
+    std::env::args_os()
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect::<Vec<_>>()
+        .join(" ")
 }

@@ -155,7 +155,8 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
     }
     // The family's vehicle files live until the fit ends.
-    let family_dir = tempfile::tempdir().map_err(|e| Error::input(e.to_string()))?;
+    let family_dir = tempfile::tempdir()
+        .map_err(|e| Error::Io(format!("a temporary directory for the family: {e}")))?;
     if a.vehicle_family > 0 {
         let base = a.fmus.fmus().vehicle_params()?;
         let mut members = vec![base.clone()];

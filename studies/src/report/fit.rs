@@ -1,7 +1,7 @@
 //! `alignment-studies fit`: everything the estimator FMU needs for one vehicle, fitted from its
 //! FMU into one directory: the simplified model's identification and Q/R calibration
-//! (`calibration.toml`, with the identification's figure), the tap bank fitted with that
-//! calibration's Kalman channel (`learned.taps`), and `report.md` with the validation figures
+//! (`fitted-calibration.toml`, with the identification's figure), the tap bank fitted with that
+//! calibration's Kalman channel (`fitted.taps`), and `report.md` with the validation figures
 //! per condition, the bank's envelope and the standard case on held-out seeds.
 //!
 //! The files are written into `dir` as they are made; the caller stages `dir` and moves it into
@@ -17,9 +17,9 @@ use orchestrator::system::Value;
 use std::path::Path;
 
 /// The calibration file in the directory.
-pub const CALIBRATION: &str = "calibration.toml";
+pub const CALIBRATION: &str = "fitted-calibration.toml";
 /// The tap bank in the directory.
-pub const TAPS: &str = "learned.taps";
+pub const TAPS: &str = "fitted.taps";
 /// The report in the directory.
 pub const REPORT: &str = "report.md";
 /// Every file a fit writes.
@@ -357,7 +357,7 @@ pub fn from_recordings(
             .map(|c| format!(" --set estimator.calibration_file={}", c.display()))
             .unwrap_or_default()
     ));
-    md.push_str("\n## Passes\n\nReference position = offset + scale x odometry (the pass's integrated speed from its first `distance`), found by correlating the shipped default's estimate with the reference (3-200 m).\n\n| pass | offset (m) | scale - 1 (%) | correlation | mean speed (m/s) | trains (m/s) |\n|---|---|---|---|---|---|\n");
+    md.push_str("\n## Passes\n\nReference position = the pass's first `distance` + offset + scale x odometry (the pass's integrated speed from its first sample), found by correlating the shipped default's estimate with the reference (3-200 m).\n\n| pass | offset (m) | scale - 1 (%) | correlation | mean speed (m/s) | trains (m/s) |\n|---|---|---|---|---|---|\n");
     for (file, at, v, bank) in &fitted.passes {
         md.push_str(&format!(
             "| {} | {:+.2} | {:+.3} | {:.3} | {v:.1} | {bank} |\n",

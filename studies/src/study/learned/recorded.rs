@@ -5,9 +5,9 @@
 //! | step | how |
 //! |---|---|
 //! | odometry | each pass's distance is the rectangle rule of its `speed` (as the estimator integrates it), from its first `distance` value when it has that column |
-//! | placement | the reference position of odometry `s` is `offset + scale * s`: found by the correlation of the shipped default's estimate with the reference in the whole band (3-200 m, zero phase), over offsets within [`SEARCH_OFFSET`] and scales within [`SEARCH_SCALE`], then refined (parabola through the best offset's neighbours; scales in steps of [`FINE_SCALE_STEP`]) |
+//! | placement | the reference position of a sample `d` metres of odometry after the pass's start `s0` is `s0 + offset + scale * d`: found by the correlation of the shipped default's estimate with the reference in the whole band (3-200 m, zero phase), over offsets within [`SEARCH_OFFSET`] and scales within [`SEARCH_SCALE`], then refined (parabola through the best offset's neighbours; scales in steps of [`FINE_SCALE_STEP`]) |
 //! | split | by reference position: the last `validation_share` of the line validates (ridge, band weights, the report's figures), the rest trains; each pass is cut there |
-//! | speeds | each pass trains the bank speed (a multiple of 2.5 m/s) nearest its mean speed; its cells are rescaled from their own speed to it as the runtime rescales its history |
+//! | speeds | each pass trains the bank speed (a multiple of 2.5 m/s) nearest its mean speed; its cells are rescaled from their own speed (at least the bank's lowest) to it as the runtime rescales its history; a speed's taps hold over +-1.25 m/s where no neighbouring speed is fitted |
 //! | taps | [`super::taps::fit_recorded`]: one condition (the recordings' own), three sensors, causal and fixed-lag, on the Kalman channel of the given calibration |
 
 use super::taps::{GridRun, Options, channel, fit_recorded, recorded_run};
@@ -138,7 +138,8 @@ pub fn read_pass(path: &Path) -> Result<Pass, Error> {
     })
 }
 
-/// Where a pass lies on the reference: reference position = `offset + scale * odometry`.
+/// Where a pass lies on the reference: the reference position of a sample `d` metres of
+/// odometry after the pass's recorded start `s0` is `s0 + offset + scale * d`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Placement {
     /// \[m\].
@@ -177,9 +178,10 @@ fn correlation(s: &[f64], e: &[f64], r0: f64, r: &[f64], offset: f64, scale: f64
     cov / (ve * vr).sqrt()
 }
 
-/// Places a pass whose estimate is `estimate` at odometry `odometry` (from its start) on the
-/// reference.
+/// Places a pass whose estimate is `estimate` at odometry `odometry` (metres from its first
+/// sample) and whose recorded start is `start` on the reference.
 pub fn place(
+    start: f64,
     odometry: &[f64],
     estimate: &[f64],
     reference: &Reference,
@@ -198,10 +200,14 @@ pub fn place(
     let s: Vec<f64> = (0..n).map(|i| PLACE_SKIP + i as f64 * PLACE_GRID).collect();
     let e = bandpass(&resample(odometry, estimate, &s), PLACE_GRID, band)
         .map_err(|m| Error::Input(format!("{}: {m}", file.display())))?;
-    let r0 = reference.distance[0];
-    let rn =
-        ((reference.distance[reference.distance.len() - 1] - r0) / PLACE_GRID).floor() as usize;
-    let grid: Vec<f64> = (0..rn).map(|i| r0 + i as f64 * PLACE_GRID).collect();
+    // The reference in the pass's own coordinates: position minus the recorded start.
+    let r0 = reference.distance[0] - start;
+    let rn = ((reference.distance[reference.distance.len() - 1] - reference.distance[0])
+        / PLACE_GRID)
+        .floor() as usize;
+    let grid: Vec<f64> = (0..rn)
+        .map(|i| reference.distance[0] + i as f64 * PLACE_GRID)
+        .collect();
     let r = bandpass(
         &resample(&reference.distance, &reference.alignment, &grid),
         PLACE_GRID,
@@ -242,7 +248,8 @@ pub fn place(
     let vertex = |x: f64, h: f64, f: &dyn Fn(f64) -> f64| -> f64 {
         let (m, z, p) = (f(x - h), f(x), f(x + h));
         let curvature = m - 2.0 * z + p;
-        if curvature < 0.0 {
+        // A neighbour off the reference (no correlation there) leaves the point as it is.
+        if curvature.is_finite() && curvature < 0.0 {
             x + (0.5 * (m - p) / curvature).clamp(-1.0, 1.0) * h
         } else {
             x
@@ -299,7 +306,8 @@ pub fn fit(
     let r0 = reference.distance[0];
     let cut = r_end - validation_share * (r_end - r0);
     let mut placed = vec![];
-    let mut runs: Vec<(f64, Vec<GridRun>, Vec<GridRun>)> = vec![];
+    // Per bank speed, the training and validation parts.
+    let mut parts: Vec<(f64, Vec<Record>, Vec<Record>)> = vec![];
     for p in passes {
         // The shipped default's estimate, to place the pass.
         let learned = offline::learned(&defaults, &default_config)?;
@@ -308,8 +316,8 @@ pub fn fit(
             Some(l) => l.iter().map(|e| e.alignment).collect(),
             None => out.filtered.iter().map(|k| k.0).collect(),
         };
-        let odometry: Vec<f64> = out.distance.iter().map(|d| p.start + d).collect();
-        let at = place(&odometry, &estimate, reference, &p.file)?;
+        let odometry = &out.distance;
+        let at = place(p.start, odometry, &estimate, reference, &p.file)?;
         let mean_speed = out.distance[out.distance.len() - 1] / (p.samples.len() as f64 * STEP);
         let speed = (mean_speed / SPEED_GRID).round().max(1.0) * SPEED_GRID;
         progress(&format!(
@@ -321,7 +329,7 @@ pub fn fit(
         ));
         // The pass cut at the validation's start, each part a record with the reference as
         // its target.
-        let position = |k: usize| at.offset + at.scale * odometry[k];
+        let position = |k: usize| p.start + at.offset + at.scale * odometry[k];
         let split = (0..p.samples.len())
             .find(|k| position(*k) >= cut)
             .unwrap_or(p.samples.len());
@@ -344,21 +352,29 @@ pub fn fit(
                 alignment: resample(&reference.distance, &reference.alignment, &positions),
             })
         };
-        let slot = match runs.iter().position(|r| r.0 == speed) {
+        let slot = match parts.iter().position(|r| r.0 == speed) {
             Some(i) => i,
             None => {
-                runs.push((speed, vec![], vec![]));
-                runs.len() - 1
+                parts.push((speed, vec![], vec![]));
+                parts.len() - 1
             }
         };
-        if let Some(r) = part(0, split) {
-            runs[slot].1.push(recorded_run(&r, &config, speed)?);
-        }
-        if let Some(r) = part(split, p.samples.len()) {
-            runs[slot].2.push(recorded_run(&r, &config, speed)?);
-        }
+        parts[slot].1.extend(part(0, split));
+        parts[slot].2.extend(part(split, p.samples.len()));
         placed.push((p.file.clone(), at, mean_speed, speed));
     }
+    // The runtime takes a cell's speed as at least the bank's lowest: so does the fit.
+    let floor = parts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let grid = |records: &[Record], speed: f64| -> Result<Vec<GridRun>, Error> {
+        records
+            .iter()
+            .map(|r| recorded_run(r, &config, speed, floor))
+            .collect()
+    };
+    let mut runs: Vec<(f64, Vec<GridRun>, Vec<GridRun>)> = parts
+        .iter()
+        .map(|(v, t, w)| Ok((*v, grid(t, *v)?, grid(w, *v)?)))
+        .collect::<Result<_, Error>>()?;
     runs.sort_by(|a, b| a.0.total_cmp(&b.0));
     for (speed, train, valid) in &runs {
         if train.is_empty() || valid.is_empty() {
@@ -372,7 +388,7 @@ pub fn fit(
             )));
         }
     }
-    let bank = fit_recorded(fmus, o, &runs, progress)?;
+    let bank = fit_recorded(fmus, o, &runs, SPEED_GRID / 2.0, progress)?;
     Ok(Fitted {
         bank,
         passes: placed,

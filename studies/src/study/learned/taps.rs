@@ -319,7 +319,11 @@ fn run(
     if let Some(v) = vehicle {
         settings.push(("vehicle".into(), Value::String(v.into())));
     }
-    settings.push(("kalker_scale".into(), Value::Real(condition.kalker)));
+    // The nominal contact is the vehicle's own: a vehicle FMU without `kalker_scale` can be
+    // fitted at it.
+    if condition.kalker != 1.0 {
+        settings.push(("kalker_scale".into(), Value::Real(condition.kalker)));
+    }
     if let Some(c) = condition.conicity {
         settings.push(("conicity".into(), Value::Real(c)));
     }
@@ -353,10 +357,11 @@ fn on_grid(rec: &Record, config: &Config) -> Result<GridRun, Error> {
     on_grid_at(rec, config, None)
 }
 
-/// [`on_grid`], each cell rescaled from the speed of the sample that closed it to `speed` as
-/// the runtime's history rescales it ([`TAP_SPEED_POWER`]): a recorded pass whose speed
-/// varies, or differs from the bank speed it trains, gives cells as at that bank speed.
-fn on_grid_at(rec: &Record, config: &Config, speed: Option<f64>) -> Result<GridRun, Error> {
+/// [`on_grid`], each cell rescaled from the speed of the sample that closed it (at least
+/// `floor`, the bank's lowest speed, where the runtime clamps it too) to the bank speed `v` of
+/// `speed = (v, floor)` as the runtime's history rescales it ([`TAP_SPEED_POWER`]): a recorded
+/// pass whose speed varies, or differs from the bank speed it trains, gives cells as at `v`.
+fn on_grid_at(rec: &Record, config: &Config, speed: Option<(f64, f64)>) -> Result<GridRun, Error> {
     let out = offline::process(config, STEP, &rec.samples, false)?;
     let x: Vec<[f64; 5]> = rec
         .samples
@@ -365,9 +370,9 @@ fn on_grid_at(rec: &Record, config: &Config, speed: Option<f64>) -> Result<GridR
         .map(|(s, k)| fmu_estimator::learned::channels(s, k.0))
         .collect();
     let mut cells = decimate(&out.distance, &x, BANK_GRID, KALMAN_HIGHPASS);
-    if let Some(v) = speed {
+    if let Some((v, floor)) = speed {
         for (cell, k) in cells.cells.iter_mut().zip(&cells.closed_by) {
-            let own = rec.samples[*k].speed.max(MIN_RECORDED_SPEED);
+            let own = rec.samples[*k].speed.max(floor);
             for (x, p) in cell.iter_mut().zip(TAP_SPEED_POWER) {
                 *x *= (v / own).powf(p);
             }
@@ -877,14 +882,16 @@ fn fit_speed(
     Ok((entries, model))
 }
 
-/// The slowest speed a recorded cell is rescaled from \[m/s\]: a train standing in a recording
-/// would otherwise blow its cells up.
-const MIN_RECORDED_SPEED: f64 = 1.0;
-
 /// A recorded pass (its samples, odometry distance, and the reference alignment at the
-/// pass's positions) on the grid at bank speed `speed`, for a fit from recordings.
-pub fn recorded_run(rec: &Record, config: &Config, speed: f64) -> Result<GridRun, Error> {
-    on_grid_at(rec, config, Some(speed))
+/// pass's positions) on the grid at bank speed `speed`, its cells' own speeds taken at least
+/// `floor` (the bank's lowest speed), for a fit from recordings.
+pub fn recorded_run(
+    rec: &Record,
+    config: &Config,
+    speed: f64,
+    floor: f64,
+) -> Result<GridRun, Error> {
+    on_grid_at(rec, config, Some((speed, floor)))
 }
 
 /// The Kalman channel the taps of `o` are fitted with ([`Options::calibration`]).
@@ -894,11 +901,13 @@ pub fn channel(o: &Options) -> Result<Config, Error> {
 
 /// A bank fitted from recorded passes: per bank speed, its training and validation runs
 /// ([`recorded_run`]); one condition (the recordings' own), three sensors, causal and
-/// `o.lags`. `fmus` names the provenance only.
+/// `o.lags`; each speed's taps held over `half_width` either side where no other speed is
+/// fitted ([`with_plateaus`]). `fmus` names the provenance only.
 pub fn fit_recorded(
     fmus: &Fmus,
     o: &Options,
     runs: &[(f64, Vec<GridRun>, Vec<GridRun>)],
+    half_width: f64,
     progress: &dyn Fn(&str),
 ) -> Result<Bank, Error> {
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
@@ -920,7 +929,35 @@ pub fn fit_recorded(
         };
         entries.extend(group.entries(&lags)?);
     }
-    assemble(fmus, o, entries, vec![])
+    assemble(fmus, o, with_plateaus(entries, half_width), vec![])
+}
+
+/// `entries` with each speed's taps also at `speed - half_width` and `speed + half_width`
+/// where no other fitted speed lies within `2 * half_width`: a speed fitted from passes
+/// between those edges then holds over them (the runtime uses a bank inside its outermost
+/// speeds only, so a one-speed bank would act at that exact speed alone). Sorted by speed.
+fn with_plateaus(entries: Vec<Entry>, half_width: f64) -> Vec<Entry> {
+    let mut speeds: Vec<f64> = entries.iter().map(|e| e.speed).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    let near = |v: f64, side: f64| {
+        speeds
+            .iter()
+            .any(|w| *w != v && (w - v) * side > 0.0 && (w - v).abs() <= 2.0 * half_width)
+    };
+    let mut out = entries.clone();
+    for e in &entries {
+        for side in [-1.0, 1.0] {
+            if !near(e.speed, side) {
+                out.push(Entry {
+                    speed: e.speed + side * half_width,
+                    ..e.clone()
+                });
+            }
+        }
+    }
+    out.sort_by(|a, b| a.speed.total_cmp(&b.speed));
+    out
 }
 
 /// Fits the bank (speeds one after the other, each speed's runs and solves in parallel).
