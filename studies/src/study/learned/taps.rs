@@ -902,7 +902,7 @@ pub fn channel(o: &Options) -> Result<Config, Error> {
 /// A bank fitted from recorded passes: per bank speed, its training and validation runs
 /// ([`recorded_run`]); one condition (the recordings' own), three sensors, causal and
 /// `o.lags`; each speed's taps held over `half_width` either side where no other speed is
-/// fitted ([`with_plateaus`]). `fmus` names the provenance only.
+/// fitted. `fmus` names the provenance only.
 pub fn fit_recorded(
     fmus: &Fmus,
     o: &Options,
