@@ -143,6 +143,22 @@ def test_a_calibration_file_that_is_not_a_regular_file_is_refused_naming_it(make
     assert_still_steps(s, 0.0)
 
 
+@pytest.mark.parametrize("name", ["tap_file", "calibration_file"])
+def test_a_missing_relative_file_is_named_in_both_places_looked_for(make_slave, name):
+    """A relative tap_file or calibration_file is looked for in the FMU's resources, then in the
+    working directory: when it is in neither, the error names both."""
+    import os
+
+    s = make_slave("missing-" + name)
+    assert s.initialize(strings={name: "no-such-dir/fitted.file"}) == ERROR
+    message = last_error(s)
+    assert "resources" in message and "no-such-dir/fitted.file" in message, message
+    assert os.path.join(os.getcwd(), "no-such-dir", "fitted.file") in message, message
+    s.fmu.reset()
+    assert s.initialize() == OK
+    assert_still_steps(s, 0.0)
+
+
 def test_a_negative_speed_is_an_error_naming_the_input(make_slave):
     """Issue 14: the model is for forward running; a negative speed is refused, not run."""
     s = initialized(make_slave, "reverse")

@@ -172,9 +172,17 @@ pub enum SettingError {
     Sigmas,
     /// A calibration file the user named does not exist (running on without it would give
     /// results for a calibration they did not ask for).
-    #[error("parameter 'calibration_file' = '{name}': {} does not exist", path.display())]
+    #[error("parameter 'calibration_file' = '{name}': {} does not exist{}", path.display(), nor_here(name))]
     CalibrationMissing {
         /// The `calibration_file` parameter as given.
+        name: String,
+        /// Where it was looked for (resolved against the resources directory).
+        path: PathBuf,
+    },
+    /// A `tap_file` the user named does not exist where it was looked for.
+    #[error("parameter 'tap_file' = '{name}': {} does not exist{}", path.display(), nor_here(name))]
+    TapFileMissing {
+        /// The `tap_file` parameter as given.
         name: String,
         /// Where it was looked for (resolved against the resources directory).
         path: PathBuf,
@@ -341,4 +349,13 @@ pub enum SampleError {
     /// The steady-state gain for the sample's speed could not be computed.
     #[error(transparent)]
     Gain(#[from] GainError),
+}
+
+/// For a relative file name, the second place it was looked for: the working directory.
+fn nor_here(name: &str) -> String {
+    let path = std::path::Path::new(name);
+    match std::path::absolute(path) {
+        Ok(here) if path.is_relative() => format!(", nor does {}", here.display()),
+        _ => String::new(),
+    }
 }

@@ -390,6 +390,9 @@ pub fn learned_from_values(
         .flatten();
     let bank = match (builtin, crate::config::user_file(&name, resources)) {
         (Some(bank), _) => bank.map_err(Error::Bank)?,
+        (None, Some(path)) if !path.exists() => {
+            return Err(SettingError::TapFileMissing { name, path }.into());
+        }
         (None, Some(path)) => Bank::load(&path).map_err(Error::Bank)?,
         (None, None) => return Err(SettingError::TapFileRelative { name }.into()),
     };
