@@ -97,6 +97,20 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
     };
     assert_eq!(taps(18.75), taps(20.0));
     assert_eq!(taps(21.25), taps(20.0));
+    // The provenance names the recordings, no seeds, and the training parts' length: 70 % of
+    // two 2.4 km passes, less what lies past the reference's end.
+    let prov = &bank.provenance;
+    assert!(
+        prov.vehicle.contains("pass0.csv") && prov.vehicle.contains("recordings"),
+        "{}",
+        prov.vehicle
+    );
+    assert!(prov.validation_seeds.is_empty());
+    assert!(
+        (2.0 * 1500.0..2.0 * 1900.0).contains(&prov.training_distance),
+        "{}",
+        prov.training_distance
+    );
 
     // The bank on a held-out track, against the paper's filter.
     let fmus = fmus();

@@ -388,7 +388,15 @@ pub fn fit(
             )));
         }
     }
-    let bank = fit_recorded(fmus, o, &runs, SPEED_GRID / 2.0, progress)?;
+    let files: Vec<String> = passes
+        .iter()
+        .map(|p| p.file.display().to_string())
+        .collect();
+    let source = format!(
+        "recordings of an instrumented train ({}), against a reference alignment; training before {cut:.0} m, validation after",
+        files.join(", ")
+    );
+    let bank = fit_recorded(fmus, o, &runs, (SPEED_GRID / 2.0, &source), progress)?;
     Ok(Fitted {
         bank,
         passes: placed,

@@ -902,12 +902,13 @@ pub fn channel(o: &Options) -> Result<Config, Error> {
 /// A bank fitted from recorded passes: per bank speed, its training and validation runs
 /// ([`recorded_run`]); one condition (the recordings' own), three sensors, causal and
 /// `o.lags`; each speed's taps held over `half_width` either side where no other speed is
-/// fitted. `fmus` names the provenance only.
+/// fitted. The provenance names `source` (the recordings) as what the taps were fitted on,
+/// no track seeds, and the training parts' total length.
 pub fn fit_recorded(
     fmus: &Fmus,
     o: &Options,
     runs: &[(f64, Vec<GridRun>, Vec<GridRun>)],
-    half_width: f64,
+    (half_width, source): (f64, &str),
     progress: &dyn Fn(&str),
 ) -> Result<Bank, Error> {
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
@@ -929,7 +930,18 @@ pub fn fit_recorded(
         };
         entries.extend(group.entries(&lags)?);
     }
-    assemble(fmus, o, with_plateaus(entries, half_width), vec![])
+    let mut bank = assemble(fmus, o, with_plateaus(entries, half_width), vec![])?;
+    // What the taps were fitted on: the recordings, not vehicle runs on seeded tracks.
+    let p = &mut bank.provenance;
+    p.vehicle = source.to_string();
+    p.training_seed = 0;
+    p.validation_seeds = vec![];
+    p.training_distance = runs
+        .iter()
+        .flat_map(|(_, train, _)| train)
+        .map(|r| r.position.last().copied().unwrap_or(0.0))
+        .sum();
+    Ok(bank)
 }
 
 /// `entries` with each speed's taps also at `speed - half_width` and `speed + half_width`
@@ -1108,7 +1120,10 @@ fn assemble(
                     o.conicities, o.roll_rate_conicities
                 )
             },
-            partner: "Kalman channel: the estimator FMU's filter with its default parameters and the shipped calibration (paper's random walk, time-varying gain), high-passed".into(),
+            partner: match &o.calibration {
+                None => "Kalman channel: the estimator FMU's filter with its default parameters and the shipped calibration (paper's random walk, time-varying gain), high-passed".into(),
+                Some(c) => format!("Kalman channel: the estimator FMU's filter with the parameters and Q and R of the calibration {} (paper's random walk, time-varying gain), high-passed", c.display()),
+            },
             ridges: RIDGES.to_vec(),
             command: o.command.clone(),
         },
