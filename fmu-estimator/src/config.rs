@@ -153,13 +153,13 @@ pub fn adopt_file_parameters(
     (out, adopted, differ)
 }
 
-/// The calibration file the values name, loaded, if they ask for one (`use_calibration_file`);
-/// what was found goes into `notes`.
+/// The calibration file the values name, loaded, with where it was, if they ask for one
+/// (`use_calibration_file`); what was found goes into `notes`.
 fn calibration_of(
     v: &Values,
     resources: Option<&Path>,
     notes: &mut Vec<Note>,
-) -> Result<Option<Calibration>, Error> {
+) -> Result<Option<(PathBuf, Calibration)>, Error> {
     if !v.boolean[vr::USE_CALIBRATION_FILE as usize] {
         return Ok(None);
     }
@@ -171,7 +171,7 @@ fn calibration_of(
                     path.display(),
                     c.status
                 )));
-                Ok(Some(c))
+                Ok(Some((path, c)))
             }
             None => {
                 notes.push(Note::Info(format!(
@@ -235,14 +235,12 @@ impl Config {
     /// The configuration from the FMI values; `resources` is the FMU's resources directory.
     pub fn from_values(v: &Values, resources: Option<&Path>) -> Result<(Config, Vec<Note>), Error> {
         let mut notes = Vec::new();
-        let calibrated = calibration_of(v, resources, &mut notes)?;
-        let adopted = calibrated.as_ref().map(|c| {
-            let what = calibration_path(v, resources)
-                .map(|p| p.display().to_string())
-                .unwrap_or_default();
-            with_file_parameters(v, c, &what, &mut notes)
-        });
+        let found = calibration_of(v, resources, &mut notes)?;
+        let adopted = found
+            .as_ref()
+            .map(|(path, c)| with_file_parameters(v, c, &path.display().to_string(), &mut notes));
         let v = adopted.as_ref().unwrap_or(v);
+        let calibrated = found.map(|(_, c)| c);
         let params = params_from(v);
         params.check()?;
         let r = |i: u32| v.real[i as usize];

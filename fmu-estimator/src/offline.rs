@@ -248,18 +248,17 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
     let mut v = values.clone();
     v.boolean[vr::USE_CALIBRATION_FILE as usize] = false;
     let mut notes = vec![];
+    let built_in = Path::new("calibration.toml (built in)");
     let c = if use_file {
         match calibration {
             Some(path) => calibration::load(path)?,
-            None => calibration::parse(SHIPPED, Path::new("calibration.toml (built in)"))?,
+            None => calibration::parse(SHIPPED, built_in)?,
         }
     } else {
         None
     };
     if let Some(c) = &c {
-        let what = calibration
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|| "calibration.toml (built in)".into());
+        let what = calibration.unwrap_or(built_in).display().to_string();
         v = crate::config::with_file_parameters(&v, c, &what, &mut notes);
     }
     // The diagonal model's sigmas must be valid even when a calibration replaces them.

@@ -119,27 +119,36 @@ fn per_condition_taps_are_blended_by_the_estimated_or_told_contact() {
     // Written and read back (the contact model's absent conicity parts included).
     let back = Bank::parse(&bank.to_bytes(), std::path::Path::new("k.taps")).unwrap();
     assert_eq!(back.contact, bank.contact);
-    let mut l = three_sensors(&bank, 0.0);
+    // Channel 1 is 0.12 x channel 0: at 10 m/s, over the speed and its square
+    // (contact::CONTACT_SPEED_POWER), 1.2 times: ln(1.44) = 0.365, scale 0.786.
+    let signal: Vec<(f64, [f64; 5])> = (0..400)
+        .map(|k| {
+            let u = (k as f64 * 0.3).sin();
+            let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
+            ((k + 1) as f64 * 0.05, x)
+        })
+        .collect();
     let mut grid = Grid::new(0.2, 500.0);
     let mut cells = vec![];
-    let mut d = 0.0;
-    for k in 0..400 {
-        d += 0.05;
-        let u = (k as f64 * 0.3).sin();
-        // Channel 1 is 0.12 x channel 0: at 10 m/s, over the speed and its square
-        // (contact::CONTACT_SPEED_POWER), 1.2 times: ln(1.44) = 0.365, scale 0.786.
-        let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
-        if let Some(c) = grid.add(d, &x) {
+    for (d, x) in &signal {
+        if let Some(c) = grid.add(*d, x) {
             cells.extend(c.cells);
         }
-        l.step(d, 10.0, &x, 0.0);
+    }
+    let (lo, hi) = (&bank.entries[0], &bank.entries[2]);
+    assert_eq!((lo.speed, hi.speed, hi.condition), (10.0, 10.0, Some(1.0)));
+    // The estimate of the taps blended at scale `s`, on the first cells.
+    let blended = |s: f64| {
+        let b = (s - 0.5) / 0.5;
+        (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells)
+    };
+    let mut l = three_sensors(&bank, 0.0);
+    for (d, x) in &signal {
+        l.step(*d, 10.0, x, 0.0);
     }
     let s = l.contact_scale();
     assert!((s - (0.75 + 0.1 * 1.44f64.ln())).abs() < 0.02, "{s}");
-    let b = (s - 0.5) / 0.5;
-    let (lo, hi) = (&bank.entries[0], &bank.entries[2]);
-    assert_eq!((lo.speed, hi.speed, hi.condition), (10.0, 10.0, Some(1.0)));
-    let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+    let want = blended(s);
     let (got, _) = l.causal(l.causal.points[1].distance).unwrap();
     assert!(
         (got - want).abs() < 1e-12 * want.abs().max(1.0),
@@ -157,21 +166,16 @@ fn per_condition_taps_are_blended_by_the_estimated_or_told_contact() {
             },
         )
         .unwrap();
-        let mut d = 0.0;
         let mut first = None;
-        for k in 0..400 {
-            d += 0.05;
-            let u = (k as f64 * 0.3).sin();
-            let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
-            t.step(d, 10.0, &x, 0.0);
+        for (d, x) in &signal {
+            t.step(*d, 10.0, x, 0.0);
             if first.is_none() && t.contact_scale() > 0.0 {
                 first = Some(t.contact_scale());
             }
         }
         assert_eq!(first, Some(at), "told {told}");
         assert_eq!(t.contact_scale(), at);
-        let b = (at - 0.5) / 0.5;
-        let want = (1.0 - b) * direct(lo, 1, &cells) + b * direct(hi, 1, &cells);
+        let want = blended(at);
         let (got, _) = t.causal(t.causal.points[1].distance).unwrap();
         assert!(
             (got - want).abs() < 1e-12 * want.abs().max(1.0),

@@ -94,12 +94,6 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
         )));
     }
     check_out(&a.out)?;
-    let window = crate::study::learned::taps::BANK_WINDOW;
-    if let Some(l) = a.lags.iter().find(|l| !(**l > 0.0 && **l <= window)) {
-        return Err(Error::Input(format!(
-            "--lags {l}: a lag must lie in (0, {window}] m (the causal taps are always fitted)"
-        )));
-    }
     if !a.recordings.is_empty() {
         return from_recordings(a, log);
     }
@@ -108,15 +102,7 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     let mut taps = Options::shipped();
     taps.speeds = a.speeds.clone();
     taps.kalker_scales = a.kalker_scales.clone();
-    taps.conicities = match a.conicities.as_slice() {
-        [z] if *z == 0.0 => vec![],
-        c if c.contains(&0.0) => {
-            return Err(Error::input(
-                "--conicities 0 (the vehicle's own) cannot be combined with other conicities",
-            ));
-        }
-        c => c.to_vec(),
-    };
+    taps.conicities = super::own_conicities(&a.conicities)?;
     taps.roll_rate_conicities = taps.conicities.iter().take(1).copied().collect();
     taps.lags = a.lags.clone();
     taps.roll_rate = !a.no_roll_rate && interface.roll_rate;
@@ -135,11 +121,7 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
             fmus.vehicle.display()
         )));
     }
-    if taps.validation_seeds.contains(&taps.training_seed) {
-        return Err(Error::input(
-            "--validation-seeds must not hold the training --seed",
-        ));
-    }
+    crate::study::learned::taps::check(&taps)?;
     let o = FitOptions {
         taps,
         evaluation_seeds: a.evaluation_seeds.clone(),
@@ -157,12 +139,6 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
 
 /// `fit --recordings`: reads and checks every input, then fits in a staged directory.
 fn from_recordings(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
-    let reference = reference(a)?;
-    let passes: Vec<_> = a
-        .recordings
-        .iter()
-        .map(|p| crate::study::learned::recorded::read_pass(p))
-        .collect::<Result<_, _>>()?;
     let mut taps = Options::shipped();
     taps.conicities = vec![];
     taps.roll_rate_conicities = vec![];
@@ -171,10 +147,17 @@ fn from_recordings(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     taps.lags = a.lags.clone();
     taps.calibration = a.calibration.clone();
     taps.command = command_line();
+    crate::study::learned::taps::check(&taps)?;
     if let Some(c) = &a.calibration {
         fmu_estimator::calibration::load(c)
             .map_err(|e| Error::Input(format!("--calibration {}: {e}", c.display())))?;
     }
+    let reference = reference(a)?;
+    let passes: Vec<_> = a
+        .recordings
+        .iter()
+        .map(|p| crate::study::learned::recorded::read_pass(p))
+        .collect::<Result<_, _>>()?;
     let fmus = a.fmus.fmus()?;
     let share = a.validation_share;
     staged(&a.out, log, |dir| {

@@ -178,6 +178,18 @@ pub fn conicity(s: &str) -> Result<f64, String> {
     )
 }
 
+/// `--conicities` as the fit takes them: `0` alone is the vehicle's own conicity (no conicity
+/// conditions, empty), which cannot be combined with other conicities.
+pub fn own_conicities(c: &[f64]) -> Result<Vec<f64>, Error> {
+    match c {
+        [z] if *z == 0.0 => Ok(vec![]),
+        _ if c.contains(&0.0) => Err(Error::input(
+            "--conicities 0 (the vehicle's own) cannot be combined with other conicities",
+        )),
+        _ => Ok(c.to_vec()),
+    }
+}
+
 /// A Kalker-coefficient scale (`--kalker-scales`): a finite number above zero (1: the vehicle's
 /// own coefficients).
 pub fn kalker_scale(s: &str) -> Result<f64, String> {

@@ -97,21 +97,11 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
     o.speeds = a.speeds.clone();
     o.kalker_scales = a.kalker_scales.clone();
     o.per_condition = !a.pooled;
-    // 0 alone: the vehicle's own conicity.
-    let own = |c: &[f64]| -> Result<Vec<f64>, Error> {
-        match c {
-            [z] if *z == 0.0 => Ok(vec![]),
-            _ if c.contains(&0.0) => Err(Error::input(
-                "--conicities 0 (the vehicle's own) cannot be combined with other conicities",
-            )),
-            _ => Ok(c.to_vec()),
-        }
-    };
-    o.conicities = own(&a.conicities)?;
+    o.conicities = super::own_conicities(&a.conicities)?;
     o.roll_rate_conicities = if o.conicities.is_empty() {
         vec![]
     } else {
-        own(&a.roll_rate_conicities)?
+        super::own_conicities(&a.roll_rate_conicities)?
     };
     o.lags = a.lags.clone();
     o.roll_rate = !a.no_roll_rate;

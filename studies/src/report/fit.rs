@@ -71,7 +71,7 @@ pub fn fit(
     let total = costs.iter().sum::<f64>() * 1.01 + evaluation;
     // 1. The simplified model and its noise.
     let calibration_file = dir.join(CALIBRATION);
-    let cal_lines = std::sync::Mutex::new(vec![]);
+    let cal_lines = std::cell::RefCell::new(vec![]);
     let cal = calibration(
         fmus,
         o.taps.training_seed,
@@ -79,7 +79,7 @@ pub fn fit(
         dir,
         &|l| {
             log(l);
-            cal_lines.lock().expect("log").push(l.to_string());
+            cal_lines.borrow_mut().push(l.to_string());
         },
     )?;
     for (path, bytes) in &cal.files {
@@ -91,14 +91,13 @@ pub fn fit(
     // 2. The tap bank on that calibration's Kalman channel.
     let mut taps = o.taps.clone();
     taps.calibration = Some(calibration_file.clone());
-    let done_cost_cell = std::sync::Mutex::new(done_cost);
+    let so_far = std::cell::Cell::new(done_cost);
     let bank = fit_each(fmus, &taps, log, &|v| {
         let i = taps.speeds.iter().position(|s| *s == v).unwrap_or(0);
-        let mut d = done_cost_cell.lock().expect("progress");
-        *d += costs[i];
-        done(*d / total);
+        so_far.set(so_far.get() + costs[i]);
+        done(so_far.get() / total);
     })?;
-    done_cost = *done_cost_cell.lock().expect("progress");
+    done_cost = so_far.get();
     let taps_file = dir.join(TAPS);
     write(&taps_file, &bank.to_bytes())?;
 
@@ -126,7 +125,7 @@ pub fn fit(
         "\n## Calibration (track seed {})\n\n",
         o.taps.training_seed
     ));
-    for l in cal_lines.lock().expect("log").iter() {
+    for l in cal_lines.borrow().iter() {
         if !l.starts_with("wrote") {
             md.push_str(&format!("- {l}\n"));
         }
@@ -166,6 +165,14 @@ pub fn evaluate(
         estimator,
         paper: None,
     };
+    let fitted_calibration = ("calibration_file".to_string(), path(calibration)?);
+    let fitted = vec![
+        ("estimator".into(), Value::Integer(2)),
+        fitted_calibration.clone(),
+        ("tap_file".into(), path(taps)?),
+    ];
+    let mut told = fitted.clone();
+    told.push(("kalker_scale".into(), Value::Real(1.0)));
     let all = [
         case(
             "shipped default (learned.taps, built-in calibration)",
@@ -173,27 +180,15 @@ pub fn evaluate(
         ),
         case(
             "paper's filter, fitted calibration",
-            vec![
-                ("estimator".into(), Value::Integer(1)),
-                ("calibration_file".into(), path(calibration)?),
-            ],
+            vec![("estimator".into(), Value::Integer(1)), fitted_calibration],
         ),
         case(
             "learned filter, fitted bank and calibration, told nothing",
-            vec![
-                ("estimator".into(), Value::Integer(2)),
-                ("calibration_file".into(), path(calibration)?),
-                ("tap_file".into(), path(taps)?),
-            ],
+            fitted,
         ),
         case(
             "learned filter, fitted bank and calibration, told kalker_scale = 1",
-            vec![
-                ("estimator".into(), Value::Integer(2)),
-                ("calibration_file".into(), path(calibration)?),
-                ("tap_file".into(), path(taps)?),
-                ("kalker_scale".into(), Value::Real(1.0)),
-            ],
+            told,
         ),
     ];
     cases::run_cases(fmus, &all, seeds, progress)

@@ -308,10 +308,11 @@ pub fn fit(
     let mut placed = vec![];
     // Per bank speed, the training and validation parts.
     let mut parts: Vec<(f64, Vec<Record>, Vec<Record>)> = vec![];
+    // The shipped default, whose estimate places each pass.
+    let learned = offline::learned(&defaults, &default_config)?;
     for p in passes {
-        // The shipped default's estimate, to place the pass.
-        let learned = offline::learned(&defaults, &default_config)?;
-        let out = offline::process_learned(&default_config, learned, STEP, &p.samples, false)?;
+        let out =
+            offline::process_learned(&default_config, learned.clone(), STEP, &p.samples, false)?;
         let estimate: Vec<f64> = match &out.learned {
             Some(l) => l.iter().map(|e| e.alignment).collect(),
             None => out.filtered.iter().map(|k| k.0).collect(),

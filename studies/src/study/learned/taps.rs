@@ -911,6 +911,7 @@ pub fn fit_recorded(
     (half_width, source): (f64, &str),
     progress: &dyn Fn(&str),
 ) -> Result<Bank, Error> {
+    check(o)?;
     let lags: Vec<usize> = o.lags.iter().map(|l| points(*l)).collect();
     let mut entries = vec![];
     for (speed, train, valid) in runs {
@@ -992,6 +993,21 @@ pub fn fit_each(
     progress: &dyn Fn(&str),
     done: &dyn Fn(f64),
 ) -> Result<Bank, Error> {
+    check(o)?;
+    let mut entries = vec![];
+    let mut models = vec![];
+    for v in &o.speeds {
+        progress(&format!("fitting the taps at {v} m/s"));
+        let (e, m) = fit_speed(fmus, o, *v, progress)?;
+        entries.extend(e);
+        models.extend(m);
+        done(*v);
+    }
+    assemble(fmus, o, entries, models)
+}
+
+/// The options' own consistency, checked before any run: seeds, speeds, conicities, lags.
+pub fn check(o: &Options) -> Result<(), Error> {
     if o.validation_seeds.contains(&o.training_seed) {
         return Err(Error::input(
             "the validation seeds must differ from the training seed",
@@ -1033,16 +1049,7 @@ pub fn fit_each(
             o.lags
         )));
     }
-    let mut entries = vec![];
-    let mut models = vec![];
-    for v in &o.speeds {
-        progress(&format!("fitting the taps at {v} m/s"));
-        let (e, m) = fit_speed(fmus, o, *v, progress)?;
-        entries.extend(e);
-        models.extend(m);
-        done(*v);
-    }
-    assemble(fmus, o, entries, models)
+    Ok(())
 }
 
 /// The bank of `entries` and the contact `models` fitted with options `o`: header, contract
