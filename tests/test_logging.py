@@ -113,3 +113,15 @@ def test_the_learned_filter_with_another_kalman_channel_is_an_error_unless_allow
     assert allowed.initialize({"allow_other_kalman": True}, strings={"calibration_file": str(path)}) == OK
     assert any("another Kalman channel" in r.message for r in allowed.log.records if r.status == WARNING)
     assert allowed.step(0.0, 1e-3) == OK
+
+
+def test_the_kalman_mismatch_names_the_channels_parameters_not_the_learned_filters(make_slave):
+    """The contract error lists the parameters not at their defaults that feed the Kalman
+    channel (alpha here); the learned filter's own conditions (conicity, kalker_scale) do not
+    change the channel and are not listed."""
+    s = make_slave("learned-other-alpha")
+    assert s.initialize({"alpha": 0.2, "conicity": 0.2, "kalker_scale": 0.5}) == ERROR
+    errors = [r.message for r in s.log.records if r.status == ERROR]
+    listed = [m.split("parameters not at their defaults:")[1] for m in errors if "parameters not at their defaults:" in m]
+    assert listed and "alpha = 0.2" in listed[0], errors
+    assert "kalker_scale" not in listed[0] and "conicity" not in listed[0], listed

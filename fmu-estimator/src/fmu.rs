@@ -428,10 +428,11 @@ pub fn learned_from_values(
 /// the gain (the fit's time-varying channel equals the steady-state one after the start-up) and
 /// the initial covariance (a start-up transient the steady-state gain does not have). Any other
 /// parameter not at its default can make the channel differ from the bank's.
-const OUTSIDE_THE_CONTRACT: [&str; 9] = [
+const OUTSIDE_THE_CONTRACT: [&str; 10] = [
     "estimator",
     "lag",
     "conicity",
+    "kalker_scale",
     "use_roll_rate",
     "tap_file",
     "allow_other_kalman",
