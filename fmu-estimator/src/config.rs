@@ -15,6 +15,10 @@ use crate::statespace::{BodyNoise, StateSpace};
 use crate::variables::vr;
 use fmi_abi::Values;
 use nalgebra::{SMatrix, SVector};
+
+/// The step the Kalman filter runs at with the diagonal model \[s\]: its sensor sigmas are
+/// per sample at 1 kHz.
+pub const DIAGONAL_MODEL_STEP: f64 = 1e-3;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -319,6 +323,16 @@ impl Config {
         }
     }
 
+    /// The step the Kalman filter runs at whatever the sample step ([`Engine::step`]): the
+    /// calibration file's, or 1 ms for the diagonal model, whose sigmas are per sample at
+    /// 1 kHz (the paper's sensors).
+    pub fn model_step(&self) -> f64 {
+        match self.body_noise {
+            BodyNoise::Calibrated { step_size, .. } => step_size,
+            BodyNoise::Rate(_) => DIAGONAL_MODEL_STEP,
+        }
+    }
+
     /// A fresh filter for this configuration.
     pub fn core(&self) -> Core {
         // Initial covariance: the alignment from `p0_xi`, the body states from typical
@@ -330,6 +344,7 @@ impl Config {
                 let p0 = SMatrix::<f64, 7, 7>::from_diagonal(&SVector::from_fn(|i, _| s[i] * s[i]));
                 let space = StateSpace::paper(&self.params, self.body_noise.clone(), true);
                 let mut e = Engine::new(space, self.scheme, self.gain, self.r, p0);
+                e.model_step = Some(self.model_step());
                 e.stationary_start = self.p0_stationary;
                 Core::Seven(e)
             }
@@ -355,6 +370,7 @@ impl Config {
                     1.0
                 };
                 let mut e = Engine::new(space, self.scheme, self.gain, r, p0);
+                e.model_step = Some(self.model_step());
                 e.stationary_start = self.p0_stationary;
                 Core::Eight(e)
             }

@@ -102,6 +102,12 @@ impl Core {
         each!(self, e => e.record_history())
     }
 
+    /// How many filter steps were recorded for the smoother (0 without a history): a sample
+    /// step other than the model's runs more or fewer filter steps than samples.
+    pub fn recorded_steps(&self) -> usize {
+        each!(self, e => e.history.as_ref().map_or(0, |h| h.x_filt.len()))
+    }
+
     /// The smoothed alignment and its standard deviation at every recorded step (empty if no
     /// history was recorded).
     pub fn smoothed_alignment(&self) -> Vec<(f64, f64)> {

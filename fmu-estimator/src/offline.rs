@@ -422,7 +422,6 @@ fn run_from(
     let mut out = Processed::default();
     // For each sample, the index of the last filter step at or before it (None before the first).
     let mut step_of: Vec<Option<usize>> = Vec::with_capacity(n);
-    let mut steps = 0usize;
     let initial = core.alignment();
     let mut checked_p = check.then(CovarianceCheck::new);
     for k in 0..n {
@@ -454,9 +453,8 @@ fn run_from(
             if let Some(c) = checked_p.as_mut() {
                 c.add(&core);
             }
-            steps += 1;
         }
-        step_of.push(steps.checked_sub(1));
+        step_of.push(core.recorded_steps().checked_sub(1));
         out.distance.push(distance);
         out.filtered.push(core.alignment());
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
