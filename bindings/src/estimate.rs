@@ -192,6 +192,19 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
     d.set_item("novelty", novelty.into_pyarray(py))?;
     let outside = out.outside_training.unwrap_or_else(|| vec![false; n]);
     d.set_item("outside_training", outside.into_pyarray(py))?;
+    let bias = out.bias.unwrap_or_else(|| vec![[0.0; 4]; n]);
+    for (i, name) in [
+        "ws_acc_y_bias",
+        "ws_yaw_rate_bias",
+        "frame_acc_y_bias",
+        "ws_roll_rate_bias",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let column: Vec<f64> = bias.iter().map(|b| b[i]).collect();
+        d.set_item(name, column.into_pyarray(py))?;
+    }
     d.set_item("distance_lagged", distance_lagged.into_pyarray(py))?;
     d.set_item("distance", out.distance.into_pyarray(py))?;
     if let Some(s) = out.smoothed {

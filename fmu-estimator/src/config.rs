@@ -72,6 +72,9 @@ pub struct Config {
     pub design_speed: f64,
     /// The calibration file's status line when its matrices are used.
     pub calibration: Option<String>,
+    /// Prior standard deviations of the four sensors' biases (`bias_sigma_*`; 0: not
+    /// estimated), [`crate::bias`].
+    pub bias_sigma: [f64; 4],
 }
 
 /// Reads the `Params` from the FMI values.
@@ -302,6 +305,12 @@ impl Config {
             min_speed: r(vr::MIN_SPEED),
             design_speed,
             calibration: None,
+            bias_sigma: [
+                r(vr::BIAS_SIGMA_WS_ACC_Y),
+                r(vr::BIAS_SIGMA_WS_YAW_RATE),
+                r(vr::BIAS_SIGMA_FRAME_ACC_Y),
+                r(vr::BIAS_SIGMA_WS_ROLL_RATE),
+            ],
         };
         Ok((
             match calibrated {

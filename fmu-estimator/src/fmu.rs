@@ -18,7 +18,7 @@ use std::path::PathBuf;
 pub use crate::variables::{VARIABLES, vr};
 
 /// How far (relative) the communication step may be from the learned filter's sample step
-/// before the log warns that its estimate is approximate: rounding of a step written in decimal
+/// before the log says so once: rounding of a step written in decimal
 /// is far below it, a real other rate (500 Hz against 1 kHz) far above.
 const STEP_TOLERANCE: f64 = 0.01;
 
@@ -34,6 +34,8 @@ pub struct Estimator {
     holding: bool,
     /// The learned filter (estimator 2).
     learned: Option<Learned>,
+    /// The sensors' biases.
+    bias: crate::bias::Bias,
     /// Whether the last step's speed was outside the taps' range (for the warning on entry).
     outside: bool,
     /// Whether `outside_training` has set in this run (warned once).
@@ -80,6 +82,17 @@ impl Estimator {
             }
         }
         let o = &mut v.real;
+        for (r, b) in [
+            vr::WS_ACC_Y_BIAS,
+            vr::WS_YAW_RATE_BIAS,
+            vr::FRAME_ACC_Y_BIAS,
+            vr::WS_ROLL_RATE_BIAS,
+        ]
+        .into_iter()
+        .zip(self.bias.estimate)
+        {
+            o[r as usize] = b;
+        }
         for (k, r) in [
             vr::EST_Y,
             vr::EST_PSI,
@@ -128,6 +141,7 @@ impl Model for Estimator {
             design_speed: 0.0,
             holding: false,
             learned: None,
+            bias: crate::bias::Bias::new([0.0; 4]),
             outside: false,
             novelty_warned: false,
             step_warned: false,
@@ -168,6 +182,7 @@ impl Model for Estimator {
         self.learned = learned_from_values(v, self.resources.as_deref(), &config, log)
             .map_err(|e| e.to_string())?;
         self.core = Some(core);
+        self.bias = crate::bias::Bias::new(config.bias_sigma);
         self.holding = false;
         self.outside = false;
         self.novelty_warned = false;
@@ -206,6 +221,7 @@ impl Model for Estimator {
             settings,
             core,
             self.learned.as_mut(),
+            &mut self.bias,
             &mut v.real[vr::DISTANCE as usize],
             h,
             input,
@@ -288,8 +304,8 @@ impl Estimator {
             && !self.step_warned
             && (h - l.sample_step()).abs() > STEP_TOLERANCE * l.sample_step()
         {
-            log.warning(&format!(
-                "step {h} s: the learned filter's taps were fitted on samples every {} s, so its estimate is approximate at this step",
+            log.info(&format!(
+                "step {h} s: the learned filter's taps were fitted on samples every {} s; its grid is by distance and its Kalman channel runs on its own clock, so the estimate holds at this step to the figures of docs/accuracy.md (\"Sample rates\")",
                 l.sample_step()
             ));
             self.step_warned = true;

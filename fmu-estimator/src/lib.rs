@@ -37,6 +37,7 @@
 // `!(x > 0.0)` is how we reject NaN together with the out-of-range values.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod bias;
 pub mod calibration;
 pub mod config;
 pub mod core;

@@ -84,6 +84,9 @@ pub struct Processed {
     pub learned: Option<Vec<Estimate>>,
     /// The FMU's `contact_scale` output per sample (with the learned filter).
     pub contact_scale: Option<Vec<f64>>,
+    /// The FMU's `ws_acc_y_bias`, `ws_yaw_rate_bias`, `frame_acc_y_bias`, `ws_roll_rate_bias`
+    /// outputs per sample, when a `bias_sigma_*` parameter is set (else every one is 0).
+    pub bias: Option<Vec<[f64; 4]>>,
     /// The FMU's `conicity_estimate` output per sample (with the learned filter).
     pub conicity: Option<Vec<f64>>,
     /// The FMU's `novelty` output per sample (with the learned filter).
@@ -369,6 +372,8 @@ pub struct Resume {
     pub learned: Option<Learned>,
     /// Distance travelled \[m\], integrated from the speed as the FMU's `distance` output.
     pub distance: f64,
+    /// The sensors' biases ([`crate::bias`]).
+    pub bias: crate::bias::Bias,
 }
 
 impl Resume {
@@ -378,6 +383,7 @@ impl Resume {
             core: config.core(),
             learned,
             distance: 0.0,
+            bias: crate::bias::Bias::new(config.bias_sigma),
         }
     }
 }
@@ -409,6 +415,7 @@ fn run_from(
         mut core,
         mut learned,
         mut distance,
+        mut bias,
     } = start;
     let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
     let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
@@ -424,6 +431,7 @@ fn run_from(
     let mut step_of: Vec<Option<usize>> = Vec::with_capacity(n);
     let initial = core.alignment();
     let mut checked_p = check.then(CovarianceCheck::new);
+    let mut biases = bias.active().then(|| Vec::with_capacity(n));
     for k in 0..n {
         let s = &sample(k);
         let settings = step::Settings {
@@ -438,6 +446,7 @@ fn run_from(
             settings,
             &mut core,
             learned.as_mut(),
+            &mut bias,
             &mut distance,
             h,
             input,
@@ -456,6 +465,9 @@ fn run_from(
         }
         step_of.push(core.recorded_steps().checked_sub(1));
         out.distance.push(distance);
+        if let Some(b) = biases.as_mut() {
+            b.push(bias.estimate);
+        }
         out.filtered.push(core.alignment());
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
             e.push(l.estimate(distance, core.alignment()));
@@ -466,6 +478,7 @@ fn run_from(
         }
     }
     out.learned = estimates;
+    out.bias = biases;
     out.conicity = contact.is_some().then_some(conicity);
     out.novelty = contact.is_some().then_some(novelty);
     out.outside_training = contact.is_some().then_some(outside);
@@ -484,6 +497,7 @@ fn run_from(
         core,
         learned,
         distance,
+        bias,
     };
     Ok((out, end))
 }

@@ -7,12 +7,14 @@
 //! | stage | rule |
 //! |---|---|
 //! | distance | advances by `speed * h` for every finite speed, also while the filter holds |
+//! | biases | a standstill refines them, every sample has them removed ([`crate::bias`]) |
 //! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
 //! | roll-rate channel | read only when the learned taps use it; otherwise 0, so an unconnected or NaN roll-rate input changes nothing |
 //! | implausible sensors | replaced by NaN ([`crate::plausible::sensors`]): the measurement update is skipped, the prediction kept |
 //! | filter speed | `design_speed` when set, else the sample's speed |
 //! | learned filter | steps with the sensors and the Kalman estimate, at the sample's own speed |
 
+use crate::bias::Bias;
 use crate::core::Core;
 use crate::engine::Skip;
 use crate::error::{SampleError, StepError};
@@ -64,12 +66,14 @@ pub fn step(
     settings: Settings,
     core: &mut Core,
     learned: Option<&mut Learned>,
+    bias: &mut Bias,
     distance: &mut f64,
     h: f64,
     input: Input,
 ) -> Result<Stepped, SampleError> {
     let speed = input.speed;
     crate::plausible::speed(speed)?;
+    bias.observe(speed, &input.sensors);
     if speed.is_finite() {
         *distance += speed * h;
     }
@@ -78,7 +82,7 @@ pub fn step(
             finite_speed: speed.is_finite(),
         });
     }
-    let mut x = input.sensors;
+    let mut x = bias.remove(&input.sensors);
     if !learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
         x[3] = 0.0;
     }

@@ -132,6 +132,22 @@ pub mod vr {
     pub const NOVELTY: u32 = 55;
     /// `kalker_scale` (Real parameter, dimensionless).
     pub const KALKER_SCALE: u32 = 56;
+    /// `bias_sigma_ws_acc_y` (Real parameter, m/s2).
+    pub const BIAS_SIGMA_WS_ACC_Y: u32 = 57;
+    /// `bias_sigma_ws_yaw_rate` (Real parameter, rad/s).
+    pub const BIAS_SIGMA_WS_YAW_RATE: u32 = 58;
+    /// `bias_sigma_frame_acc_y` (Real parameter, m/s2).
+    pub const BIAS_SIGMA_FRAME_ACC_Y: u32 = 59;
+    /// `bias_sigma_ws_roll_rate` (Real parameter, rad/s).
+    pub const BIAS_SIGMA_WS_ROLL_RATE: u32 = 60;
+    /// `ws_acc_y_bias` (Real output, m/s2).
+    pub const WS_ACC_Y_BIAS: u32 = 61;
+    /// `ws_yaw_rate_bias` (Real output, rad/s).
+    pub const WS_YAW_RATE_BIAS: u32 = 62;
+    /// `frame_acc_y_bias` (Real output, m/s2).
+    pub const FRAME_ACC_Y_BIAS: u32 = 63;
+    /// `ws_roll_rate_bias` (Real output, rad/s).
+    pub const WS_ROLL_RATE_BIAS: u32 = 64;
     // Integer
     /// `discretization` (Integer parameter).
     pub const DISCRETIZATION: u32 = 0;
@@ -243,5 +259,13 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_output(vr::NOVELTY, "novelty", "1", 0.0, "How far the sensors' contact features lie from what the tap bank's training runs showed at the estimated condition (squared Mahalanobis distance over the level exceeded on 0.2 % of the validation distance; 200 m memory): above 1 the vehicle or its wheels are unlike what the taps were fitted on. 0 without a bank fitted over conicities"),
     VarSpec::boolean_output(vr::OUTSIDE_TRAINING, "outside_training", false, "novelty above 1: the learned filter's estimate is less trustworthy here (alignment_std grows with it); a warning is logged when it first sets"),
     VarSpec::integer_output(vr::ACTIVE_ESTIMATOR, "active_estimator", 1, "Which estimate 'alignment' carries at this step: 1 the Kalman filter (estimator 1, start of the run, speed outside the taps' range), 2 the learned filter"),
+    VarSpec::real_parameter(vr::BIAS_SIGMA_WS_ACC_Y, "bias_sigma_ws_acc_y", "m/s2", 0.0, "Prior standard deviation of the wheelset accelerometer's bias (its turn-on bias, a datasheet figure): > 0 estimates the bias while the train stands still (speed below 0.01 m/s) and removes it from every sample; 0: not estimated").min(0.0),
+    VarSpec::real_parameter(vr::BIAS_SIGMA_WS_YAW_RATE, "bias_sigma_ws_yaw_rate", "rad/s", 0.0, "As bias_sigma_ws_acc_y, for the yaw gyroscope").min(0.0),
+    VarSpec::real_parameter(vr::BIAS_SIGMA_FRAME_ACC_Y, "bias_sigma_frame_acc_y", "m/s2", 0.0, "As bias_sigma_ws_acc_y, for the frame accelerometer").min(0.0),
+    VarSpec::real_parameter(vr::BIAS_SIGMA_WS_ROLL_RATE, "bias_sigma_ws_roll_rate", "rad/s", 0.0, "As bias_sigma_ws_acc_y, for the roll gyroscope").min(0.0),
+    VarSpec::real_output(vr::WS_ACC_Y_BIAS, "ws_acc_y_bias", "m/s2", 0.0, "The wheelset accelerometer's estimated bias, removed from its samples (0 unless bias_sigma_ws_acc_y > 0 and the train has stood still)"),
+    VarSpec::real_output(vr::WS_YAW_RATE_BIAS, "ws_yaw_rate_bias", "rad/s", 0.0, "The yaw gyroscope's estimated bias, removed from its samples"),
+    VarSpec::real_output(vr::FRAME_ACC_Y_BIAS, "frame_acc_y_bias", "m/s2", 0.0, "The frame accelerometer's estimated bias, removed from its samples"),
+    VarSpec::real_output(vr::WS_ROLL_RATE_BIAS, "ws_roll_rate_bias", "rad/s", 0.0, "The roll gyroscope's estimated bias, removed from its samples"),
     VarSpec::string_parameter(vr::CALIBRATION_FILE, "calibration_file", DEFAULT_CALIBRATION_FILE, "Calibration file (Q and R, and in [parameters] the model they were made with, taken for the parameters left at their defaults), absolute, or relative to the FMU's resources directory, then to the working directory; a file other than the default that does not exist is an error"),
 ];
