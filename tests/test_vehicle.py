@@ -120,9 +120,12 @@ def test_noise_is_exactly_the_difference_to_the_clean_signal_and_has_its_sigma(m
     assert np.array_equal(out[:, 0], out[:, 1])
 
 
-def test_restored_and_deserialized_states_replay_bit_identically(make_vehicle):
+@pytest.mark.parametrize("integers", [{}, {"sensor_grade": 2}], ids=["ideal", "mems"])
+def test_restored_and_deserialized_states_replay_bit_identically(make_vehicle, integers):
+    """Also with the MEMS preset's sensor errors: drift generator, anti-alias filters and
+    quantization are part of the state."""
     s = make_vehicle()
-    assert initialize(s) == OK
+    assert initialize(s, integers=integers) == OK
     run(s, 1000)
     state = s.fmu.getFMUstate()
     blob = s.fmu.serializeFMUstate(state)
@@ -131,7 +134,7 @@ def test_restored_and_deserialized_states_replay_bit_identically(make_vehicle):
     s.fmu.freeFMUstate(state)
     assert np.array_equal(run(s, 500, t0=1.0), first)
     other = make_vehicle("other")
-    assert initialize(other, integers={"track_seed": 9}) == OK
+    assert initialize(other, integers={"track_seed": 9, **integers}) == OK
     restored = other.fmu.deSerializeFMUstate(blob)
     other.fmu.setFMUstate(restored)
     other.fmu.freeFMUstate(restored)
@@ -225,6 +228,9 @@ def test_a_measured_track_is_followed(make_vehicle, tmp_path):
         ({"strings": {"track_file": "/nonexistent/track.csv"}}, "/nonexistent/track.csv"),
         ({"strings": {"track_file": "/dev/zero"}}, "/dev/zero: the track file is not a regular file"),
         ({"strings": {"vehicle": "/dev/zero"}}, "/dev/zero: the vehicle file is not a regular file"),
+        ({"reals": {"ws_acc_y_misalignment": 0.5}}, "ws_acc_y_misalignment"),
+        ({"reals": {"ws_yaw_rate_bias_instability": 1e-4}}, "ws_yaw_rate_bias_tau"),
+        ({"reals": {"frame_acc_y_scale_error": -1.0}}, "frame_acc_y_scale_error"),
     ],
 )
 def test_impossible_parameters_are_refused_naming_them(make_vehicle, setting, word):
@@ -251,3 +257,30 @@ def test_a_vehicle_that_leaves_the_track_stops_with_an_error_naming_it(tmp_path)
     relative = np.abs(r["RailVehicle.ws_y"] - r["RailVehicle.alignment"])
     assert 5.0 < r.time[-1] < 20.0 and relative.max() <= 0.039 + 1e-9
     oc.run("simulate", fmu, "--stop", "20", "--quiet", "--no-record", "--set", "kalker_scale=0.5", "--set", "speed=25")
+
+
+def test_sensor_errors_compose_as_documented_against_the_true_signals(make_vehicle):
+    """Without noise and vertical irregularities (so the vertical specific force is g), every
+    sample is the documented chain of the true signals: misalignment, scale, bias."""
+    s = make_vehicle()
+    m, k, b = 0.004, 0.03, 0.02
+    assert initialize(s, booleans={"sensor_noise": False, "vertical_irregularity": False}, reals={
+        "ws_acc_y_misalignment": m, "ws_acc_y_scale_error": k, "ws_acc_y_bias": b,
+        "ws_yaw_rate_misalignment": m, "ws_yaw_rate_scale_error": k, "ws_yaw_rate_bias": 1e-3,
+    }) == OK
+    out = run(s, 2000, names=["ws_acc_y", "ws_acc_y_clean", "ws_yaw_rate", "ws_yaw_rate_true",
+                              "ws_roll_rate_true"])
+    acc = (1 + k) * (np.cos(m) * out[:, 1] + np.sin(m) * 9.81) + b
+    gyro = (1 + k) * (np.cos(m) * out[:, 3] + np.sin(m) * out[:, 4]) + 1e-3
+    assert np.allclose(out[:, 0], acc, rtol=0, atol=1e-12)
+    assert np.allclose(out[:, 2], gyro, rtol=0, atol=1e-15)
+
+
+def test_a_noise_density_gives_the_sigma_of_the_step(make_vehicle):
+    """sigma = sqrt(psd / (2 h)): 5e-4 rad/s at 1 kHz from psd 5e-10 rad2/s, as sigma_gyro's
+    default; quantized to 1e-4 rad/s the samples are multiples of it."""
+    s = make_vehicle()
+    assert initialize(s, reals={"ws_yaw_rate_noise_psd": 5e-10, "ws_yaw_rate_resolution": 1e-4}) == OK
+    out = run(s, 5000, names=["ws_yaw_rate", "ws_yaw_rate_true"])
+    assert abs(np.std(out[:, 0] - out[:, 1]) / 5e-4 - 1) < 0.05
+    assert np.allclose(out[:, 0] / 1e-4, np.round(out[:, 0] / 1e-4), rtol=0, atol=1e-9)

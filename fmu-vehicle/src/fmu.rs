@@ -106,6 +106,78 @@ pub mod vr {
     pub const WS_ROLL_RATE_TRUE: u32 = 42;
     /// `sigma_roll_gyro` (Real parameter, rad/s).
     pub const SIGMA_ROLL_GYRO: u32 = 43;
+    /// `ws_acc_y_bias` (Real parameter, m/s2).
+    pub const WS_ACC_Y_BIAS: u32 = 44;
+    /// `ws_acc_y_bias_instability` (Real parameter, m/s2).
+    pub const WS_ACC_Y_BIAS_INSTABILITY: u32 = 45;
+    /// `ws_acc_y_bias_tau` (Real parameter, s).
+    pub const WS_ACC_Y_BIAS_TAU: u32 = 46;
+    /// `ws_acc_y_scale_error` (Real parameter, 1).
+    pub const WS_ACC_Y_SCALE_ERROR: u32 = 47;
+    /// `ws_acc_y_misalignment` (Real parameter, rad).
+    pub const WS_ACC_Y_MISALIGNMENT: u32 = 48;
+    /// `ws_acc_y_noise_psd` (Real parameter, m2/s3).
+    pub const WS_ACC_Y_NOISE_PSD: u32 = 49;
+    /// `ws_acc_y_bandwidth` (Real parameter, Hz).
+    pub const WS_ACC_Y_BANDWIDTH: u32 = 50;
+    /// `ws_acc_y_range` (Real parameter, m/s2).
+    pub const WS_ACC_Y_RANGE: u32 = 51;
+    /// `ws_acc_y_resolution` (Real parameter, m/s2).
+    pub const WS_ACC_Y_RESOLUTION: u32 = 52;
+    /// `ws_yaw_rate_bias` (Real parameter, rad/s).
+    pub const WS_YAW_RATE_BIAS: u32 = 53;
+    /// `ws_yaw_rate_bias_instability` (Real parameter, rad/s).
+    pub const WS_YAW_RATE_BIAS_INSTABILITY: u32 = 54;
+    /// `ws_yaw_rate_bias_tau` (Real parameter, s).
+    pub const WS_YAW_RATE_BIAS_TAU: u32 = 55;
+    /// `ws_yaw_rate_scale_error` (Real parameter, 1).
+    pub const WS_YAW_RATE_SCALE_ERROR: u32 = 56;
+    /// `ws_yaw_rate_misalignment` (Real parameter, rad).
+    pub const WS_YAW_RATE_MISALIGNMENT: u32 = 57;
+    /// `ws_yaw_rate_noise_psd` (Real parameter, rad2/s).
+    pub const WS_YAW_RATE_NOISE_PSD: u32 = 58;
+    /// `ws_yaw_rate_bandwidth` (Real parameter, Hz).
+    pub const WS_YAW_RATE_BANDWIDTH: u32 = 59;
+    /// `ws_yaw_rate_range` (Real parameter, rad/s).
+    pub const WS_YAW_RATE_RANGE: u32 = 60;
+    /// `ws_yaw_rate_resolution` (Real parameter, rad/s).
+    pub const WS_YAW_RATE_RESOLUTION: u32 = 61;
+    /// `frame_acc_y_bias` (Real parameter, m/s2).
+    pub const FRAME_ACC_Y_BIAS: u32 = 62;
+    /// `frame_acc_y_bias_instability` (Real parameter, m/s2).
+    pub const FRAME_ACC_Y_BIAS_INSTABILITY: u32 = 63;
+    /// `frame_acc_y_bias_tau` (Real parameter, s).
+    pub const FRAME_ACC_Y_BIAS_TAU: u32 = 64;
+    /// `frame_acc_y_scale_error` (Real parameter, 1).
+    pub const FRAME_ACC_Y_SCALE_ERROR: u32 = 65;
+    /// `frame_acc_y_misalignment` (Real parameter, rad).
+    pub const FRAME_ACC_Y_MISALIGNMENT: u32 = 66;
+    /// `frame_acc_y_noise_psd` (Real parameter, m2/s3).
+    pub const FRAME_ACC_Y_NOISE_PSD: u32 = 67;
+    /// `frame_acc_y_bandwidth` (Real parameter, Hz).
+    pub const FRAME_ACC_Y_BANDWIDTH: u32 = 68;
+    /// `frame_acc_y_range` (Real parameter, m/s2).
+    pub const FRAME_ACC_Y_RANGE: u32 = 69;
+    /// `frame_acc_y_resolution` (Real parameter, m/s2).
+    pub const FRAME_ACC_Y_RESOLUTION: u32 = 70;
+    /// `ws_roll_rate_bias` (Real parameter, rad/s).
+    pub const WS_ROLL_RATE_BIAS: u32 = 71;
+    /// `ws_roll_rate_bias_instability` (Real parameter, rad/s).
+    pub const WS_ROLL_RATE_BIAS_INSTABILITY: u32 = 72;
+    /// `ws_roll_rate_bias_tau` (Real parameter, s).
+    pub const WS_ROLL_RATE_BIAS_TAU: u32 = 73;
+    /// `ws_roll_rate_scale_error` (Real parameter, 1).
+    pub const WS_ROLL_RATE_SCALE_ERROR: u32 = 74;
+    /// `ws_roll_rate_misalignment` (Real parameter, rad).
+    pub const WS_ROLL_RATE_MISALIGNMENT: u32 = 75;
+    /// `ws_roll_rate_noise_psd` (Real parameter, rad2/s).
+    pub const WS_ROLL_RATE_NOISE_PSD: u32 = 76;
+    /// `ws_roll_rate_bandwidth` (Real parameter, Hz).
+    pub const WS_ROLL_RATE_BANDWIDTH: u32 = 77;
+    /// `ws_roll_rate_range` (Real parameter, rad/s).
+    pub const WS_ROLL_RATE_RANGE: u32 = 78;
+    /// `ws_roll_rate_resolution` (Real parameter, rad/s).
+    pub const WS_ROLL_RATE_RESOLUTION: u32 = 79;
     // Integer
     /// `track_seed` (Integer parameter).
     pub const TRACK_SEED: u32 = 0;
@@ -113,6 +185,8 @@ pub mod vr {
     pub const SPECTRUM: u32 = 1;
     /// `noise_seed` (Integer parameter).
     pub const NOISE_SEED: u32 = 2;
+    /// `sensor_grade` (Integer parameter).
+    pub const SENSOR_GRADE: u32 = 3;
     // Boolean
     /// `lateral_irregularity` (Boolean parameter).
     pub const LATERAL_IRREGULARITY: u32 = 0;
@@ -461,6 +535,50 @@ pub static VARIABLES: &[VarSpec] = &[
     .max(4.0),
     VarSpec::integer_parameter(vr::NOISE_SEED, "noise_seed", 2, "Seed of the sensor noise")
         .min(0.0),
+    VarSpec::integer_parameter(
+        vr::SENSOR_GRADE,
+        "sensor_grade",
+        0,
+        "Sensor error preset: 0 the paper's ideal sensors; 1 tactical grade (Honeywell HG1700 class); 2 industrial MEMS (Xsens MTi-1 class): every sensor error parameter left at 0 takes the preset's value (docs/vehicle-fmu.md)",
+    )
+    .min(0.0)
+    .max(2.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_BIAS, "ws_acc_y_bias", "m/s2", 0.0, "Turn-on bias of the wheelset accelerometer, added to every sample (sensor errors: docs/vehicle-fmu.md)"),
+    VarSpec::real_parameter(vr::WS_ACC_Y_BIAS_INSTABILITY, "ws_acc_y_bias_instability", "m/s2", 0.0, "Stationary standard deviation of the wheelset accelerometer's first-order Gauss-Markov bias (its own random stream; 0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_BIAS_TAU, "ws_acc_y_bias_tau", "s", 0.0, "Correlation time of that Gauss-Markov bias").min(0.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_SCALE_ERROR, "ws_acc_y_scale_error", "1", 0.0, "Scale factor error of the wheelset accelerometer (0.01: reads 1 % high)").min(-0.5).max(0.5),
+    VarSpec::real_parameter(vr::WS_ACC_Y_MISALIGNMENT, "ws_acc_y_misalignment", "rad", 0.0, "Mounting misalignment of the wheelset accelerometer: its axis turned toward the coupled axis (vertical: gravity through a tilt)").min(-0.1).max(0.1),
+    VarSpec::real_parameter(vr::WS_ACC_Y_NOISE_PSD, "ws_acc_y_noise_psd", "m2/s3", 0.0, "One-sided power spectral density of the wheelset accelerometer white noise (the square of the datasheet noise density); > 0 replaces the per-sample sigma by sqrt(psd x bandwidth), the bandwidth the Nyquist frequency of the step or the anti-alias filter's").min(0.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_BANDWIDTH, "ws_acc_y_bandwidth", "Hz", 0.0, "Anti-alias cut-off of the wheelset accelerometer: 2nd-order Butterworth on every internal step (0: none)").min(0.0).max(2000.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_RANGE, "ws_acc_y_range", "m/s2", 0.0, "Full scale of the wheelset accelerometer: saturation (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_ACC_Y_RESOLUTION, "ws_acc_y_resolution", "m/s2", 0.0, "One LSB of the wheelset accelerometer: samples rounded to it (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_BIAS, "ws_yaw_rate_bias", "rad/s", 0.0, "Turn-on bias of the yaw gyroscope, added to every sample (sensor errors: docs/vehicle-fmu.md)"),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_BIAS_INSTABILITY, "ws_yaw_rate_bias_instability", "rad/s", 0.0, "Stationary standard deviation of the yaw gyroscope's first-order Gauss-Markov bias (its own random stream; 0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_BIAS_TAU, "ws_yaw_rate_bias_tau", "s", 0.0, "Correlation time of that Gauss-Markov bias").min(0.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_SCALE_ERROR, "ws_yaw_rate_scale_error", "1", 0.0, "Scale factor error of the yaw gyroscope (0.01: reads 1 % high)").min(-0.5).max(0.5),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_MISALIGNMENT, "ws_yaw_rate_misalignment", "rad", 0.0, "Mounting misalignment of the yaw gyroscope: its axis turned toward the coupled axis (longitudinal: the roll rate)").min(-0.1).max(0.1),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_NOISE_PSD, "ws_yaw_rate_noise_psd", "rad2/s", 0.0, "One-sided power spectral density of the yaw gyroscope white noise (the square of the datasheet noise density); > 0 replaces the per-sample sigma by sqrt(psd x bandwidth), the bandwidth the Nyquist frequency of the step or the anti-alias filter's").min(0.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_BANDWIDTH, "ws_yaw_rate_bandwidth", "Hz", 0.0, "Anti-alias cut-off of the yaw gyroscope: 2nd-order Butterworth on every internal step (0: none)").min(0.0).max(2000.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_RANGE, "ws_yaw_rate_range", "rad/s", 0.0, "Full scale of the yaw gyroscope: saturation (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_YAW_RATE_RESOLUTION, "ws_yaw_rate_resolution", "rad/s", 0.0, "One LSB of the yaw gyroscope: samples rounded to it (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_BIAS, "frame_acc_y_bias", "m/s2", 0.0, "Turn-on bias of the frame accelerometer, added to every sample (sensor errors: docs/vehicle-fmu.md)"),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_BIAS_INSTABILITY, "frame_acc_y_bias_instability", "m/s2", 0.0, "Stationary standard deviation of the frame accelerometer's first-order Gauss-Markov bias (its own random stream; 0: none)").min(0.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_BIAS_TAU, "frame_acc_y_bias_tau", "s", 0.0, "Correlation time of that Gauss-Markov bias").min(0.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_SCALE_ERROR, "frame_acc_y_scale_error", "1", 0.0, "Scale factor error of the frame accelerometer (0.01: reads 1 % high)").min(-0.5).max(0.5),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_MISALIGNMENT, "frame_acc_y_misalignment", "rad", 0.0, "Mounting misalignment of the frame accelerometer: its axis turned toward the coupled axis (vertical: gravity through a tilt)").min(-0.1).max(0.1),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_NOISE_PSD, "frame_acc_y_noise_psd", "m2/s3", 0.0, "One-sided power spectral density of the frame accelerometer white noise (the square of the datasheet noise density); > 0 replaces the per-sample sigma by sqrt(psd x bandwidth), the bandwidth the Nyquist frequency of the step or the anti-alias filter's").min(0.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_BANDWIDTH, "frame_acc_y_bandwidth", "Hz", 0.0, "Anti-alias cut-off of the frame accelerometer: 2nd-order Butterworth on every internal step (0: none)").min(0.0).max(2000.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_RANGE, "frame_acc_y_range", "m/s2", 0.0, "Full scale of the frame accelerometer: saturation (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::FRAME_ACC_Y_RESOLUTION, "frame_acc_y_resolution", "m/s2", 0.0, "One LSB of the frame accelerometer: samples rounded to it (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_BIAS, "ws_roll_rate_bias", "rad/s", 0.0, "Turn-on bias of the roll gyroscope, added to every sample (sensor errors: docs/vehicle-fmu.md)"),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_BIAS_INSTABILITY, "ws_roll_rate_bias_instability", "rad/s", 0.0, "Stationary standard deviation of the roll gyroscope's first-order Gauss-Markov bias (its own random stream; 0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_BIAS_TAU, "ws_roll_rate_bias_tau", "s", 0.0, "Correlation time of that Gauss-Markov bias").min(0.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_SCALE_ERROR, "ws_roll_rate_scale_error", "1", 0.0, "Scale factor error of the roll gyroscope (0.01: reads 1 % high)").min(-0.5).max(0.5),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_MISALIGNMENT, "ws_roll_rate_misalignment", "rad", 0.0, "Mounting misalignment of the roll gyroscope: its axis turned toward the coupled axis (vertical: the yaw rate)").min(-0.1).max(0.1),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_NOISE_PSD, "ws_roll_rate_noise_psd", "rad2/s", 0.0, "One-sided power spectral density of the roll gyroscope white noise (the square of the datasheet noise density); > 0 replaces the per-sample sigma by sqrt(psd x bandwidth), the bandwidth the Nyquist frequency of the step or the anti-alias filter's").min(0.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_BANDWIDTH, "ws_roll_rate_bandwidth", "Hz", 0.0, "Anti-alias cut-off of the roll gyroscope: 2nd-order Butterworth on every internal step (0: none)").min(0.0).max(2000.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_RANGE, "ws_roll_rate_range", "rad/s", 0.0, "Full scale of the roll gyroscope: saturation (0: none)").min(0.0),
+    VarSpec::real_parameter(vr::WS_ROLL_RATE_RESOLUTION, "ws_roll_rate_resolution", "rad/s", 0.0, "One LSB of the roll gyroscope: samples rounded to it (0: none)").min(0.0),
     VarSpec::boolean_parameter(
         vr::LATERAL_IRREGULARITY,
         "lateral_irregularity",
@@ -680,13 +798,50 @@ pub fn build_simulation(
         sigma_gyro: real(vr::SIGMA_GYRO),
         sigma_roll_gyro: real(vr::SIGMA_ROLL_GYRO),
     };
-    Ok(Simulation::new(
-        vehicle,
-        track,
-        config,
-        noise,
-        int(vr::NOISE_SEED) as u64,
-    ))
+    let grade = int(vr::SENSOR_GRADE);
+    let preset = crate::sensors::preset(grade)
+        .ok_or_else(|| format!("parameter 'sensor_grade' = {grade}: 0, 1 or 2"))?;
+    let first = [
+        vr::WS_ACC_Y_BIAS,
+        vr::WS_YAW_RATE_BIAS,
+        vr::FRAME_ACC_Y_BIAS,
+        vr::WS_ROLL_RATE_BIAS,
+    ];
+    let mut spec = preset;
+    for (i, base) in first.into_iter().enumerate() {
+        // Nine parameters per sensor, in SensorSpec's field order; one set to anything but 0
+        // wins over the preset.
+        let p = &mut spec[i];
+        let fields = [
+            &mut p.bias,
+            &mut p.bias_instability,
+            &mut p.bias_tau,
+            &mut p.scale_error,
+            &mut p.misalignment,
+            &mut p.noise_density,
+            &mut p.bandwidth,
+            &mut p.range,
+            &mut p.resolution,
+        ];
+        for (k, field) in fields.into_iter().enumerate() {
+            let value = real(base + k as u32);
+            if value != 0.0 {
+                // The noise is given as a PSD (integer SI exponents), kept as its density.
+                *field = if k == 5 { value.sqrt() } else { value };
+            }
+        }
+        if p.bias_instability > 0.0 && !(p.bias_tau > 0.0) {
+            return Err(format!(
+                "parameter '{}_bias_tau' must be positive when {}_bias_instability is set",
+                crate::sensors::NAMES[i],
+                crate::sensors::NAMES[i]
+            ));
+        }
+    }
+    Ok(
+        Simulation::new(vehicle, track, config, noise, int(vr::NOISE_SEED) as u64)
+            .with_sensors(spec),
+    )
 }
 
 impl Model for RailVehicle {

@@ -18,6 +18,7 @@ pub mod dynamics;
 pub mod fmu;
 pub mod modal;
 pub mod params;
+pub mod sensors;
 pub mod simulation;
 pub mod track;
 

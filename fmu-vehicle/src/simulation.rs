@@ -48,8 +48,13 @@
 //! its own that never overlaps the first in any run, so adding it left the other sensors' noise
 //! (and every output that depends on it) bit for bit as it was, for every seed and whatever
 //! `sigma_roll_gyro` is. Both generators are part of the FMU state.
+//!
+//! Sensor errors (bias, drift, scale, misalignment, anti-alias filter, noise density, range,
+//! quantization) are [`crate::sensors`]; all off by default. The `_clean` and `_true` outputs
+//! stay the true quantities, without them.
 
 use crate::dynamics::{Diagnostics, Dof, GRAVITY, Vehicle, WheelsetTrack, dof};
+use crate::sensors::{SensorSpec, Sensors};
 use crate::track::{Irregularity, Track};
 use serde::{Deserialize, Serialize};
 
@@ -263,6 +268,8 @@ pub struct Simulation {
     pub rng: NoiseRng,
     /// The roll gyroscope's generator: `rng` at the start, jumped by 2^128 draws.
     pub roll_rng: NoiseRng,
+    /// The sensors' errors and their state (drift generator: `rng` jumped twice).
+    pub sensors: Sensors,
     /// Displacements from static equilibrium, laid out as [`dof`] says.
     pub q: Dof,
     /// Velocities, laid out like `q`.
@@ -311,6 +318,7 @@ impl Simulation {
             config,
             noise,
             roll_rng: rng.jumped(),
+            sensors: Sensors::new([SensorSpec::default(); 4], rng.jumped().jumped()),
             rng,
             q: Dof::zeros(),
             qd: Dof::zeros(),
@@ -318,8 +326,15 @@ impl Simulation {
             outputs: Outputs::default(),
             substeps: 0,
         };
-        sim.outputs = sim.measure(0.0, false);
+        sim.outputs = sim.measure(0.0, false, 0.0, 0.0);
         sim
+    }
+
+    /// These sensor errors ([`crate::sensors`]) on the sensors, the outputs measured again.
+    pub fn with_sensors(mut self, spec: [SensorSpec; 4]) -> Simulation {
+        self.sensors = Sensors::new(spec, self.rng.jumped().jumped());
+        self.outputs = self.measure(0.0, false, 0.0, 0.0);
+        self
     }
 
     /// The (ramped) irregularities at track position `s`.
@@ -364,7 +379,11 @@ impl Simulation {
             .at_load(self.vehicle.static_wheel_load[0]);
         let lambda = (2.0 * c.f22 / (v * p.mass))
             .max(2.0 * c.f11 * p.half_gauge * p.half_gauge / (v * p.yaw_inertia));
-        self.config.max_internal_step.min(0.5 / lambda)
+        let step = self.config.max_internal_step.min(0.5 / lambda);
+        match self.sensors.max_bandwidth() {
+            bw if bw > 0.0 => step.min(0.25 / bw),
+            _ => step,
+        }
     }
 
     /// Advances by `h` at speed `v` (held over the step) and updates the outputs.
@@ -377,12 +396,74 @@ impl Simulation {
             // A master's clock rounding (h a few ulps over the step) must not add a substep.
             let n = fmi_abi::step::substeps(h, self.internal_step(v));
             let dt = h / n as f64;
-            for _ in 0..n {
+            let filtering = self.sensors.max_bandwidth() > 0.0;
+            for k in 0..n {
                 self.rk4(dt, v);
+                // The anti-alias filters see every substep; the last one's end is measured below.
+                if filtering && k + 1 < n {
+                    let (u, c) = self.true_sensors(v);
+                    let sensed = self.sensors.sensed(u, c);
+                    self.sensors.filter(sensed, dt);
+                }
             }
             self.substeps += n as u64;
+            self.outputs = self.measure(v, true, dt, h);
+            return;
         }
-        self.outputs = self.measure(if moving { v } else { 0.0 }, true);
+        self.outputs = self.measure(0.0, true, h, h);
+    }
+
+    /// The accelerations and diagnostics at the current state at speed `v`; standing (`v`
+    /// 0) the accelerations are 0 and the diagnostics are evaluated at a stand-in speed.
+    fn accelerations_now(&self, v: f64) -> (Dof, Diagnostics) {
+        if v > 0.0 {
+            self.accelerations(&self.q, &self.qd, v, self.s)
+        } else {
+            (
+                Dof::zeros(),
+                self.accelerations(&self.q, &self.qd, self.config.min_speed.max(1e-3), self.s)
+                    .1,
+            )
+        }
+    }
+
+    /// The four sensors' true quantities at the current state and, for each, the one its
+    /// misalignment couples in ([`crate::sensors`]): `(u, c)` in [`crate::sensors::NAMES`]
+    /// order. Standing (`v` 0) the accelerations are 0 and the rates too.
+    fn true_sensors(&self, v: f64) -> ([f64; 4], [f64; 4]) {
+        let (acc, diag) = self.accelerations_now(v);
+        let vertical_ds2 = self.irregularity(self.s).vertical_ds2;
+        self.sensor_values(&acc, &diag, v, vertical_ds2)
+    }
+
+    /// `(u, c)` of [`Simulation::true_sensors`] from the accelerations, with the vertical
+    /// profile's curvature at the leading wheelset (the measurement has it already).
+    fn sensor_values(
+        &self,
+        acc: &Dof,
+        diag: &Diagnostics,
+        v: f64,
+        vertical_ds2: f64,
+    ) -> ([f64; 4], [f64; 4]) {
+        let (q, qd) = (&self.q, &self.qd);
+        let a = self.vehicle.params.bogie.semi_wheelbase;
+        let w = dof::wheelset(0);
+        let b = dof::bogie(0);
+        let ws_acc = acc[w] + GRAVITY * diag.wheelset_roll[0];
+        let gyro = qd[w + 1];
+        let frame_acc = acc[b + dof::Y] + a * acc[b + dof::YAW] + GRAVITY * q[b + dof::ROLL];
+        // See the module docs; standing, `diag` was evaluated at a stand-in speed.
+        let roll_rate = if v > 0.0 {
+            diag.wheelset_roll_rate[0]
+        } else {
+            0.0
+        };
+        let ws_vertical = GRAVITY + v * v * vertical_ds2;
+        let frame_vertical = GRAVITY + acc[b + dof::Z] - a * acc[b + dof::PITCH];
+        (
+            [ws_acc, gyro, frame_acc, roll_rate],
+            [ws_vertical, roll_rate, frame_vertical, gyro],
+        )
     }
 
     fn rk4(&mut self, dt: f64, v: f64) {
@@ -399,42 +480,54 @@ impl Simulation {
         self.s = s0 + v * dt;
     }
 
-    /// Sensor and truth outputs at the current state; `noisy` draws the sensor noise.
-    fn measure(&mut self, v: f64, noisy: bool) -> Outputs {
-        let (acc, diag) = if v > 0.0 {
-            self.accelerations(&self.q, &self.qd, v, self.s)
-        } else {
-            (
-                Dof::zeros(),
-                self.accelerations(&self.q, &self.qd, self.config.min_speed.max(1e-3), self.s)
-                    .1,
-            )
-        };
-        let (q, qd) = (&self.q, &self.qd);
+    /// Sensor and truth outputs at the current state; `noisy` draws the sensor noise and
+    /// advances the sensors' drift, `dt` being the last substep (for the anti-alias filters)
+    /// and the step (for the drift) at once when standing.
+    fn measure(&mut self, v: f64, noisy: bool, dt: f64, h: f64) -> Outputs {
+        let (acc, diag) = self.accelerations_now(v);
         let a = self.vehicle.params.bogie.semi_wheelbase;
         let w = dof::wheelset(0);
         let b = dof::bogie(0);
         let irr = self.irregularity(self.s);
-        let ws_acc = acc[w] + GRAVITY * diag.wheelset_roll[0];
-        let gyro = qd[w + 1];
-        let frame_acc = acc[b + dof::Y] + a * acc[b + dof::YAW] + GRAVITY * q[b + dof::ROLL];
-        // See the module docs; standing, `diag` was evaluated at a stand-in speed.
-        let roll_rate = if v > 0.0 {
-            diag.wheelset_roll_rate[0]
-        } else {
-            0.0
-        };
-        let (mut n1, mut n2, mut n3, mut n4) = (0.0, 0.0, 0.0, 0.0);
+        let (u, c) = self.sensor_values(&acc, &diag, v, irr.vertical_ds2);
+        let [ws_acc, gyro, frame_acc, roll_rate] = u;
+        let mut n = [0.0; 4];
         if noisy && self.noise.enabled {
-            n1 = self.noise.sigma_acc * self.rng.normal();
-            n2 = self.noise.sigma_gyro * self.rng.normal();
-            n3 = self.noise.sigma_acc * self.rng.normal();
-            n4 = self.noise.sigma_roll_gyro * self.roll_rng.normal();
+            n = [
+                self.rng.normal(),
+                self.rng.normal(),
+                self.rng.normal(),
+                self.roll_rng.normal(),
+            ];
         }
+        let sigma = [
+            self.noise.sigma_acc,
+            self.noise.sigma_gyro,
+            self.noise.sigma_acc,
+            self.noise.sigma_roll_gyro,
+        ];
+        let sensed = self.sensors.sensed(u, c);
+        if self.sensors.max_bandwidth() > 0.0 {
+            let filter_dt = if dt > 0.0 {
+                dt
+            } else {
+                self.config.max_internal_step
+            };
+            self.sensors.filter(sensed, filter_dt);
+        }
+        // The communication step, for the drift and the noise density's bandwidth; 0 (no
+        // drift, no density noise) when not sampling.
+        let h = if noisy { h } else { 0.0 };
+        let y = if self.sensors.is_ideal() {
+            std::array::from_fn(|i| u[i] + sigma[i] * n[i])
+        } else {
+            self.sensors.sample(sensed, h, sigma, n)
+        };
+        let (q, qd) = (&self.q, &self.qd);
         Outputs {
-            ws_acc_y: ws_acc + n1,
-            ws_yaw_rate: gyro + n2,
-            frame_acc_y: frame_acc + n3,
+            ws_acc_y: y[0],
+            ws_yaw_rate: y[1],
+            frame_acc_y: y[2],
             ws_acc_y_clean: ws_acc,
             ws_yaw_rate_clean: gyro,
             frame_acc_y_clean: frame_acc,
@@ -458,7 +551,7 @@ impl Simulation {
             wheel_load_left: diag.wheel_loads[0][0],
             wheel_load_right: diag.wheel_loads[0][1],
             forward_speed: v,
-            ws_roll_rate: roll_rate + n4,
+            ws_roll_rate: y[3],
             ws_roll_rate_clean: roll_rate,
         }
     }
