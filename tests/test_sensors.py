@@ -116,3 +116,64 @@ def test_the_kalman_filter_keeps_its_1_ms_clock_at_2_ms(clean):
     np.testing.assert_array_equal(slow["alignment_kalman"], fast["alignment_kalman"][1::2])
     m = ta.band_metrics(slow["distance"], slow["alignment"], clean["distance"], clean["alignment"])
     assert m["D2"]["Jrel"] < 0.15
+
+
+def test_the_estimators_bias_and_clock_are_part_of_its_state(clean):
+    """A state saved in the middle of a standstill (the bias's running statistics) and between
+    two model steps (0.75 ms samples: a part of a 1 ms step pending) replays bit for bit."""
+    import fmpy
+    from fmpy.fmi2 import FMU2Slave
+    path = packaged_fmus()["AlignmentEstimator"]
+    md = fmpy.read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    unzip = fmpy.extract(str(path))
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzip, modelIdentifier="AlignmentEstimator",
+                    instanceName="state")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.setReal([vr["bias_sigma_ws_yaw_rate"]], [1e-3])
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    cols, ns = with_standstill(clean, (0.0, 2e-4, 0.0))
+    h = 7.5e-4
+    inputs = [vr[k] for k in ("ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed")]
+    outputs = [vr[k] for k in ("alignment", "alignment_kalman", "ws_yaw_rate_bias", "distance")]
+
+    def steps(k0, n):
+        out = []
+        for k in range(k0, k0 + n):
+            fmu.setReal(inputs, [cols["ws_acc_y"][k], cols["ws_yaw_rate"][k], cols["frame_acc_y"][k],
+                                 cols["speed"][k]])
+            fmu.doStep(k * h, h)
+            out.append(fmu.getReal(outputs))
+        return np.array(out)
+
+    steps(0, ns - 1001)
+    state = fmu.getFMUstate()
+    first = steps(ns - 1001, 3001)
+    fmu.setFMUstate(state)
+    again = steps(ns - 1001, 3001)
+    fmu.freeFMUstate(state)
+    fmu.terminate()
+    fmu.freeInstance()
+    assert np.array_equal(first, again)
+    assert abs(first[-1, 2] - 2e-4) < 4 * 5e-4 / np.sqrt(ns - 1)
+
+
+@pytest.mark.parametrize("bias", [0.0, 2e-4])
+def test_an_untold_gyro_bias_is_warned_of_after_a_kilometre(make_slave, bias):
+    """60 s at 20 m/s (1200 m) of a zero-mean yaw-rate wave, with and without 2e-4 rad/s
+    added: only the biased run logs the warning, once, naming the mean."""
+    from fmi_harness import WARNING
+    s = make_slave("bias", logging_on=True)
+    assert s.initialize({"estimator": 1}) == 0
+    inputs = [s.vr[k] for k in ("ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed")]
+    for k in range(60_000):
+        t = k * 1e-3
+        s.fmu.setReal(inputs, [0.0, 3e-3 * np.sin(2.0 * t) + bias, 0.0, 20.0])
+        assert s.step(t, 1e-3) <= WARNING
+    warned = [m for m in s.log.messages(WARNING) if "gyroscope bias is likely" in m]
+    if bias:
+        assert len(warned) == 1 and "2.0" in warned[0] and "1000 m" in warned[0], warned
+    else:
+        assert warned == []

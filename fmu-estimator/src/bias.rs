@@ -23,11 +23,24 @@
 //! standstill began with (0 at the start). A later standstill refines it the same way, so a
 //! bias that wanders is followed from stop to stop. In motion it is held. With every
 //! `sigma_i` 0 (the default) nothing is estimated and the samples pass unchanged.
+//!
+//! # A bias suspected in motion
+//! Whatever the priors, the yaw rate's mean over the distance run since the last standstill
+//! (after the estimated bias is removed) is kept: on straight track it has an rms of 1.9e-5
+//! rad/s over 1000 m (above), so a mean beyond [`SUSPECT_LEVEL`] after [`SUSPECT_DISTANCE`] is
+//! a gyroscope bias the estimator was not told of or could not see (no standstill), and the
+//! FMU says so once in its log. On a curved line the design curvature's `V / R` is such a mean
+//! too.
 
 use serde::{Deserialize, Serialize};
 
 /// Below this speed \[m/s\] the train stands still: its sensors read their biases.
 pub const STANDSTILL_SPEED: f64 = 0.01;
+/// The distance \[m\] over which the yaw rate's mean is judged.
+pub const SUSPECT_DISTANCE: f64 = 1000.0;
+/// The yaw rate's mean \[rad/s\] beyond which a bias is suspected: five times its rms over
+/// 1000 m of straight track.
+pub const SUSPECT_LEVEL: f64 = 1e-4;
 
 /// The sensors' biases and the current standstill's statistics. Part of the FMU state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,6 +57,10 @@ pub struct Bias {
     /// Their running mean and sum of squared deviations (Welford).
     mean: [f64; 4],
     m2: [f64; 4],
+    /// Distance run since the last standstill \[m\], and the integral of the corrected yaw rate
+    /// over it \[rad\].
+    #[serde(default)]
+    moved: (f64, f64),
 }
 
 impl Bias {
@@ -56,6 +73,7 @@ impl Bias {
             n: 0,
             mean: [0.0; 4],
             m2: [0.0; 4],
+            moved: (0.0, 0.0),
         }
     }
 
@@ -64,9 +82,17 @@ impl Bias {
         self.sigma.iter().any(|s| *s > 0.0)
     }
 
-    /// One sample at `speed`: at a standstill it refines the estimate, in motion it ends the
-    /// standstill. Non-finite samples are left out.
-    pub fn observe(&mut self, speed: f64, x: &[f64; 4]) {
+    /// One sample at `speed` after a step of `h`: at a standstill it refines the estimate, in
+    /// motion it ends the standstill and adds to the yaw rate's mean. Non-finite samples are
+    /// left out.
+    pub fn observe(&mut self, speed: f64, h: f64, x: &[f64; 4]) {
+        if speed.abs() < STANDSTILL_SPEED {
+            self.moved = (0.0, 0.0);
+        } else if speed.is_finite() && x[1].is_finite() {
+            let ds = speed * h;
+            self.moved.0 += ds;
+            self.moved.1 += (x[1] - self.estimate[1]) * ds;
+        }
         if !self.active() {
             return;
         }
@@ -83,10 +109,10 @@ impl Bias {
         }
         self.n += 1;
         let n = self.n as f64;
-        for i in 0..4 {
-            let d = x[i] - self.mean[i];
+        for (i, &xi) in x.iter().enumerate() {
+            let d = xi - self.mean[i];
             self.mean[i] += d / n;
-            self.m2[i] += d * (x[i] - self.mean[i]);
+            self.m2[i] += d * (xi - self.mean[i]);
             if self.sigma[i] > 0.0 && self.n >= 2 {
                 let var = self.m2[i] / (n - 1.0);
                 let prior = self.sigma[i] * self.sigma[i];
@@ -94,6 +120,14 @@ impl Bias {
                 self.estimate[i] = self.start[i] + w * (self.mean[i] - self.start[i]);
             }
         }
+    }
+
+    /// The yaw rate's mean since the last standstill \[rad/s\] when it suggests a bias (module
+    /// docs), with the distance it is over.
+    pub fn suspected_yaw_bias(&self) -> Option<(f64, f64)> {
+        let (distance, integral) = self.moved;
+        let mean = integral / distance;
+        (distance >= SUSPECT_DISTANCE && mean.abs() > SUSPECT_LEVEL).then_some((mean, distance))
     }
 
     /// `x` with the estimated biases removed.
@@ -115,7 +149,9 @@ mod tests {
             // Sum of 12 uniforms minus 6: close enough to a unit normal for this check.
             (0..12)
                 .map(|_| {
-                    state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    state = state
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
                     (state >> 11) as f64 / (1u64 << 53) as f64
                 })
                 .sum::<f64>()
@@ -129,7 +165,7 @@ mod tests {
             .map(|_| std::array::from_fn(|i| truth[i] + noise_sigma[i] * noise()))
             .collect();
         for x in &samples {
-            b.observe(0.0, x);
+            b.observe(0.0, 1e-3, x);
         }
         for i in 0..4 {
             let n = samples.len() as f64;
@@ -140,29 +176,57 @@ mod tests {
             } else {
                 0.0
             };
-            assert!((b.estimate[i] - w * m).abs() <= 1e-12 * m.abs().max(1e-9), "{i}");
+            assert!(
+                (b.estimate[i] - w * m).abs() <= 1e-12 * m.abs().max(1e-9),
+                "{i}"
+            );
         }
         // Within 5 standard errors of the truth for the estimated ones; 0 for the other.
         assert!((b.estimate[1] - 1e-3).abs() < 5.0 * 5e-4 / 2000f64.sqrt());
         assert_eq!(b.estimate[2], 0.0);
         // In motion the estimate holds, and the samples are corrected by it.
         let held = b.estimate;
-        b.observe(20.0, &[9.0; 4]);
+        b.observe(20.0, 1e-3, &[9.0; 4]);
         assert_eq!(b.estimate, held);
         assert_eq!(b.remove(&[1.0; 4])[1], 1.0 - held[1]);
         // A second standstill starts from the first's estimate: with the truth moved, the
         // estimate moves to it.
         for x in &samples {
-            b.observe(0.0, &std::array::from_fn(|i| x[i] + 2e-4));
+            b.observe(0.0, 1e-3, &std::array::from_fn(|i| x[i] + 2e-4));
         }
         assert!((b.estimate[1] - 1.2e-3).abs() < 5.0 * 5e-4 / 2000f64.sqrt());
+    }
+
+    /// 1020 m at 20 m/s: a yaw-rate wave of zero mean is not suspected, the same with 2e-4
+    /// rad/s added is (its mean found), before 1000 m it is not judged, and a standstill
+    /// starts the mean again.
+    #[test]
+    fn a_yaw_rate_mean_beyond_a_straight_tracks_is_suspected() {
+        let run = |offset: f64, seconds: f64| {
+            let mut b = Bias::new([0.0; 4]);
+            for k in 0..(seconds / 1e-3) as usize {
+                let w = 3e-3 * (k as f64 * 1e-3 * 2.0).sin() + offset;
+                b.observe(20.0, 1e-3, &[0.0, w, 0.0, 0.0]);
+            }
+            b
+        };
+        assert_eq!(run(0.0, 51.0).suspected_yaw_bias(), None);
+        let (mean, distance) = run(2e-4, 51.0).suspected_yaw_bias().unwrap();
+        // The wave's own mean over 51 s: 3e-3 (1 - cos 102) / 102.
+        let want = 2e-4 + 3e-3 * (1.0 - 102f64.cos()) / 102.0;
+        assert!((mean - want).abs() < 1e-6, "{mean} vs {want}");
+        assert!((distance - 1020.0).abs() < 1e-6);
+        assert_eq!(run(2e-4, 49.0).suspected_yaw_bias(), None);
+        let mut b = run(2e-4, 51.0);
+        b.observe(0.0, 1e-3, &[0.0; 4]);
+        assert_eq!(b.suspected_yaw_bias(), None);
     }
 
     #[test]
     fn without_priors_nothing_is_estimated() {
         let mut b = Bias::new([0.0; 4]);
         for _ in 0..10 {
-            b.observe(0.0, &[1.0, 2.0, 3.0, 4.0]);
+            b.observe(0.0, 1e-3, &[1.0, 2.0, 3.0, 4.0]);
         }
         assert_eq!(b.estimate, [0.0; 4]);
         assert!(!b.active());

@@ -619,10 +619,14 @@ mod tests {
         // 0.75 ms: four samples fill three model steps, as 0.75 + 0.25 | 0.5 + 0.5 | 0.25 + 0.75.
         let (mut at_1ms, mut odd) = (engine(None), engine(Some(1e-3)));
         for k in 0..1_000 {
-            let z: Vec<Vec4> = (0..4).map(|i| sensors((4 * k + i) as f64 * 7.5e-4)).collect();
+            let z: Vec<Vec4> = (0..4)
+                .map(|i| sensors((4 * k + i) as f64 * 7.5e-4))
+                .collect();
             for (a, b) in [(0, 1), (1, 2), (2, 3)] {
                 let wa = [0.75, 0.5, 0.25][a];
-                at_1ms.step(20.0, 1e-3, &(z[a] * wa + z[b] * (1.0 - wa))).unwrap();
+                at_1ms
+                    .step(20.0, 1e-3, &(z[a] * wa + z[b] * (1.0 - wa)))
+                    .unwrap();
             }
             for zi in &z {
                 odd.step(20.0, 7.5e-4, zi).unwrap();

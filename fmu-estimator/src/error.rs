@@ -346,6 +346,11 @@ pub enum SampleError {
         "input 'speed' = {0} m/s is negative: the estimator is for forward running (give the speed's magnitude along the direction the sensors were mounted for)"
     )]
     NegativeSpeed(f64),
+    /// The sample step is longer than [`crate::plausible::MAX_SAMPLE_STEP`] (the value, s).
+    #[error(
+        "step {0:e} s is longer than 1 s: the estimator takes sensor samples every 0.5 ms to 1 s (its Kalman filter runs 1 ms steps through each)"
+    )]
+    StepTooLong(f64),
     /// The steady-state gain for the sample's speed could not be computed.
     #[error(transparent)]
     Gain(#[from] GainError),

@@ -40,6 +40,8 @@ pub struct Estimator {
     outside: bool,
     /// Whether `outside_training` has set in this run (warned once).
     novelty_warned: bool,
+    /// Whether a yaw-rate bias was suspected in this run (warned once).
+    bias_warned: bool,
     /// The step size warned about, if any (once).
     step_warned: bool,
     /// Warnings that recur per step, logged once and counted.
@@ -144,6 +146,7 @@ impl Model for Estimator {
             bias: crate::bias::Bias::new([0.0; 4]),
             outside: false,
             novelty_warned: false,
+            bias_warned: false,
             step_warned: false,
             repeats: Default::default(),
         })
@@ -186,6 +189,7 @@ impl Model for Estimator {
         self.holding = false;
         self.outside = false;
         self.novelty_warned = false;
+        self.bias_warned = false;
         self.step_warned = false;
         self.repeats.clear();
         self.write_outputs(v);
@@ -256,6 +260,7 @@ impl Model for Estimator {
                 v.boolean[vr::UPDATED as usize] = updated;
                 self.note_speed_range(input.speed, log);
                 self.note_novelty(v.real[vr::DISTANCE as usize], log);
+                self.note_bias(v.real[vr::DISTANCE as usize], log);
                 self.write_outputs(v);
                 Ok(outcome)
             }
@@ -336,6 +341,18 @@ impl Estimator {
     }
 
     /// `outside_training` setting for the first time in the run: said once.
+    /// A yaw-rate mean that straight track does not give ([`crate::bias`]): said once.
+    fn note_bias(&mut self, distance: f64, log: &Logger) {
+        if let Some((mean, over)) = self.bias.suspected_yaw_bias()
+            && !self.bias_warned
+        {
+            log.warning(&format!(
+                "at {distance:.1} m the yaw rate's mean over the last {over:.0} m is {mean:.2e} rad/s, beyond the 1e-4 rad/s of straight track: a gyroscope bias is likely, and the estimate may be several times less accurate; set bias_sigma_ws_yaw_rate and start the run standing still (said once)"
+            ));
+            self.bias_warned = true;
+        }
+    }
+
     fn note_novelty(&mut self, distance: f64, log: &Logger) {
         if let Some(l) = self.learned.as_ref()
             && !self.novelty_warned

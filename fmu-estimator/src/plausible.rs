@@ -5,6 +5,7 @@
 //! | `speed` | negative: an error | the model is for forward running (creep terms divide by the speed; a reversing train is another vehicle orientation) |
 //! | accelerometers | beyond [`MAX_ACC`]: the sample is skipped like a non-finite one | no axle-box or frame accelerometer reads 200 g; such a value is a fault, and one sample of 1e300 m/s2 would otherwise put 1e301 m into the estimate |
 //! | gyroscopes | beyond [`MAX_RATE`]: skipped likewise | a wheelset does not turn at 100 rad/s about a vertical or longitudinal axis |
+//! | the step | longer than [`MAX_SAMPLE_STEP`]: an error | the Kalman filter runs on its 1 ms clock (`Engine::step`): a step of `h` is `h / 1 ms` filter steps, and no sensor samples this rarely |
 
 use crate::error::SampleError;
 
@@ -13,6 +14,18 @@ use crate::error::SampleError;
 pub const MAX_ACC: f64 = 2000.0;
 /// Largest plausible angular-rate sample \[rad/s\].
 pub const MAX_RATE: f64 = 100.0;
+
+/// Longest sample step \[s\]: 1000 of the Kalman filter's 1 ms steps per sample (sensors for
+/// this sample at 100 Hz and faster).
+pub const MAX_SAMPLE_STEP: f64 = 1.0;
+
+/// An error if the sample step `h` is longer than [`MAX_SAMPLE_STEP`].
+pub fn sample_step(h: f64) -> Result<(), SampleError> {
+    if h > MAX_SAMPLE_STEP {
+        return Err(SampleError::StepTooLong(h));
+    }
+    Ok(())
+}
 
 /// An error if `speed` is negative (NaN and infinite speeds are held over, not refused).
 pub fn speed(speed: f64) -> Result<(), SampleError> {
@@ -45,6 +58,13 @@ pub fn sensors(x: &mut [f64; 4]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_step_over_a_second_is_refused() {
+        assert!(sample_step(1e-3).is_ok() && sample_step(1.0).is_ok());
+        let e = sample_step(1e300).unwrap_err().to_string();
+        assert!(e.contains("1e300") && e.contains("step"), "{e}");
+    }
 
     #[test]
     fn negative_speeds_are_refused_by_name() {

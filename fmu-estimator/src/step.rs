@@ -72,8 +72,9 @@ pub fn step(
     input: Input,
 ) -> Result<Stepped, SampleError> {
     let speed = input.speed;
+    crate::plausible::sample_step(h)?;
     crate::plausible::speed(speed)?;
-    bias.observe(speed, &input.sensors);
+    bias.observe(speed, h, &input.sensors);
     if speed.is_finite() {
         *distance += speed * h;
     }
