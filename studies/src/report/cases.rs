@@ -72,6 +72,9 @@ pub fn outputs(groups: &[Group], first_seed: u32) -> Vec<String> {
                 names.push(format!("{title}.svg"))
             }
         }
+        if *g == Group::Robustness {
+            names.push("sensors.json".into());
+        }
     }
     names
 }
@@ -137,6 +140,20 @@ pub fn cases(
     let results = cases::run_cases(fmus, &all, seeds, &|| progress(Progress::Done));
     progress(Progress::Finished);
     let results = results?;
+    // The sensor table: the vehicle FMU's sensor errors (ours; another vehicle FMU has none).
+    let sensors = if groups.contains(&Group::Robustness) {
+        if crate::study::interface::has_parameter(&fmus.vehicle, "sensor_grade") {
+            Some(crate::study::sensors::run(fmus, seeds)?)
+        } else {
+            log(&format!(
+                "robustness: the sensor table needs a vehicle FMU with sensor errors (parameter sensor_grade); {} has none",
+                fmus.vehicle.display()
+            ));
+            None
+        }
+    } else {
+        None
+    };
     // The figures are drawn into the directory.
     create_dir(out)?;
     let mut report = Report::default();
@@ -162,6 +179,12 @@ pub fn cases(
                 report.figures.push(path);
                 md.push_str(&format!("![{title}: Jrel per band]({svg})\n\n"));
             }
+        }
+        if let (Group::Robustness, Some(sensors)) = (group, &sensors) {
+            md.push_str(&crate::study::sensors::markdown(seeds, sensors));
+            md.push('\n');
+            let json = serde_json::to_string_pretty(sensors).unwrap_or_default();
+            report.file(out.join("sensors.json"), json);
         }
     }
     let report_path = out.join("report.md");

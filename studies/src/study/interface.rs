@@ -33,6 +33,16 @@ pub struct Interface {
     pub roll_rate: bool,
 }
 
+/// Whether the FMU at `path` has a parameter `name` (false when it cannot be opened: the run
+/// that loads it says why).
+pub fn has_parameter(path: &Path, name: &str) -> bool {
+    Fmu::open_shared(path).is_ok_and(|fmu| {
+        fmu.model_description()
+            .variable(name)
+            .is_some_and(|v| v.causality == Causality::Parameter)
+    })
+}
+
 /// The vehicle FMU at `path` checked: an error naming the file and every variable missing or
 /// of the wrong causality, else what it offers of the optional part.
 pub fn check(path: &Path) -> Result<Interface, Error> {

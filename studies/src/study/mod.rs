@@ -11,6 +11,7 @@ pub mod optimize;
 pub mod plot;
 pub mod records;
 pub mod runs;
+pub mod sensors;
 pub mod standard;
 pub mod standard_case;
 pub mod variants;

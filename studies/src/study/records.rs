@@ -77,6 +77,18 @@ pub fn record_with(
     Ok(record_table(fmus, settings, stop, speed, roll_rate, &[])?.0)
 }
 
+/// [`record`] with the communication step `step` (the sensors' sample step).
+pub fn record_stepped(
+    fmus: &Fmus,
+    settings: Settings,
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+    step: f64,
+) -> Result<Record, Error> {
+    let table = super::runs::vehicle_run_stepped(fmus, settings, &RECORDED, stop, speed, step)?;
+    from_table(&table)
+}
+
 /// [`record_with`], also recording the vehicle's variables `more`: the record and the table
 /// of every recorded column.
 pub fn record_table(

@@ -172,6 +172,10 @@ pub const STOP: f64 = 20.0;
 pub const STEP: f64 = 1e-3;
 
 fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
+    options_at(stop, record, STEP)
+}
+
+fn options_at(stop: f64, record: Vec<Endpoint>, step: f64) -> RunOptions {
     RunOptions {
         record: Some(record),
         log: LogConfig {
@@ -179,7 +183,7 @@ fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
             ..LogConfig::default()
         },
         collect: true,
-        ..RunOptions::new(0.0, stop, STEP)
+        ..RunOptions::new(0.0, stop, step)
     }
 }
 
@@ -213,6 +217,18 @@ pub fn vehicle_run_driven(
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
 ) -> Result<Table, Error> {
+    vehicle_run_stepped(fmus, settings, variables, stop, speed, STEP)
+}
+
+/// [`vehicle_run_driven`] with the communication step `step` (the sensors' sample step).
+pub fn vehicle_run_stepped(
+    fmus: &Fmus,
+    settings: Settings,
+    variables: &[&str],
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+    step: f64,
+) -> Result<Table, Error> {
     let system = System {
         name: "vehicle".into(),
         components: vec![Component {
@@ -233,12 +249,16 @@ pub fn vehicle_run_driven(
         .map(|v| Endpoint::new("vehicle", v))
         .collect();
     let Some(speed) = speed else {
-        return run(system, stop, record);
+        let cosim = Cosimulation::load(system)?;
+        let summary = cosim.run(&options_at(stop, record, step))?;
+        return summary
+            .table
+            .ok_or_else(|| Error::Input("no table was collected".into()));
     };
     let cosim = Cosimulation::load(system)?;
     let inputs = [Endpoint::new("vehicle", "speed")];
     let fill = |t: f64, out: &mut [f64]| out[0] = speed(t);
-    let opts = options(stop, record);
+    let opts = options_at(stop, record, step);
     let summary = cosim.runner(&opts).inputs(&inputs, &fill).run()?;
     summary
         .table
