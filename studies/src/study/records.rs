@@ -77,16 +77,19 @@ pub fn record_with(
     Ok(record_table(fmus, settings, stop, speed, roll_rate, &[])?.0)
 }
 
-/// [`record`] with the communication step `step` (the sensors' sample step).
+/// [`record_with`] with the communication step `step` (the sensors' sample step).
 pub fn record_stepped(
     fmus: &Fmus,
     settings: Settings,
     stop: f64,
     speed: Option<SpeedProfile<'_>>,
+    roll_rate: Option<&str>,
     step: f64,
 ) -> Result<Record, Error> {
-    let table = super::runs::vehicle_run_stepped(fmus, settings, &RECORDED, stop, speed, step)?;
-    from_table(&table)
+    let mut variables = RECORDED.to_vec();
+    variables.extend(roll_rate);
+    let table = super::runs::vehicle_run_stepped(fmus, settings, &variables, stop, speed, step)?;
+    with_roll_rate(from_table(&table)?, &table, roll_rate)
 }
 
 /// [`record_with`], also recording the vehicle's variables `more`: the record and the table
@@ -103,14 +106,23 @@ pub fn record_table(
     variables.extend(roll_rate);
     variables.extend(more);
     let table = vehicle_run_driven(fmus, settings, &variables, stop, speed)?;
-    let mut rec = from_table(&table)?;
+    let rec = with_roll_rate(from_table(&table)?, &table, roll_rate)?;
+    Ok((rec, table))
+}
+
+/// `rec` with the table's column `roll_rate` (when given) as the samples' roll rate.
+fn with_roll_rate(
+    mut rec: Record,
+    table: &Table,
+    roll_rate: Option<&str>,
+) -> Result<Record, Error> {
     if let Some(name) = roll_rate {
         let col = table
             .column(&format!("vehicle.{name}"))
             .ok_or_else(|| Error::Input(format!("no column vehicle.{name}")))?;
         rec.samples = Sample::with_roll_rate(rec.samples, &col[1..]);
     }
-    Ok((rec, table))
+    Ok(rec)
 }
 
 /// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row

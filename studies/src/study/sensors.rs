@@ -44,6 +44,8 @@ pub struct Condition {
     pub step: f64,
     /// The estimator's speed input over the true one (1.02: odometry 2 % high).
     pub odometry: f64,
+    /// The learned filter with the roll-rate gyroscope too (`use_roll_rate`).
+    pub roll_rate: bool,
 }
 
 fn condition(name: &str, vehicle: &[(&str, f64)]) -> Condition {
@@ -52,6 +54,7 @@ fn condition(name: &str, vehicle: &[(&str, f64)]) -> Condition {
         vehicle: vehicle.iter().map(|(n, v)| (n.to_string(), *v)).collect(),
         step: STEP,
         odometry: 1.0,
+        roll_rate: false,
     }
 }
 
@@ -117,6 +120,20 @@ pub fn conditions() -> Vec<Condition> {
         at_rate("200 Hz (5 ms), paper's noise density", 5e-3),
         condition("tactical preset (sensor_grade 1)", &[("sensor_grade", 1.0)]),
         condition("MEMS preset (sensor_grade 2)", &[("sensor_grade", 2.0)]),
+        Condition {
+            roll_rate: true,
+            ..condition(
+                "tactical preset, with the roll-rate gyroscope (use_roll_rate)",
+                &[("sensor_grade", 1.0)],
+            )
+        },
+        Condition {
+            roll_rate: true,
+            ..condition(
+                "MEMS preset, with the roll-rate gyroscope (use_roll_rate)",
+                &[("sensor_grade", 2.0)],
+            )
+        },
     ]
 }
 
@@ -147,17 +164,32 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         };
         settings.push((name.clone(), value));
     }
-    let rec: Record = record_stepped(fmus, settings, STANDSTILL + RUN, Some(&profile), c.step)?;
+    let roll = c.roll_rate.then_some("ws_roll_rate");
+    let rec: Record = record_stepped(
+        fmus,
+        settings,
+        STANDSTILL + RUN,
+        Some(&profile),
+        roll,
+        c.step,
+    )?;
     let mut samples = rec.samples.clone();
     for s in &mut samples {
         s.speed *= c.odometry;
     }
-    let told: Vec<(String, String)> = PRIORS
+    let mut told: Vec<(String, String)> = PRIORS
         .iter()
         .map(|(n, v)| (n.to_string(), v.to_string()))
         .collect();
     let mut paper = told.clone();
     paper.push(("estimator".into(), "1".into()));
+    let mut untold = vec![];
+    if c.roll_rate {
+        // The roll gyroscope told like the yaw gyroscope; the paper's filter does not read it.
+        told.push(("bias_sigma_ws_roll_rate".into(), PRIORS[1].1.into()));
+        told.push(("use_roll_rate".into(), "true".into()));
+        untold.push(("use_roll_rate".into(), "true".into()));
+    }
     let judge = |(distance, est): (Vec<f64>, Vec<f64>)| -> Result<BandMetrics, Error> {
         // At the true positions when odometry is off, else where the estimator puts them.
         let at = if c.odometry != 1.0 {
@@ -188,7 +220,12 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
             &told,
             Output::Alignment,
         )?)?,
-        judge(estimate_learned(&samples, c.step, &[], Output::Alignment)?)?,
+        judge(estimate_learned(
+            &samples,
+            c.step,
+            &untold,
+            Output::Alignment,
+        )?)?,
     ])
 }
 
