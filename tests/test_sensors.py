@@ -148,16 +148,30 @@ def test_the_estimators_bias_and_clock_are_part_of_its_state(clean):
             out.append(fmu.getReal(outputs))
         return np.array(out)
 
+    # A state in the standstill (the bias's running statistics)...
     steps(0, ns - 1001)
     state = fmu.getFMUstate()
     first = steps(ns - 1001, 3001)
     fmu.setFMUstate(state)
     again = steps(ns - 1001, 3001)
     fmu.freeFMUstate(state)
-    fmu.terminate()
-    fmu.freeInstance()
     assert np.array_equal(first, again)
     assert abs(first[-1, 2] - 2e-4) < 4 * 5e-4 / np.sqrt(ns - 1)
+    # ... and one in motion with 0.75 ms of a 1 ms filter step pending (2001 x 0.75 ms moving).
+    steps(ns + 2000, 1)
+    state = fmu.getFMUstate()
+    first = steps(ns + 2001, 1000)
+    updated = []
+    fmu.setFMUstate(state)
+    for k in range(ns + 2001, ns + 3001):
+        again_k = steps(k, 1)
+        updated.append(fmu.getBoolean([vr["updated"]])[0])
+        assert np.array_equal(again_k[0], first[k - ns - 2001]), k
+    fmu.freeFMUstate(state)
+    fmu.terminate()
+    fmu.freeInstance()
+    # Every fourth 0.75 ms sample completes no filter step, and says so.
+    assert updated.count(False) == 250 and updated[:4] == [True, True, True, False], updated[:8]
 
 
 @pytest.mark.parametrize("bias", [0.0, 2e-4])

@@ -52,8 +52,10 @@ pub struct Bias {
     pub estimate: [f64; 4],
     /// The estimate the current standstill began with.
     start: [f64; 4],
-    /// Samples of the current standstill (0 in motion).
-    n: u64,
+    /// Whether the last sample was standing.
+    standing: bool,
+    /// Finite samples of each sensor in the current standstill.
+    n: [u64; 4],
     /// Their running mean and sum of squared deviations (Welford).
     mean: [f64; 4],
     m2: [f64; 4],
@@ -70,7 +72,8 @@ impl Bias {
             sigma,
             estimate: [0.0; 4],
             start: [0.0; 4],
-            n: 0,
+            standing: false,
+            n: [0; 4],
             mean: [0.0; 4],
             m2: [0.0; 4],
             moved: (0.0, 0.0),
@@ -83,37 +86,36 @@ impl Bias {
     }
 
     /// One sample at `speed` after a step of `h`: at a standstill it refines the estimate, in
-    /// motion it ends the standstill and adds to the yaw rate's mean. Non-finite samples are
-    /// left out.
+    /// motion it ends the standstill and adds to the yaw rate's mean. Each sensor's non-finite
+    /// samples (a sensor not connected, one the plausibility check replaced) are left out of
+    /// that sensor's figures only.
     pub fn observe(&mut self, speed: f64, h: f64, x: &[f64; 4]) {
-        if speed.abs() < STANDSTILL_SPEED {
+        let standing = speed.abs() < STANDSTILL_SPEED;
+        if standing {
             self.moved = (0.0, 0.0);
         } else if speed.is_finite() && x[1].is_finite() {
             let ds = speed * h;
             self.moved.0 += ds;
             self.moved.1 += (x[1] - self.estimate[1]) * ds;
         }
-        if !self.active() {
-            return;
-        }
-        if !(speed.abs() < STANDSTILL_SPEED) || !x.iter().all(|v| v.is_finite()) {
-            if speed.abs() >= STANDSTILL_SPEED {
-                self.n = 0;
-            }
-            return;
-        }
-        if self.n == 0 {
+        if standing && !self.standing {
             self.start = self.estimate;
-            self.mean = [0.0; 4];
-            self.m2 = [0.0; 4];
+            (self.n, self.mean, self.m2) = ([0; 4], [0.0; 4], [0.0; 4]);
         }
-        self.n += 1;
-        let n = self.n as f64;
+        self.standing = standing;
+        if !standing || !self.active() {
+            return;
+        }
         for (i, &xi) in x.iter().enumerate() {
+            if self.sigma[i] <= 0.0 || !xi.is_finite() {
+                continue;
+            }
+            self.n[i] += 1;
+            let n = self.n[i] as f64;
             let d = xi - self.mean[i];
             self.mean[i] += d / n;
             self.m2[i] += d * (xi - self.mean[i]);
-            if self.sigma[i] > 0.0 && self.n >= 2 {
+            if self.n[i] >= 2 {
                 let var = self.m2[i] / (n - 1.0);
                 let prior = self.sigma[i] * self.sigma[i];
                 let w = prior / (prior + var / n);
@@ -220,6 +222,21 @@ mod tests {
         let mut b = run(2e-4, 51.0);
         b.observe(0.0, 1e-3, &[0.0; 4]);
         assert_eq!(b.suspected_yaw_bias(), None);
+    }
+
+    /// A sensor that is not connected (NaN) leaves the others' estimates as they would be.
+    #[test]
+    fn one_sensors_missing_samples_do_not_stop_the_others() {
+        let mut a = Bias::new([0.1, 1e-3, 0.1, 1e-3]);
+        let mut b = a.clone();
+        for k in 0..100 {
+            let x = [0.05 + 1e-3 * (k % 7) as f64, 2e-4, -0.01, 3e-4];
+            a.observe(0.0, 1e-3, &x);
+            b.observe(0.0, 1e-3, &[x[0], x[1], x[2], f64::NAN]);
+        }
+        assert_eq!(a.estimate[..3], b.estimate[..3]);
+        assert_eq!(b.estimate[3], 0.0);
+        assert!(a.estimate[3] != 0.0);
     }
 
     #[test]

@@ -16,8 +16,8 @@
 //! q = [[...7 numbers...], ...]   # 7 rows, discrete process noise covariance
 //! r = [[...4 numbers...], ...]   # 4 rows, measurement noise covariance
 //! ```
-//! When the FMU runs with another step `h`, Q is scaled by `h / step_size` (white process noise
-//! accumulates linearly in time) and a message says so.
+//! The Kalman filter runs at `step_size` whatever the sample step (`Engine::step`: samples held
+//! over their step), so Q and R are used as they were computed.
 //!
 //! # The diagonal model
 //! - `R = diag(sigma_acc_ws^2, sigma_yaw_rate^2, sigma_acc_frame^2, sigma_xi^2)`: the sensor
@@ -49,8 +49,8 @@ pub struct Calibration {
     /// The file's free-text `status` line ("unspecified" when absent), logged so a run says
     /// which calibration it used.
     pub status: String,
-    /// The step Q was computed for \[s\], positive: Q is scaled by `h / step_size` for a
-    /// run with step `h`.
+    /// The step Q and R were computed for \[s\], 1e-4 to 0.1: the Kalman filter runs at it
+    /// ([`crate::engine::Engine::step`]).
     pub step_size: f64,
     /// The discrete process noise covariance of the paper's 7 states at `step_size`
     /// (symmetric, non-negative diagonal), as the paper's section 4.2 estimates it.
@@ -157,7 +157,9 @@ pub fn parse(text: &str, path: &Path) -> Result<Option<Calibration>, Calibration
         (Some(q), Some(r)) => {
             let step_size = file
                 .step_size
-                .filter(|h| *h > 0.0 && h.is_finite())
+                // The filter runs at this step whatever the sample step: at most 1e4 filter
+                // steps per sample of up to 1 s.
+                .filter(|h| (1e-4..=0.1).contains(h))
                 .ok_or_else(|| CalibrationError::StepSize {
                     file: path.to_path_buf(),
                 })?;

@@ -263,9 +263,9 @@ pub enum CalibrationError {
         /// The matrix's entry name (`q` or `r`).
         name: &'static str,
     },
-    /// `step_size` is missing, zero, negative or not finite.
+    /// `step_size` is missing, or outside 0.1 ms to 0.1 s.
     #[error(
-        "{}: 'step_size' (the step Q was computed for) must be a positive number",
+        "{}: 'step_size' (the step Q and R were computed for, which the Kalman filter runs at) must be a number from 1e-4 to 0.1 s",
         file.display()
     )]
     StepSize {

@@ -251,6 +251,8 @@ impl Model for Estimator {
                         v.real[vr::NIS as usize] = nis;
                         true
                     }
+                    // A sample step shorter than the filter's: no update yet, nothing wrong.
+                    Err(Skip::Pending) => false,
                     Err(skip) => {
                         self.note_skip(skip, implausible.is_empty(), input.sensors, log);
                         outcome = StepOutcome::Warning;
@@ -329,7 +331,7 @@ impl Estimator {
                     )
                 });
             }
-            Skip::NonFinite => {}
+            Skip::NonFinite | Skip::Pending => {}
             Skip::NotPositiveDefinite => {
                 self.repeats
                     .warn(log, "innovation covariance not positive definite", || {
@@ -340,7 +342,6 @@ impl Estimator {
         }
     }
 
-    /// `outside_training` setting for the first time in the run: said once.
     /// A yaw-rate mean that straight track does not give ([`crate::bias`]): said once.
     fn note_bias(&mut self, distance: f64, log: &Logger) {
         if let Some((mean, over)) = self.bias.suspected_yaw_bias()
@@ -353,6 +354,7 @@ impl Estimator {
         }
     }
 
+    /// `outside_training` setting for the first time in the run: said once.
     fn note_novelty(&mut self, distance: f64, log: &Logger) {
         if let Some(l) = self.learned.as_ref()
             && !self.novelty_warned

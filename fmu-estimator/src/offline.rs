@@ -456,7 +456,7 @@ fn run_from(
             source,
         })?;
         if let step::Stepped::Filtered { update, .. } = stepped {
-            if update.is_err() {
+            if update.is_err_and(|skip| skip != crate::engine::Skip::Pending) {
                 out.skipped += 1;
             }
             if let Some(c) = checked_p.as_mut() {

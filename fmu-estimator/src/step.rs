@@ -6,11 +6,11 @@
 //!
 //! | stage | rule |
 //! |---|---|
-//! | distance | advances by `speed * h` for every finite speed, also while the filter holds |
-//! | biases | a standstill refines them, every sample has them removed ([`crate::bias`]) |
-//! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
 //! | roll-rate channel | read only when the learned taps use it; otherwise 0, so an unconnected or NaN roll-rate input changes nothing |
 //! | implausible sensors | replaced by NaN ([`crate::plausible::sensors`]): the measurement update is skipped, the prediction kept |
+//! | biases | a standstill refines them from the samples the two rows above leave, each sensor on its own; every sample has them removed ([`crate::bias`]) |
+//! | distance | advances by `speed * h` for every finite speed, also while the filter holds |
+//! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
 //! | filter speed | `design_speed` when set, else the sample's speed |
 //! | learned filter | steps with the sensors and the Kalman estimate, at the sample's own speed |
 
@@ -74,7 +74,12 @@ pub fn step(
     let speed = input.speed;
     crate::plausible::sample_step(h)?;
     crate::plausible::speed(speed)?;
-    bias.observe(speed, h, &input.sensors);
+    let mut x = input.sensors;
+    if !learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
+        x[3] = 0.0;
+    }
+    let implausible = crate::plausible::sensors(&mut x);
+    bias.observe(speed, h, &x);
     if speed.is_finite() {
         *distance += speed * h;
     }
@@ -83,11 +88,7 @@ pub fn step(
             finite_speed: speed.is_finite(),
         });
     }
-    let mut x = bias.remove(&input.sensors);
-    if !learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
-        x[3] = 0.0;
-    }
-    let implausible = crate::plausible::sensors(&mut x);
+    let x = bias.remove(&x);
     let filter_speed = if settings.design_speed > 0.0 {
         settings.design_speed
     } else {

@@ -17,15 +17,17 @@
 //!
 //!    The longitudinal specific force is not modelled (the speed is held over each step).
 //! 2. **anti-alias filter**: a second-order Butterworth low-pass of cut-off `bandwidth` \[Hz\]
-//!    (0: none; at most 2 kHz, which bounds the substeps at 20 per millisecond) on `u'`, evaluated at every Runge-Kutta substep (the internal step is then at
-//!    most `1 / (4 bandwidth)`) and discretized by the bilinear transform with the cut-off
+//!    (0: none; at most 2 kHz) on `u'`, evaluated at every Runge-Kutta substep (the internal
+//!    step is then at most `1 / (4 bandwidth)`, so at most 8 per millisecond; standing, at
+//!    substeps of that size too) and discretized by the bilinear transform with the cut-off
 //!    prewarped, so the sample is the filter's output at the communication point, as a MEMS
 //!    part's internal digital low-pass before its output data rate;
 //! 3. **scale factor error** `k`: `(1 + k) u'`;
 //! 4. **bias**: the turn-on bias `b0` (constant) plus a first-order Gauss-Markov bias of
 //!    stationary standard deviation `sigma_b` and correlation time `tau` \[s\]:
 //!    `b' = -b / tau + w`, `w` white of power spectral density `2 sigma_b^2 / tau` (two-sided),
-//!    so `b` has the PSD `2 sigma_b^2 tau / (1 + (2 pi f tau)^2)` (one-sided, per Hz) and the
+//!    so `b` has the PSD `4 sigma_b^2 tau / (1 + (2 pi f tau)^2)` (one-sided, per Hz: it
+//!    integrates to `sigma_b^2` over `f` from 0 to infinity) and the
 //!    exact discrete update over a step `h`:
 //!    `b_(k+1) = e^(-h / tau) b_k + sigma_b sqrt(1 - e^(-2 h / tau)) n_k`, `n_k` standard
 //!    normal. It starts at a draw from its stationary distribution. `tau` to infinity with
@@ -146,18 +148,27 @@ pub fn preset(grade: i32) -> Option<[SensorSpec; 4]> {
 }
 
 /// A second-order Butterworth low-pass, bilinear with the cut-off prewarped, for one step size
-/// (rebuilt when the substep changes), in direct form II transposed.
+/// (rebuilt when the substep changes). Direct form I: its state is the last two inputs and
+/// outputs, signals that mean the same under the new coefficients, so a change of substep (a
+/// speed change, a stop) does not jump the output as a direct form II state would.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct LowPass {
     dt: f64,
     b: [f64; 3],
     a: [f64; 2],
-    z: [f64; 2],
+    /// The last two inputs and outputs, newest first.
+    x: [f64; 2],
+    y: [f64; 2],
     started: bool,
 }
 
 impl LowPass {
+    /// Valid for `fc dt < 1 / 2` (the Nyquist frequency); the callers keep `fc dt <= 1 / 4`.
     fn design(fc: f64, dt: f64) -> ([f64; 3], [f64; 2]) {
+        debug_assert!(
+            fc * dt < 0.5,
+            "cut-off {fc} Hz at the Nyquist frequency of {dt} s"
+        );
         let k = (std::f64::consts::PI * fc * dt).tan();
         let q = std::f64::consts::SQRT_2;
         let norm = 1.0 / (1.0 + q * k + k * k);
@@ -171,18 +182,20 @@ impl LowPass {
     /// The filter's output for input `x` after a step of `dt`; the first input sets the state
     /// to its steady state (the sensor has been on for long).
     pub fn next(&mut self, fc: f64, dt: f64, x: f64) -> f64 {
-        if dt != self.dt {
+        if !fmi_abi::step::same(dt, self.dt) {
             (self.b, self.a) = Self::design(fc, dt);
             self.dt = dt;
         }
         if !self.started {
             // The steady state of a constant input x (unit gain at DC: y = x).
-            self.z = [x * (1.0 - self.b[0]), x * (self.b[2] - self.a[1])];
+            (self.x, self.y) = ([x; 2], [x; 2]);
             self.started = true;
         }
-        let y = self.b[0] * x + self.z[0];
-        self.z[0] = self.b[1] * x - self.a[0] * y + self.z[1];
-        self.z[1] = self.b[2] * x - self.a[1] * y;
+        let (b, a) = (self.b, self.a);
+        let y =
+            b[0] * x + b[1] * self.x[0] + b[2] * self.x[1] - a[0] * self.y[0] - a[1] * self.y[1];
+        self.x = [x, self.x[0]];
+        self.y = [y, self.y[0]];
         y
     }
 }
@@ -295,11 +308,12 @@ impl Sensors {
                 sigma[i]
             };
             let mut y = (1.0 + s.scale_error) * x + s.bias + self.drift[i] + sd * noise[i];
-            if s.range > 0.0 {
-                y = y.clamp(-s.range, s.range);
-            }
             if s.resolution > 0.0 {
                 y = (y / s.resolution).round() * s.resolution;
+            }
+            // After the rounding, so that no sample lies beyond the full scale.
+            if s.range > 0.0 {
+                y = y.clamp(-s.range, s.range);
             }
             y
         })

@@ -20,7 +20,8 @@
 //! - axle-box accelerometer: the specific force along the wheelset's axle,
 //!   `y_w'' + g phi_w`, with `phi_w` the wheelset's roll (cross-level plus cone roll): gravity
 //!   enters through roll, as in a real axle-box accelerometer;
-//! - yaw gyroscope on the same wheelset: `psi_w'`;
+//! - yaw gyroscope on the same wheelset: `psi_w'` (0 standing: the held state keeps the
+//!   velocities it stopped with, which no sensor would read);
 //! - bogie-frame accelerometer above the leading wheelset, at the frame's centre-of-gravity
 //!   height and `a` (semi-wheelbase) ahead of its centre: the specific force along the frame's
 //!   lateral axis, `y_b'' + a psi_b'' - z_s phi_b'' + g phi_b` with `z_s = 0`;
@@ -410,7 +411,23 @@ impl Simulation {
             self.outputs = self.measure(v, true, dt, h);
             return;
         }
-        self.outputs = self.measure(0.0, true, h, h);
+        // Standing, the filters still run at substeps they are designed for (the state, so the
+        // sensed signals, are constant over the step).
+        let bw = self.sensors.max_bandwidth();
+        let n = if bw > 0.0 {
+            fmi_abi::step::substeps(h, 0.25 / bw)
+        } else {
+            1
+        };
+        let dt = h / n as f64;
+        if n > 1 {
+            let (u, c) = self.true_sensors(0.0);
+            let sensed = self.sensors.sensed(u, c);
+            for _ in 1..n {
+                self.sensors.filter(sensed, dt);
+            }
+        }
+        self.outputs = self.measure(0.0, true, dt, h);
     }
 
     /// The accelerations and diagnostics at the current state at speed `v`; standing (`v`
@@ -450,7 +467,8 @@ impl Simulation {
         let w = dof::wheelset(0);
         let b = dof::bogie(0);
         let ws_acc = acc[w] + GRAVITY * diag.wheelset_roll[0];
-        let gyro = qd[w + 1];
+        // Standing, the state is held with the velocities it stopped with: the rates are 0.
+        let gyro = if v > 0.0 { qd[w + 1] } else { 0.0 };
         let frame_acc = acc[b + dof::Y] + a * acc[b + dof::YAW] + GRAVITY * q[b + dof::ROLL];
         // See the module docs; standing, `diag` was evaluated at a stand-in speed.
         let roll_rate = if v > 0.0 {
@@ -508,10 +526,13 @@ impl Simulation {
         ];
         let sensed = self.sensors.sensed(u, c);
         if self.sensors.max_bandwidth() > 0.0 {
+            // At the start (`dt` 0) the filters only take their steady state.
             let filter_dt = if dt > 0.0 {
                 dt
             } else {
-                self.config.max_internal_step
+                self.config
+                    .max_internal_step
+                    .min(0.25 / self.sensors.max_bandwidth())
             };
             self.sensors.filter(sensed, filter_dt);
         }

@@ -25,8 +25,8 @@ pub const STANDSTILL: f64 = 5.0;
 const SPEED: f64 = 20.0;
 const RUN: f64 = 20.0;
 
-/// The bias priors both estimators are told: a MEMS part's turn-on biases (0.1 m/s2, 2e-3
-/// rad/s, as `sensor_grade` 2's, doubled).
+/// The bias priors both estimators are told: generous for a MEMS part (`sensor_grade` 2 has
+/// 9.8e-3 m/s2 and 1.75e-3 rad/s; the accelerometers' prior also covers a 0.6 deg tilt).
 pub const PRIORS: [(&str, &str); 3] = [
     ("bias_sigma_ws_acc_y", "0.1"),
     ("bias_sigma_ws_yaw_rate", "2e-3"),
