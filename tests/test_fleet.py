@@ -190,3 +190,21 @@ def test_the_command_line_writes_the_map(fleet_dir, tmp_path):
     seg = pd.read_parquet(out / "segments.parquet")
     assert list(seg["end_m"]) == [250.0, 500.0, 750.0, 1000.0] and (seg["passes"] == 4).all()
     assert "4 segments from 4 passes" in p.stdout
+
+
+def test_recordings_at_2_ms_are_read_at_their_rate_and_meet_the_tolerance(tmp_path):
+    """A fleet recorded every 2 ms (track seed 2, 10 passes): the pipeline takes the recordings'
+    own step, and the segment SDs meet the same tolerance as at 1 ms (the Kalman filter runs on
+    its 1 ms clock, the learned filter's grid is by distance)."""
+    out = tmp_path / "fleet2ms"
+    out.mkdir()
+    synthetic.synthesize(out, packaged_fmus()["RailVehicle"], passes=MORE_PASSES, track_seed=2,
+                         length=1000.0, seed=2, step=2e-3)
+    files = fleet.expand([out])
+    assert all(recordings.read_recording(f)[1] == 2e-3 for f in files)
+    options = fleet.Options()
+    coverages = [fleet.estimate_pass(f, options)[0] for f in files]
+    e = segment_errors(coverages, fleet.truth_sds(out / "truth.parquet", options), options, MORE_PASSES)
+    print("segment SD errors at 2 ms:", {k: np.round(v * 100, 2).tolist() for k, v in e.items()})
+    for k in fleet.BANDS:
+        assert np.nanmax(np.abs(e[k])) < TOLERANCE, (k, e[k])
