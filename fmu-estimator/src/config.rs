@@ -15,13 +15,13 @@ use crate::statespace::{BodyNoise, StateSpace};
 use crate::variables::vr;
 use fmi_abi::Values;
 use nalgebra::{SMatrix, SVector};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
 
 /// The step the Kalman filter runs at with the diagonal model \[s\]: its sensor sigmas are
 /// per sample at 1 kHz.
 pub const DIAGONAL_MODEL_STEP: f64 = 1e-3;
-use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 
 /// A message for the FMU's logger (or the offline caller).
 #[derive(Debug, Clone, PartialEq)]

@@ -379,10 +379,10 @@ impl<const N: usize> Engine<N> {
             };
             self.pending = (0.0, Vec4::zeros());
             left -= take;
-            result = match self.step_at(speed, h0, &mean) {
-                Err(StepError::Gain(e)) => return Err(StepError::Gain(e)),
-                other => other,
-            };
+            result = self.step_at(speed, h0, &mean);
+            if let Err(StepError::Gain(_)) = result {
+                return result;
+            }
         }
         if left > 0.0 {
             self.pending.0 += left;

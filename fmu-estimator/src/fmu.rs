@@ -312,7 +312,7 @@ impl Estimator {
             && (h - l.sample_step()).abs() > STEP_TOLERANCE * l.sample_step()
         {
             log.info(&format!(
-                "step {h} s: the learned filter's taps were fitted on samples every {} s; its grid is by distance and its Kalman channel runs on its own clock, so the estimate holds at this step to the figures of docs/accuracy.md (\"Sample rates\")",
+                "step {h} s: the learned filter's taps were fitted on samples every {} s; its grid is by distance and its Kalman channel runs on its own clock, so the estimate holds at this step to the figures of docs/estimator-fmu.md (\"Sample step\")",
                 l.sample_step()
             ));
             self.step_warned = true;

@@ -241,9 +241,11 @@ impl Sensors {
         self.spec.iter().all(|s| *s == SensorSpec::default())
     }
 
-    /// The highest anti-alias cut-off \[Hz\] (0: none), which bounds the internal step.
-    pub fn max_bandwidth(&self) -> f64 {
-        self.spec.iter().map(|s| s.bandwidth).fold(0.0, f64::max)
+    /// The longest substep the anti-alias filters allow \[s\]: a quarter period of the highest
+    /// cut-off (module docs); `None` without a filter.
+    pub fn filter_step(&self) -> Option<f64> {
+        let bandwidth = self.spec.iter().map(|s| s.bandwidth).fold(0.0, f64::max);
+        (bandwidth > 0.0).then(|| 0.25 / bandwidth)
     }
 
     /// The misaligned signals: `u cos m + c sin m` per sensor (module docs).

@@ -381,10 +381,7 @@ impl Simulation {
         let lambda = (2.0 * c.f22 / (v * p.mass))
             .max(2.0 * c.f11 * p.half_gauge * p.half_gauge / (v * p.yaw_inertia));
         let step = self.config.max_internal_step.min(0.5 / lambda);
-        match self.sensors.max_bandwidth() {
-            bw if bw > 0.0 => step.min(0.25 / bw),
-            _ => step,
-        }
+        self.sensors.filter_step().map_or(step, |f| step.min(f))
     }
 
     /// Advances by `h` at speed `v` (held over the step) and updates the outputs.
@@ -397,14 +394,12 @@ impl Simulation {
             // A master's clock rounding (h a few ulps over the step) must not add a substep.
             let n = fmi_abi::step::substeps(h, self.internal_step(v));
             let dt = h / n as f64;
-            let filtering = self.sensors.max_bandwidth() > 0.0;
+            let filtering = self.sensors.filter_step().is_some();
             for k in 0..n {
                 self.rk4(dt, v);
                 // The anti-alias filters see every substep; the last one's end is measured below.
                 if filtering && k + 1 < n {
-                    let (u, c) = self.true_sensors(v);
-                    let sensed = self.sensors.sensed(u, c);
-                    self.sensors.filter(sensed, dt);
+                    self.feed_filters(v, dt, 1);
                 }
             }
             self.substeps += n as u64;
@@ -413,21 +408,26 @@ impl Simulation {
         }
         // Standing, the filters still run at substeps they are designed for (the state, so the
         // sensed signals, are constant over the step).
-        let bw = self.sensors.max_bandwidth();
-        let n = if bw > 0.0 {
-            fmi_abi::step::substeps(h, 0.25 / bw)
-        } else {
-            1
-        };
+        let n = self
+            .sensors
+            .filter_step()
+            .map_or(1, |f| fmi_abi::step::substeps(h, f));
         let dt = h / n as f64;
-        if n > 1 {
-            let (u, c) = self.true_sensors(0.0);
-            let sensed = self.sensors.sensed(u, c);
-            for _ in 1..n {
-                self.sensors.filter(sensed, dt);
-            }
-        }
+        self.feed_filters(0.0, dt, n - 1);
         self.outputs = self.measure(0.0, true, dt, h);
+    }
+
+    /// Feeds the anti-alias filters the sensed signals at the current state `times` times,
+    /// each a substep of `dt` (the state does not change between them).
+    fn feed_filters(&mut self, v: f64, dt: f64, times: usize) {
+        if times == 0 {
+            return;
+        }
+        let (u, c) = self.true_sensors(v);
+        let sensed = self.sensors.sensed(u, c);
+        for _ in 0..times {
+            self.sensors.filter(sensed, dt);
+        }
     }
 
     /// The accelerations and diagnostics at the current state at speed `v`; standing (`v`
@@ -525,14 +525,12 @@ impl Simulation {
             self.noise.sigma_roll_gyro,
         ];
         let sensed = self.sensors.sensed(u, c);
-        if self.sensors.max_bandwidth() > 0.0 {
+        if let Some(longest) = self.sensors.filter_step() {
             // At the start (`dt` 0) the filters only take their steady state.
             let filter_dt = if dt > 0.0 {
                 dt
             } else {
-                self.config
-                    .max_internal_step
-                    .min(0.25 / self.sensors.max_bandwidth())
+                self.config.max_internal_step.min(longest)
             };
             self.sensors.filter(sensed, filter_dt);
         }

@@ -144,41 +144,36 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         whole(&paper)
     );
 
-    // A reference with a gap is named with its line; nothing is written.
+    // Refused with exit code 2 and nothing written: the message for the checks.
+    let refused = |reference: &str, out: &str| -> String {
+        let o = fit(&[
+            "--recordings".as_ref(),
+            p("pass0.csv").as_os_str(),
+            "--reference".as_ref(),
+            p(reference).as_os_str(),
+            "--out".as_ref(),
+            p(out).as_os_str(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(!p(out).exists());
+        err
+    };
+    // A reference with a gap is named with its line.
     write_reference(&truth, Some((1000.0, 1010.0)), &p("gap.csv")).unwrap();
-    let o = fit(&[
-        "--recordings".as_ref(),
-        p("pass0.csv").as_os_str(),
-        "--reference".as_ref(),
-        p("gap.csv").as_os_str(),
-        "--out".as_ref(),
-        p("gap-out").as_os_str(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused("gap.csv", "gap-out");
     assert!(
         err.contains("gap.csv") && err.contains("gap of") && err.contains("line"),
         "{err}"
     );
-    assert!(!p("gap-out").exists());
-    // Passes of another line: no overlap found, named; nothing written.
+    // Passes of another line: no overlap found, named.
     let other = run(7, 5001, 130.0);
     write_reference(&other, None, &p("other.csv")).unwrap();
-    let o = fit(&[
-        "--recordings".as_ref(),
-        p("pass0.csv").as_os_str(),
-        "--reference".as_ref(),
-        p("other.csv").as_os_str(),
-        "--out".as_ref(),
-        p("other-out").as_os_str(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused("other.csv", "other-out");
     assert!(
         err.contains("pass0.csv") && err.contains("no overlap"),
         "{err}"
     );
-    assert!(!p("other-out").exists());
     let left: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -2,7 +2,7 @@
 //! variants, the learned FIR smoother, the tap fit) takes as its data, in a module of its own
 //! so that none of them depends on another for it.
 
-use super::runs::{Fmus, Settings, SpeedProfile, vehicle_run_driven};
+use super::runs::{Fmus, STEP, Settings, SpeedProfile, vehicle_run_stepped};
 use crate::Error;
 use fmu_estimator::offline::{self, Sample};
 use orchestrator::master::Table;
@@ -86,10 +86,7 @@ pub fn record_stepped(
     roll_rate: Option<&str>,
     step: f64,
 ) -> Result<Record, Error> {
-    let mut variables = RECORDED.to_vec();
-    variables.extend(roll_rate);
-    let table = super::runs::vehicle_run_stepped(fmus, settings, &variables, stop, speed, step)?;
-    with_roll_rate(from_table(&table)?, &table, roll_rate)
+    Ok(record_table_at(fmus, settings, stop, speed, roll_rate, &[], step)?.0)
 }
 
 /// [`record_with`], also recording the vehicle's variables `more`: the record and the table
@@ -102,27 +99,31 @@ pub fn record_table(
     roll_rate: Option<&str>,
     more: &[&str],
 ) -> Result<(Record, Table), Error> {
+    record_table_at(fmus, settings, stop, speed, roll_rate, more, STEP)
+}
+
+/// [`record_table`] with the communication step `step`.
+fn record_table_at(
+    fmus: &Fmus,
+    settings: Settings,
+    stop: f64,
+    speed: Option<SpeedProfile<'_>>,
+    roll_rate: Option<&str>,
+    more: &[&str],
+    step: f64,
+) -> Result<(Record, Table), Error> {
     let mut variables = RECORDED.to_vec();
     variables.extend(roll_rate);
     variables.extend(more);
-    let table = vehicle_run_driven(fmus, settings, &variables, stop, speed)?;
-    let rec = with_roll_rate(from_table(&table)?, &table, roll_rate)?;
-    Ok((rec, table))
-}
-
-/// `rec` with the table's column `roll_rate` (when given) as the samples' roll rate.
-fn with_roll_rate(
-    mut rec: Record,
-    table: &Table,
-    roll_rate: Option<&str>,
-) -> Result<Record, Error> {
+    let table = vehicle_run_stepped(fmus, settings, &variables, stop, speed, step)?;
+    let mut rec = from_table(&table)?;
     if let Some(name) = roll_rate {
         let col = table
             .column(&format!("vehicle.{name}"))
             .ok_or_else(|| Error::Input(format!("no column vehicle.{name}")))?;
         rec.samples = Sample::with_roll_rate(rec.samples, &col[1..]);
     }
-    Ok(rec)
+    Ok((rec, table))
 }
 
 /// The record from a table of the vehicle's variables (row 0, the initial values, dropped: row

@@ -171,11 +171,7 @@ pub const STOP: f64 = 20.0;
 /// The communication step \[s\] of every study run (1 kHz, the sensors' rate).
 pub const STEP: f64 = 1e-3;
 
-fn options(stop: f64, record: Vec<Endpoint>) -> RunOptions {
-    options_at(stop, record, STEP)
-}
-
-fn options_at(stop: f64, record: Vec<Endpoint>, step: f64) -> RunOptions {
+fn options(stop: f64, record: Vec<Endpoint>, step: f64) -> RunOptions {
     RunOptions {
         record: Some(record),
         log: LogConfig {
@@ -188,8 +184,12 @@ fn options_at(stop: f64, record: Vec<Endpoint>, step: f64) -> RunOptions {
 }
 
 fn run(system: System, stop: f64, record: Vec<Endpoint>) -> Result<Table, Error> {
+    run_at(system, stop, record, STEP)
+}
+
+fn run_at(system: System, stop: f64, record: Vec<Endpoint>, step: f64) -> Result<Table, Error> {
     let cosim = Cosimulation::load(system)?;
-    let summary = cosim.run(&options(stop, record))?;
+    let summary = cosim.run(&options(stop, record, step))?;
     summary
         .table
         .ok_or_else(|| Error::Input("no table was collected".into()))
@@ -249,16 +249,12 @@ pub fn vehicle_run_stepped(
         .map(|v| Endpoint::new("vehicle", v))
         .collect();
     let Some(speed) = speed else {
-        let cosim = Cosimulation::load(system)?;
-        let summary = cosim.run(&options_at(stop, record, step))?;
-        return summary
-            .table
-            .ok_or_else(|| Error::Input("no table was collected".into()));
+        return run_at(system, stop, record, step);
     };
     let cosim = Cosimulation::load(system)?;
     let inputs = [Endpoint::new("vehicle", "speed")];
     let fill = |t: f64, out: &mut [f64]| out[0] = speed(t);
-    let opts = options_at(stop, record, step);
+    let opts = options(stop, record, step);
     let summary = cosim.runner(&opts).inputs(&inputs, &fill).run()?;
     summary
         .table

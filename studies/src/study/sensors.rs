@@ -165,7 +165,7 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         settings.push((name.clone(), value));
     }
     let roll = c.roll_rate.then_some("ws_roll_rate");
-    let rec: Record = record_stepped(
+    let mut rec: Record = record_stepped(
         fmus,
         settings,
         STANDSTILL + RUN,
@@ -173,10 +173,15 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         roll,
         c.step,
     )?;
-    let mut samples = rec.samples.clone();
-    for s in &mut samples {
+    for s in &mut rec.samples {
         s.speed *= c.odometry;
     }
+    // The moving part only is judged: from the last standing sample on.
+    let from = rec
+        .samples
+        .iter()
+        .rposition(|s| s.speed == 0.0)
+        .unwrap_or(0);
     let mut told: Vec<(String, String)> = PRIORS
         .iter()
         .map(|(n, v)| (n.to_string(), v.to_string()))
@@ -197,12 +202,6 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         } else {
             &distance
         };
-        // The moving part only: from the last standing sample on.
-        let from = rec
-            .samples
-            .iter()
-            .rposition(|s| s.speed == 0.0)
-            .unwrap_or(0);
         Ok(evaluate(
             &at[from..],
             &est[from..],
@@ -213,15 +212,15 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         )?)
     };
     Ok([
-        judge(estimate(&samples, c.step, &paper, None, false)?)?,
+        judge(estimate(&rec.samples, c.step, &paper, None, false)?)?,
         judge(estimate_learned(
-            &samples,
+            &rec.samples,
             c.step,
             &told,
             Output::Alignment,
         )?)?,
         judge(estimate_learned(
-            &samples,
+            &rec.samples,
             c.step,
             &untold,
             Output::Alignment,
