@@ -1,5 +1,6 @@
-//! Equations of motion of the vehicle: car body, two bogie frames, four wheelsets on a straight
-//! track with irregularities.
+//! Equations of motion of the vehicle: car body, two bogie frames, four wheelsets on a track
+//! with irregularities. Written here for straight track; what a curved, canted design line
+//! adds is derived in [`crate::curving`].
 //!
 //! # Coordinates
 //! A track frame moves with the vehicle at speed `V` along the *ideal* (irregularity-free) track
@@ -89,6 +90,7 @@
 //! `I_wz psi'' = l (Fx_R - Fx_L) + sum Mz - I_wy Omega phi_w' + suspension`.
 
 use crate::contact::{self, ContactGeometry, CreepLaw, Creepages, Material};
+use crate::curving::Curving;
 use crate::params::VehicleParams;
 use crate::track::Irregularity;
 use nalgebra::{SVector, Vector3};
@@ -374,12 +376,14 @@ impl Vehicle {
         &self.mass
     }
 
-    /// The 6-vector (x, y, z, roll, pitch, yaw) of every body's displacement and velocity.
+    /// The 6-vector (x, y, z, roll, pitch, yaw) of every body's displacement and velocity; on
+    /// a curve, expressed in the car body's track frame ([`crate::curving`]).
     fn body_motion(
         &self,
         q: &Dof,
         qd: &Dof,
         presc: &[(f64, f64, f64, f64); 4],
+        curving: Option<&Curving>,
     ) -> ([[f64; 6]; NBODY], [[f64; 6]; NBODY]) {
         let mut u = [[0.0; 6]; NBODY];
         let mut v = [[0.0; 6]; NBODY];
@@ -410,17 +414,27 @@ impl Vehicle {
                 qd[dof::wheelset(j) + 1],
             ];
         }
+        if let Some(c) = curving {
+            for b in 0..NBODY {
+                for (k, slot) in [1, 3, 5].into_iter().enumerate() {
+                    u[b][slot] += c.offset[b][k];
+                    v[b][slot] += c.offset_rate[b][k];
+                }
+            }
+        }
         (u, v)
     }
 
     /// Generalized accelerations for the state (q, qd) at speed `v` with the track seen by each
-    /// wheelset. Also returns loads and wheelset roll for the sensors.
+    /// wheelset, on a curved line the design line's terms (`None` on straight track). Also
+    /// returns loads and wheelset roll for the sensors.
     pub fn accelerations(
         &self,
         q: &Dof,
         qd: &Dof,
         v: f64,
         track: &[WheelsetTrack; 4],
+        curving: Option<&Curving>,
     ) -> (Dof, Diagnostics) {
         let p = &self.params;
         let (l, r0, alpha) = (
@@ -457,7 +471,7 @@ impl Vehicle {
             diag.wheelset_roll[j] = roll;
             diag.wheelset_roll_rate[j] = roll_rate;
         }
-        let (u, w) = self.body_motion(q, qd, &presc);
+        let (u, w) = self.body_motion(q, qd, &presc, curving);
 
         // Generalized forces on the 6-vectors of every body.
         let mut f6 = [[0.0; 6]; NBODY];
@@ -494,6 +508,18 @@ impl Vehicle {
             f6[r.b][r.axis] -= m;
         }
 
+        // The design line's D'Alembert forces and frame yaw accelerations ([`crate::curving`]).
+        if let Some(c) = curving {
+            let slots = [dof::CAR, dof::bogie(0), dof::bogie(1)]
+                .into_iter()
+                .chain((0..4).map(dof::wheelset));
+            for (body, base) in slots.enumerate() {
+                let yaw = if body < 3 { base + dof::YAW } else { base + 1 };
+                f6[body][1] -= self.mass[base] * c.lateral[body];
+                f6[body][5] -= self.mass[yaw] * c.yaw_acceleration[body];
+            }
+        }
+
         // Contact.
         let mw = p.wheelset.mass;
         let bp = p.primary.semi_spacing;
@@ -506,13 +532,27 @@ impl Vehicle {
             let rel = contact_u[j];
             let (roll, roll_rate) = (presc[j].2, presc[j].3);
             let total = mw * (GRAVITY + zdd[j]) + down[j][0] + down[j][1];
-            let transfer = (bp * (down[j][0] - down[j][1]) + h_axle * lateral_primary[j]) / l;
+            let mut transfer = (bp * (down[j][0] - down[j][1]) + h_axle * lateral_primary[j]) / l;
+            // On a curve: the curvature, the frame's roll rate and the wheelset's own lateral
+            // D'Alembert force at its axle ([`crate::curving`], "Wheel-rail contact").
+            let (k, frame_roll_rate) = match curving {
+                Some(c) => {
+                    transfer -= r0 * mw * c.lateral[b] / l;
+                    (c.curvature[b], c.roll_rate[b])
+                }
+                None => (0.0, 0.0),
+            };
             let n = [
                 ((total + transfer) / 2.0).max(0.0),
                 ((total - transfer) / 2.0).max(0.0),
             ];
             diag.wheel_loads[j] = n;
-            let long = alpha * rel / r0 + l * psid / v;
+            let mut long = alpha * rel / r0 + l * psid / v;
+            let mut turn = psid / v;
+            if curving.is_some() {
+                long += l * k;
+                turn += k;
+            }
             let lat = (yd + r0 * roll_rate) / v - psi;
             let mut fy = 0.0;
             let mut mz = 0.0;
@@ -521,7 +561,7 @@ impl Vehicle {
                 let nu = Creepages {
                     longitudinal: -sign * long,
                     lateral: lat,
-                    spin: psid / v - sign * alpha / r0,
+                    spin: turn - sign * alpha / r0,
                 };
                 let mut cf = contact::linear_creep(&coef, &nu);
                 if self.options.saturation {
@@ -541,7 +581,12 @@ impl Vehicle {
                     self.options.flange_stiffness,
                 );
             }
-            mz -= p.wheelset.spin_inertia * omega_spin * roll_rate;
+            let absolute_roll_rate = if curving.is_some() {
+                roll_rate + frame_roll_rate
+            } else {
+                roll_rate
+            };
+            mz -= p.wheelset.spin_inertia * omega_spin * absolute_roll_rate;
             f6[b][1] += fy;
             f6[b][5] += mz;
         }

@@ -6,6 +6,7 @@
 //! the speed input held over the step and reports sensors and truth at `t + h`.
 
 use crate::dynamics::{ContactOptions, Vehicle};
+use crate::line::{DesignLine, OneCurve};
 use crate::params::VehicleParams;
 use crate::simulation::{SensorNoise, SimConfig, Simulation};
 use crate::track::{Spectrum, Track, TrackSpec};
@@ -178,6 +179,20 @@ pub mod vr {
     pub const WS_ROLL_RATE_RANGE: u32 = 78;
     /// `ws_roll_rate_resolution` (Real parameter, rad/s).
     pub const WS_ROLL_RATE_RESOLUTION: u32 = 79;
+    /// `design_curvature` (Real output, 1/m).
+    pub const DESIGN_CURVATURE: u32 = 80;
+    /// `design_cant` (Real output, m).
+    pub const DESIGN_CANT: u32 = 81;
+    /// `curve_radius` (Real parameter, m).
+    pub const CURVE_RADIUS: u32 = 82;
+    /// `curve_transition` (Real parameter, m).
+    pub const CURVE_TRANSITION: u32 = 83;
+    /// `curve_length` (Real parameter, m).
+    pub const CURVE_LENGTH: u32 = 84;
+    /// `curve_cant` (Real parameter, m).
+    pub const CURVE_CANT: u32 = 85;
+    /// `curve_start` (Real parameter, m).
+    pub const CURVE_START: u32 = 86;
     // Integer
     /// `track_seed` (Integer parameter).
     pub const TRACK_SEED: u32 = 0;
@@ -187,6 +202,8 @@ pub mod vr {
     pub const NOISE_SEED: u32 = 2;
     /// `sensor_grade` (Integer parameter).
     pub const SENSOR_GRADE: u32 = 3;
+    /// `curve_direction` (Integer parameter).
+    pub const CURVE_DIRECTION: u32 = 4;
     // Boolean
     /// `lateral_irregularity` (Boolean parameter).
     pub const LATERAL_IRREGULARITY: u32 = 0;
@@ -203,6 +220,8 @@ pub mod vr {
     pub const VEHICLE: u32 = 0;
     /// `track_file` (String parameter).
     pub const TRACK_FILE: u32 = 1;
+    /// `line_file` (String parameter).
+    pub const LINE_FILE: u32 = 2;
 }
 
 /// The variable table: modelDescription.xml, the documentation's table and the export layer's
@@ -526,6 +545,14 @@ pub static VARIABLES: &[VarSpec] = &[
     )
     .min(0.0),
     VarSpec::integer_parameter(
+        vr::CURVE_DIRECTION,
+        "curve_direction",
+        1,
+        "One curve: 1 turns left, -1 turns right",
+    )
+    .min(-1.0)
+    .max(1.0),
+    VarSpec::integer_parameter(
         vr::SPECTRUM,
         "spectrum",
         1,
@@ -579,6 +606,25 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::WS_ROLL_RATE_BANDWIDTH, "ws_roll_rate_bandwidth", "Hz", 0.0, "Anti-alias cut-off of the roll gyroscope: 2nd-order Butterworth on every internal step (0: none)").min(0.0).max(2000.0),
     VarSpec::real_parameter(vr::WS_ROLL_RATE_RANGE, "ws_roll_rate_range", "rad/s", 0.0, "Full scale of the roll gyroscope: saturation (0: none)").min(0.0),
     VarSpec::real_parameter(vr::WS_ROLL_RATE_RESOLUTION, "ws_roll_rate_resolution", "rad/s", 0.0, "One LSB of the roll gyroscope: samples rounded to it (0: none)").min(0.0),
+    VarSpec::real_output(
+        vr::DESIGN_CURVATURE,
+        "design_curvature",
+        "1/m",
+        0.0,
+        "Design curvature at the leading wheelset, positive when the track turns left (0 on straight track)",
+    ),
+    VarSpec::real_output(
+        vr::DESIGN_CANT,
+        "design_cant",
+        "m",
+        0.0,
+        "Design cant at the leading wheelset: right rail above left (positive in a canted left-hand curve)",
+    ),
+    VarSpec::real_parameter(vr::CURVE_RADIUS, "curve_radius", "m", 0.0, "One curve on the line: radius of its circular part (0: straight track, or the line_file's line)").min(0.0),
+    VarSpec::real_parameter(vr::CURVE_TRANSITION, "curve_transition", "m", 60.0, "One curve: length of each clothoid transition, along which the cant ramps linearly").min(0.0),
+    VarSpec::real_parameter(vr::CURVE_LENGTH, "curve_length", "m", 200.0, "One curve: length of its circular part").min(0.0),
+    VarSpec::real_parameter(vr::CURVE_CANT, "curve_cant", "m", 0.0, "One curve: cant of its circular part, raising the outer rail (at most 0.2)").min(0.0).max(crate::line::MAX_CANT),
+    VarSpec::real_parameter(vr::CURVE_START, "curve_start", "m", 100.0, "One curve: distance at which its entry transition starts").min(0.0),
     VarSpec::boolean_parameter(
         vr::LATERAL_IRREGULARITY,
         "lateral_irregularity",
@@ -620,6 +666,12 @@ pub static VARIABLES: &[VarSpec] = &[
         "track_file",
         "",
         "Measured track CSV (distance, alignment, vertical, cross_level); empty: synthesize",
+    ),
+    VarSpec::string_parameter(
+        vr::LINE_FILE,
+        "line_file",
+        "",
+        "Design line CSV (distance, curvature, cant): curves with transitions and cant under the irregularities; empty: straight, or the curve_* parameters",
     ),
 ];
 
@@ -697,6 +749,8 @@ impl RailVehicle {
             (vr::FORWARD_SPEED, o.forward_speed),
             (vr::WS_ROLL_RATE, o.ws_roll_rate),
             (vr::WS_ROLL_RATE_TRUE, o.ws_roll_rate_clean),
+            (vr::DESIGN_CURVATURE, o.design_curvature),
+            (vr::DESIGN_CANT, o.design_cant),
         ] {
             r[i as usize] = x;
         }
@@ -774,19 +828,11 @@ pub fn build_simulation(
         spec.validate()?;
         Track::generate(&spec, s_min, s_max)
     } else {
-        let path = PathBuf::from(&track_file);
-        let path = if path.is_absolute() {
-            path
-        } else {
-            model
-                .resources
-                .as_ref()
-                .map(|d| d.join(&path))
-                .unwrap_or(path)
-        };
+        let path = resource_path(model, &track_file);
         log.info(&format!("track from {}", path.display()));
         Track::from_csv(&path)?
     };
+    let line = design_line(model, v, log)?;
     let config = SimConfig {
         max_internal_step: real(vr::MAX_INTERNAL_STEP),
         ramp_length: real(vr::RAMP_LENGTH),
@@ -840,8 +886,50 @@ pub fn build_simulation(
     }
     Ok(
         Simulation::new(vehicle, track, config, noise, int(vr::NOISE_SEED) as u64)
-            .with_sensors(spec),
+            .with_sensors(spec)
+            .with_line(line),
     )
+}
+
+/// A file name as the FMU's String parameters take it: absolute, or relative to the resources.
+fn resource_path(model: &RailVehicle, name: &str) -> PathBuf {
+    let path = PathBuf::from(name);
+    if path.is_absolute() {
+        path
+    } else {
+        model
+            .resources
+            .as_ref()
+            .map(|d| d.join(&path))
+            .unwrap_or(path)
+    }
+}
+
+/// The design line: `line_file`, or one curve from the `curve_*` parameters, or straight.
+fn design_line(model: &RailVehicle, v: &Values, log: &Logger) -> Result<DesignLine, String> {
+    let file = v.string[vr::LINE_FILE as usize].trim();
+    let radius = v.real[vr::CURVE_RADIUS as usize];
+    if !file.is_empty() {
+        if radius != 0.0 {
+            return Err(format!(
+                "parameters 'line_file' = '{file}' and 'curve_radius' = {radius} m both give a design line: set one"
+            ));
+        }
+        let path = resource_path(model, file);
+        log.info(&format!("design line from {}", path.display()));
+        return DesignLine::from_csv(&path);
+    }
+    if radius == 0.0 {
+        return Ok(DesignLine::straight());
+    }
+    DesignLine::one_curve(&OneCurve {
+        start: v.real[vr::CURVE_START as usize],
+        radius,
+        transition: v.real[vr::CURVE_TRANSITION as usize],
+        length: v.real[vr::CURVE_LENGTH as usize],
+        cant: v.real[vr::CURVE_CANT as usize],
+        direction: f64::from(v.integer[vr::CURVE_DIRECTION as usize]),
+    })
 }
 
 impl Model for RailVehicle {
@@ -850,7 +938,7 @@ impl Model for RailVehicle {
         model_identifier: "RailVehicle",
         // By build.rs from the sources and what shapes the modelDescription: new when they change.
         guid: env!("VEHICLE_GUID"),
-        description: "A metro car (car body, two bogies, four wheelsets) on an irregular straight track with lateral and vertical dynamics, Kalker creep and virtual inertial sensors.",
+        description: "A metro car (car body, two bogies, four wheelsets) on an irregular straight or curved track with lateral and vertical dynamics, Kalker creep and virtual inertial sensors.",
         author: "railway track-geometry toolkit",
         version: env!("CARGO_PKG_VERSION"),
         default_start: 0.0,

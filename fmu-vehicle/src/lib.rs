@@ -1,9 +1,11 @@
-//! A metro vehicle on an irregular straight track, with virtual inertial sensors, as an FMI 2.0
+//! A metro vehicle on an irregular straight or curved track, with virtual inertial sensors, as an FMI 2.0
 //! co-simulation FMU: the "complete model" against which the alignment estimator is judged.
 //!
 //! - [`params`]: vehicle parameter sets (ML95-like metro car, Manchester Benchmark vehicle) with
 //!   the source of every value;
 //! - [`track`]: track irregularities (spectra, harmonic, measured profiles);
+//! - [`line`]: the design line (curvature and cant) the irregularities are laid on;
+//! - [`curving`]: what a curved, canted line adds to the equations and sensors;
 //! - [`contact`]: Hertz contact, Kalker creep coefficients, saturation, flange;
 //! - [`dynamics`]: the equations of motion and their derivation;
 //! - [`simulation`]: time integration, run-in, virtual sensors and noise;
@@ -14,8 +16,10 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod contact;
+pub mod curving;
 pub mod dynamics;
 pub mod fmu;
+pub mod line;
 pub mod modal;
 pub mod params;
 pub mod sensors;

@@ -51,8 +51,8 @@ pub fn state_matrix(vehicle: &Vehicle, v: f64) -> DMatrix<f64> {
             qdp[j - n] += eps;
             qdm[j - n] -= eps;
         }
-        let (ap, _) = vehicle.accelerations(&qp, &qdp, v, &track);
-        let (am, _) = vehicle.accelerations(&qm, &qdm, v, &track);
+        let (ap, _) = vehicle.accelerations(&qp, &qdp, v, &track, None);
+        let (am, _) = vehicle.accelerations(&qm, &qdm, v, &track, None);
         for i in 0..n {
             a[(n + i, j)] = (ap[i] - am[i]) / (2.0 * eps);
         }

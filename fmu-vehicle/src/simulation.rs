@@ -54,7 +54,9 @@
 //! quantization) are [`crate::sensors`]; all off by default. The `_clean` and `_true` outputs
 //! stay the true quantities, without them.
 
+use crate::curving::{self, Curving};
 use crate::dynamics::{Diagnostics, Dof, GRAVITY, Vehicle, WheelsetTrack, dof};
+use crate::line::DesignLine;
 use crate::sensors::{SensorSpec, Sensors};
 use crate::track::{Irregularity, Track};
 use serde::{Deserialize, Serialize};
@@ -252,6 +254,10 @@ pub struct Outputs {
     pub ws_roll_rate: f64,
     /// `ws_roll_rate` without noise; 0 when standing.
     pub ws_roll_rate_clean: f64,
+    /// Design curvature at the leading wheelset \[1/m\], left positive ([`crate::line`]).
+    pub design_curvature: f64,
+    /// Design cant at the leading wheelset, right rail above left \[m\].
+    pub design_cant: f64,
 }
 
 /// The running simulation: everything here is part of an FMU state.
@@ -261,6 +267,9 @@ pub struct Simulation {
     pub vehicle: Vehicle,
     /// The irregularities, grown as the vehicle runs.
     pub track: Track,
+    /// The design line the irregularities are laid on ([`crate::line`]); `None` when it is
+    /// straight and level, so no design term is even evaluated.
+    pub line: Option<DesignLine>,
     /// Integration and run-in settings.
     pub config: SimConfig,
     /// Sensor noise settings.
@@ -316,6 +325,7 @@ impl Simulation {
         let mut sim = Simulation {
             vehicle,
             track,
+            line: None,
             config,
             noise,
             roll_rng: rng.jumped(),
@@ -336,6 +346,22 @@ impl Simulation {
         self.sensors = Sensors::new(spec, self.rng.jumped().jumped());
         self.outputs = self.measure(0.0, false, 0.0, 0.0);
         self
+    }
+
+    /// The vehicle on this design line (straight and level: as without one), the outputs
+    /// measured again.
+    pub fn with_line(mut self, line: DesignLine) -> Simulation {
+        self.line = (!line.is_straight()).then_some(line);
+        self.outputs = self.measure(0.0, false, 0.0, 0.0);
+        self
+    }
+
+    /// The design line's terms with the leading wheelset at `s`, at speed `v`; `None` on a
+    /// straight line.
+    fn curving(&self, s: f64, v: f64) -> Option<Curving> {
+        self.line
+            .as_ref()
+            .map(|line| Curving::at(line, &self.vehicle, s, v))
     }
 
     /// The (ramped) irregularities at track position `s`.
@@ -368,7 +394,9 @@ impl Simulation {
     }
 
     fn accelerations(&self, q: &Dof, qd: &Dof, v: f64, s: f64) -> (Dof, Diagnostics) {
-        self.vehicle.accelerations(q, qd, v, &self.track_for(s))
+        let curving = self.curving(s, v);
+        self.vehicle
+            .accelerations(q, qd, v, &self.track_for(s), curving.as_ref())
     }
 
     /// The internal step for speed `v` (see the module docs).
@@ -396,7 +424,9 @@ impl Simulation {
             let dt = h / n as f64;
             let filtering = self.sensors.filter_step().is_some();
             for k in 0..n {
+                let before = self.s;
                 self.rk4(dt, v);
+                self.roll_kicks(before, v);
                 // The anti-alias filters see every substep; the last one's end is measured below.
                 if filtering && k + 1 < n {
                     self.feed_filters(v, dt, 1);
@@ -415,6 +445,28 @@ impl Simulation {
         let dt = h / n as f64;
         self.feed_filters(0.0, dt, n - 1);
         self.outputs = self.measure(0.0, true, dt, h);
+    }
+
+    /// The jumps of the car body's and bogie frames' roll rates and lateral velocities where
+    /// they passed the end of a cant ramp since the leading wheelset was at `before`
+    /// ([`crate::curving`]).
+    fn roll_kicks(&mut self, before: f64, v: f64) {
+        let Some(line) = &self.line else { return };
+        let x = curving::body_positions(&self.vehicle);
+        let h = curving::body_heights(&self.vehicle);
+        let two_l = 2.0 * self.vehicle.params.wheelset.half_gauge;
+        for (body, base) in [dof::CAR, dof::bogie(0), dof::bogie(1)]
+            .into_iter()
+            .enumerate()
+        {
+            let shift = x[body] - x[3];
+            for (_, slope_jump) in line.cant_kinks(before + shift, self.s + shift) {
+                // phi_d = -c / (2 l): the frame's roll rate jumps by -V dc' / (2 l).
+                let (roll, lateral) = curving::roll_kick(-v * slope_jump / two_l, h[body]);
+                self.qd[base + dof::ROLL] += roll;
+                self.qd[base + dof::Y] += lateral;
+            }
+        }
     }
 
     /// Feeds the anti-alias filters the sensed signals at the current state `times` times,
@@ -450,17 +502,20 @@ impl Simulation {
     fn true_sensors(&self, v: f64) -> ([f64; 4], [f64; 4]) {
         let (acc, diag) = self.accelerations_now(v);
         let vertical_ds2 = self.irregularity(self.s).vertical_ds2;
-        self.sensor_values(&acc, &diag, v, vertical_ds2)
+        let curving = self.curving(self.s, v);
+        self.sensor_values(&acc, &diag, v, vertical_ds2, curving.as_ref())
     }
 
     /// `(u, c)` of [`Simulation::true_sensors`] from the accelerations, with the vertical
-    /// profile's curvature at the leading wheelset (the measurement has it already).
+    /// profile's curvature at the leading wheelset (the measurement has it already) and the
+    /// design line's terms at speed `v` ([`crate::curving`], "Sensors").
     fn sensor_values(
         &self,
         acc: &Dof,
         diag: &Diagnostics,
         v: f64,
         vertical_ds2: f64,
+        curving: Option<&Curving>,
     ) -> ([f64; 4], [f64; 4]) {
         let (q, qd) = (&self.q, &self.qd);
         let a = self.vehicle.params.bogie.semi_wheelbase;
@@ -475,6 +530,15 @@ impl Simulation {
             diag.wheelset_roll_rate[0]
         } else {
             0.0
+        };
+        let (ws_acc, gyro, frame_acc, roll_rate) = match curving {
+            Some(c) => (
+                ws_acc + c.lateral[3],
+                gyro + v * c.curvature[3],
+                frame_acc + c.lateral[1] + a * c.yaw_acceleration[1],
+                roll_rate + c.roll_rate[3],
+            ),
+            None => (ws_acc, gyro, frame_acc, roll_rate),
         };
         let ws_vertical = GRAVITY + v * v * vertical_ds2;
         let frame_vertical = GRAVITY + acc[b + dof::Z] - a * acc[b + dof::PITCH];
@@ -507,7 +571,10 @@ impl Simulation {
         let w = dof::wheelset(0);
         let b = dof::bogie(0);
         let irr = self.irregularity(self.s);
-        let (u, c) = self.sensor_values(&acc, &diag, v, irr.vertical_ds2);
+        let curving = self.curving(self.s, v);
+        let (u, c) = self.sensor_values(&acc, &diag, v, irr.vertical_ds2, curving.as_ref());
+        let design = self.line.as_ref().map(|l| l.at(self.s)).unwrap_or_default();
+        let design_roll = curving.map_or(0.0, |c| c.roll[3]);
         let [ws_acc, gyro, frame_acc, roll_rate] = u;
         let mut n = [0.0; 4];
         if noisy && self.noise.enabled {
@@ -557,7 +624,7 @@ impl Simulation {
             ws_y: q[w],
             ws_yaw: q[w + 1],
             ws_vy: qd[w],
-            ws_roll: diag.wheelset_roll[0],
+            ws_roll: diag.wheelset_roll[0] + design_roll,
             frame_y: q[b + dof::Y] + a * q[b + dof::YAW],
             frame_vy: qd[b + dof::Y] + a * qd[b + dof::YAW],
             bogie_y: q[b + dof::Y],
@@ -572,6 +639,8 @@ impl Simulation {
             forward_speed: v,
             ws_roll_rate: y[3],
             ws_roll_rate_clean: roll_rate,
+            design_curvature: design.curvature,
+            design_cant: design.cant,
         }
     }
 }

@@ -1,0 +1,490 @@
+//! The design line: the track's intended horizontal curvature and cant as functions of the
+//! distance, on which the irregularities ([`crate::track`]) are laid.
+//!
+//! # Definition
+//! Curvature `k(s)` \[1/m\], positive when the track turns left (the centre of the curve on the
+//! left, `y` positive), and cant `c(s)` \[m\], the height of the right rail above the left one:
+//! positive raises the outer rail of a left-hand curve, so a normally canted curve has `c` of
+//! the sign of `k`. Both are linear between the rows of the line (a line file's rows, or the
+//! points of [`DesignLine::one_curve`]) and held before the first row and after the last. So:
+//! - a straight is a stretch with `k = 0`, a circular curve one with constant `k`;
+//! - a transition whose curvature goes linearly from one value to another is a clothoid (its
+//!   curvature is linear in the arc length by definition), with the cant ramped linearly along
+//!   it: the shapes of EN 13803 and of nearly every railway's design rules;
+//! - a line starts straight and level where its first row says so; the vehicle starts at
+//!   `s = 0` in its straight-track equilibrium.
+//!
+//! The track plane is rolled by the cant about the track centre line at rail level: its roll
+//! angle (left side up positive, the convention of every roll in the model) is
+//! `phi_d = -c / (2 l)`, `2 l` the distance between the contact points (the model's gauge).
+//!
+//! # Integrals
+//! The bodies of the vehicle sit at different distances on the line, so their track frames
+//! differ in heading and lateral position. With the heading `T(s) = int_0^s k` and its
+//! integral `P(s) = int_0^s T`, the design centre line at `s + x`, seen from the tangent at `s`
+//! (small angles), is at the lateral offset `P(s + x) - P(s) - x T(s)` and turned by
+//! `T(s + x) - T(s)`. With `k` linear on each segment `T` is quadratic and `P` cubic there, so
+//! both are exact: each segment carries `T` and `P` at its start, summed from the line's
+//! first row (the offsets do not depend on where the sums start).
+
+use std::path::Path;
+
+/// Tightest curve the model accepts \[1/m\]: a 25 m radius, below the tightest tram curves.
+/// Linear creep and a coned tread on knife-edge rails are far out of their range beyond that.
+pub const MAX_CURVATURE: f64 = 1.0 / 25.0;
+/// Largest cant the model accepts \[m\]: EN 13803 allows at most 180-200 mm.
+pub const MAX_CANT: f64 = 0.2;
+
+/// The design geometry at one distance.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DesignPoint {
+    /// Curvature \[1/m\], left positive.
+    pub curvature: f64,
+    /// Its derivative along the line \[1/m2\].
+    pub curvature_ds: f64,
+    /// Cant, right rail above left \[m\].
+    pub cant: f64,
+    /// Its derivative along the line \[-\].
+    pub cant_ds: f64,
+    /// Heading `T(s)`, the integral of the curvature from the first row \[rad\] (only
+    /// differences of `T` and `P` have a meaning: module docs).
+    pub heading: f64,
+    /// `P(s)`, the integral of the heading from the first row \[m\].
+    pub heading_integral: f64,
+}
+
+/// A design line (module docs): rows of (distance, curvature, cant), linear between them.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DesignLine {
+    s: Vec<f64>,
+    curvature: Vec<f64>,
+    cant: Vec<f64>,
+    /// `T` and `P` at each row.
+    heading: Vec<f64>,
+    heading_integral: Vec<f64>,
+}
+
+/// One curve as the FMU's parameters give it (module docs of [`crate::fmu`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OneCurve {
+    /// Where the entry transition starts \[m\].
+    pub start: f64,
+    /// Radius of the circular part \[m\], positive.
+    pub radius: f64,
+    /// Length of each transition \[m\], 0 for none.
+    pub transition: f64,
+    /// Length of the circular part \[m\].
+    pub length: f64,
+    /// Cant in the circular part, raising the outer rail \[m\], not negative.
+    pub cant: f64,
+    /// +1 a left-hand curve, -1 a right-hand one.
+    pub direction: f64,
+}
+
+impl DesignLine {
+    /// A line from its rows. `rows` are (distance, curvature, cant); `what(i)` names row `i` in
+    /// messages (a file's line, a parameter set).
+    pub fn new(
+        rows: &[(f64, f64, f64)],
+        what: impl Fn(usize) -> String,
+    ) -> Result<DesignLine, String> {
+        if rows.is_empty() {
+            return Err(format!("{}: a design line needs at least one row", what(0)));
+        }
+        for (i, &(s, k, c)) in rows.iter().enumerate() {
+            if !(s.is_finite() && k.is_finite() && c.is_finite()) {
+                return Err(format!(
+                    "{}: distance, curvature and cant must be finite numbers",
+                    what(i)
+                ));
+            }
+            if i > 0 && !(s > rows[i - 1].0) {
+                return Err(format!(
+                    "{}: distance {s} m is not greater than the previous row's {} m; distances must be strictly increasing",
+                    what(i),
+                    rows[i - 1].0
+                ));
+            }
+            if k.abs() > MAX_CURVATURE {
+                return Err(format!(
+                    "{}: curvature {k} 1/m (radius {:.1} m) is tighter than the model's limit of {MAX_CURVATURE} 1/m (radius 25 m)",
+                    what(i),
+                    1.0 / k.abs()
+                ));
+            }
+            if c.abs() > MAX_CANT {
+                return Err(format!(
+                    "{}: cant {c} m is beyond the model's limit of {MAX_CANT} m (EN 13803 allows 180-200 mm)",
+                    what(i)
+                ));
+            }
+        }
+        let n = rows.len();
+        let mut line = DesignLine {
+            s: rows.iter().map(|r| r.0).collect(),
+            curvature: rows.iter().map(|r| r.1).collect(),
+            cant: rows.iter().map(|r| r.2).collect(),
+            heading: vec![0.0; n],
+            heading_integral: vec![0.0; n],
+        };
+        // T and P from the first row, segment by segment (exact for linear curvature).
+        for i in 0..n - 1 {
+            let len = line.s[i + 1] - line.s[i];
+            let (k0, k1) = line.segment_curvature(i);
+            let t = line.heading[i];
+            line.heading_integral[i + 1] =
+                line.heading_integral[i] + t * len + k0 * len * len / 2.0 + k1 * len.powi(3) / 6.0;
+            line.heading[i + 1] = t + k0 * len + k1 * len * len / 2.0;
+        }
+        Ok(line)
+    }
+
+    /// Curvature at the start of segment `i` and its slope (0 for the held stretch after the
+    /// last row).
+    fn segment_curvature(&self, i: usize) -> (f64, f64) {
+        let k0 = self.curvature[i];
+        match self.s.get(i + 1) {
+            Some(&b) => (k0, (self.curvature[i + 1] - k0) / (b - self.s[i])),
+            None => (k0, 0.0),
+        }
+    }
+
+    /// The cant's slope on segment `i` (0 on the held stretches).
+    fn segment_cant_slope(&self, i: usize) -> f64 {
+        match self.s.get(i + 1) {
+            Some(&b) => (self.cant[i + 1] - self.cant[i]) / (b - self.s[i]),
+            None => 0.0,
+        }
+    }
+
+    /// The straight line: one row of zeros.
+    pub fn straight() -> DesignLine {
+        DesignLine::new(&[(0.0, 0.0, 0.0)], |_| String::new()).expect("a valid line")
+    }
+
+    /// Whether the line is straight and level everywhere (the model then skips every design
+    /// term, so straight-track results stay bit for bit those of the straight model).
+    pub fn is_straight(&self) -> bool {
+        self.curvature.iter().all(|&k| k == 0.0) && self.cant.iter().all(|&c| c == 0.0)
+    }
+
+    /// One curve: a straight to `start`, a clothoid transition with a linear cant ramp, the
+    /// circular part, the exit transition, and a straight after it.
+    pub fn one_curve(c: &OneCurve) -> Result<DesignLine, String> {
+        let name = |what: &str| format!("one-curve parameters ({what})");
+        if !(c.radius > 0.0 && c.radius.is_finite()) {
+            return Err(format!(
+                "{}: radius {} m must be positive",
+                name("curve_radius"),
+                c.radius
+            ));
+        }
+        for (v, n) in [
+            (c.transition, "curve_transition"),
+            (c.length, "curve_length"),
+            (c.cant, "curve_cant"),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!(
+                    "{}: {v} must be a finite number, not negative",
+                    name(n)
+                ));
+            }
+        }
+        if !(c.start >= 0.0 && c.start.is_finite()) {
+            return Err(format!(
+                "{}: {} m must be a finite distance, not negative",
+                name("curve_start"),
+                c.start
+            ));
+        }
+        if c.direction != 1.0 && c.direction != -1.0 {
+            return Err(format!(
+                "{}: {} must be 1 (left) or -1 (right)",
+                name("curve_direction"),
+                c.direction
+            ));
+        }
+        let (k, h) = (c.direction / c.radius, c.direction * c.cant);
+        let mut rows = vec![(c.start, 0.0, 0.0)];
+        let mut s = c.start + c.transition;
+        if c.transition > 0.0 {
+            rows.push((s, k, h));
+        } else {
+            // An abrupt curve: curvature and cant step within a millimetre.
+            s += 1e-3;
+            rows.push((s, k, h));
+        }
+        s += c.length;
+        if c.length > 0.0 {
+            rows.push((s, k, h));
+        }
+        s += c.transition.max(1e-3);
+        rows.push((s, 0.0, 0.0));
+        DesignLine::new(&rows, |i| {
+            format!("{} row {}", name("the points they make"), i + 1)
+        })
+    }
+
+    /// Reads a line file: CSV with the header `distance,curvature,cant` (m, 1/m, m; other
+    /// columns ignored, blank lines and lines starting with `#` skipped). Errors name the file,
+    /// the line and the column.
+    pub fn from_csv(path: &Path) -> Result<DesignLine, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("line file {}: {e}", path.display()))?;
+        let file = path.display();
+        let names = ["distance", "curvature", "cant"];
+        let mut index: Option<Vec<usize>> = None;
+        let mut width = 0;
+        let mut rows = vec![];
+        let mut line_of = vec![];
+        for (i, raw) in text.lines().enumerate() {
+            let line_no = i + 1;
+            let line = raw.trim();
+            if line.is_empty() || line.starts_with('#') {
+                continue;
+            }
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            let Some(idx) = &index else {
+                let mut idx = vec![];
+                for n in names {
+                    match cells.iter().position(|c| *c == n) {
+                        Some(p) => idx.push(p),
+                        None => {
+                            return Err(format!(
+                                "{file}: line {line_no}: header has no column '{n}' (found: {}); expected 'distance,curvature,cant'",
+                                cells.join(",")
+                            ));
+                        }
+                    }
+                }
+                width = cells.len();
+                index = Some(idx);
+                continue;
+            };
+            if cells.len() != width {
+                return Err(format!(
+                    "{file}: line {line_no}: {} column(s), the header has {width}",
+                    cells.len()
+                ));
+            }
+            let mut row = [0.0; 3];
+            for (k, n) in names.iter().enumerate() {
+                let cell = cells[idx[k]];
+                row[k] = cell.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                    format!("{file}: line {line_no}, column {} ('{n}'): '{cell}' is not a finite number", idx[k] + 1)
+                })?;
+            }
+            rows.push((row[0], row[1], row[2]));
+            line_of.push(line_no);
+        }
+        if rows.is_empty() {
+            return Err(format!(
+                "{file}: no rows (a header 'distance,curvature,cant' and at least one row are needed)"
+            ));
+        }
+        DesignLine::new(&rows, |i| format!("{file}: line {}", line_of[i]))
+    }
+
+    /// The segment holding `s`: the last row at or before it, or `None` before the first.
+    fn segment(&self, s: f64) -> Option<usize> {
+        let i = self.s.partition_point(|&x| x <= s);
+        i.checked_sub(1)
+    }
+
+    /// The geometry at distance `s`.
+    pub fn at(&self, s: f64) -> DesignPoint {
+        let Some(i) = self.segment(s) else {
+            let d = s - self.s[0];
+            let k = self.curvature[0];
+            return DesignPoint {
+                curvature: k,
+                curvature_ds: 0.0,
+                cant: self.cant[0],
+                cant_ds: 0.0,
+                heading: self.heading[0] + k * d,
+                heading_integral: self.heading_integral[0] + self.heading[0] * d + k * d * d / 2.0,
+            };
+        };
+        let t = s - self.s[i];
+        let (k0, k1) = self.segment_curvature(i);
+        let c1 = self.segment_cant_slope(i);
+        let (t0, p0) = (self.heading[i], self.heading_integral[i]);
+        DesignPoint {
+            curvature: k0 + k1 * t,
+            curvature_ds: k1,
+            cant: self.cant[i] + c1 * t,
+            cant_ds: c1,
+            heading: t0 + k0 * t + k1 * t * t / 2.0,
+            heading_integral: p0 + t0 * t + k0 * t * t / 2.0 + k1 * t.powi(3) / 6.0,
+        }
+    }
+
+    /// The rows strictly after `a` and at or before `b`, with the change of the cant's slope
+    /// there (`slope after - slope before`): where the track plane's roll rate jumps.
+    pub fn cant_kinks(&self, a: f64, b: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let first = self.s.partition_point(|&x| x <= a);
+        let last = self.s.partition_point(|&x| x <= b);
+        (first..last).filter_map(move |i| {
+            let before = if i == 0 {
+                0.0
+            } else {
+                self.segment_cant_slope(i - 1)
+            };
+            let jump = self.segment_cant_slope(i) - before;
+            (jump != 0.0).then_some((self.s[i], jump))
+        })
+    }
+
+    /// The rows (distance, curvature, cant), as given.
+    pub fn rows(&self) -> impl Iterator<Item = (f64, f64, f64)> + '_ {
+        (0..self.s.len()).map(|i| (self.s[i], self.curvature[i], self.cant[i]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn line(rows: &[(f64, f64, f64)]) -> DesignLine {
+        DesignLine::new(rows, |i| format!("row {i}")).unwrap()
+    }
+
+    /// Heading and offset integrals against a midpoint-rule quadrature of the curvature.
+    #[test]
+    fn the_integrals_match_quadrature() {
+        let l = line(&[
+            (-5.0, 0.001, 0.0),
+            (30.0, 0.0, 0.0),
+            (70.0, 1.0 / 300.0, 0.1),
+            (120.0, -0.002, 0.0),
+        ]);
+        let (mut t, mut p, ds) = (0.0, 0.0, 1e-3);
+        let mut s = 0.0;
+        while s < 160.0 {
+            let k = l.at(s + ds / 2.0).curvature;
+            p += (t + k * ds / 2.0) * ds;
+            t += k * ds;
+            s += ds;
+            if (s - s.round()).abs() < ds / 2.0 && s.round() as i64 % 10 == 0 {
+                let (d, o) = (l.at(s), l.at(0.0));
+                let heading = d.heading - o.heading;
+                let offset = d.heading_integral - o.heading_integral - s * o.heading;
+                assert!((heading - t).abs() < 1e-9, "T({s}) {heading} vs {t}");
+                assert!((offset - p).abs() < 1e-7, "P({s}) {offset} vs {p}");
+            }
+        }
+        // Before the first row: the first row's curvature held.
+        let d = l.at(-10.0);
+        assert!(
+            (d.heading - (-0.005)).abs() < 1e-15 && (d.heading_integral - 0.0125).abs() < 1e-15
+        );
+    }
+
+    /// A clothoid of length L into a curve of radius R: heading s^2 / (2 R L), offset
+    /// s^3 / (6 R L), the textbook cubic parabola.
+    #[test]
+    fn a_transition_is_a_clothoid() {
+        let (r, len) = (300.0, 60.0);
+        let l = DesignLine::one_curve(&OneCurve {
+            start: 100.0,
+            radius: r,
+            transition: len,
+            length: 200.0,
+            cant: 0.1,
+            direction: 1.0,
+        })
+        .unwrap();
+        let base = l.at(100.0);
+        for x in [10.0, 30.0, 60.0] {
+            let d = l.at(100.0 + x);
+            assert!((d.heading - base.heading - x * x / (2.0 * r * len)).abs() < 1e-12);
+            let offset = d.heading_integral - base.heading_integral - x * base.heading;
+            assert!((offset - x.powi(3) / (6.0 * r * len)).abs() < 1e-12);
+            assert!((d.cant - 0.1 * x / len).abs() < 1e-12);
+        }
+        let mid = l.at(250.0);
+        assert_eq!(
+            (mid.curvature, mid.cant, mid.curvature_ds),
+            (1.0 / r, 0.1, 0.0)
+        );
+        let kinks: Vec<_> = l.cant_kinks(0.0, 1000.0).collect();
+        assert_eq!(kinks.len(), 4);
+        assert!((kinks[0].1 - 0.1 / len).abs() < 1e-15 && (kinks[1].1 + 0.1 / len).abs() < 1e-15);
+        // A right-hand curve mirrors it.
+        let right = DesignLine::one_curve(&OneCurve {
+            direction: -1.0,
+            ..OneCurve {
+                start: 100.0,
+                radius: r,
+                transition: len,
+                length: 200.0,
+                cant: 0.1,
+                direction: 1.0,
+            }
+        })
+        .unwrap();
+        assert_eq!(right.at(250.0).curvature, -1.0 / r);
+        assert_eq!(right.at(250.0).cant, -0.1);
+    }
+
+    #[test]
+    fn impossible_lines_are_refused_with_the_row() {
+        let e = DesignLine::new(&[(0.0, 0.0, 0.0), (0.0, 0.001, 0.0)], |i| {
+            format!("f.csv: line {}", i + 2)
+        })
+        .unwrap_err();
+        assert!(
+            e.contains("f.csv: line 3") && e.contains("strictly increasing"),
+            "{e}"
+        );
+        let e = DesignLine::new(&[(0.0, 0.1, 0.0)], |_| "x".into()).unwrap_err();
+        assert!(e.contains("radius 10.0 m"), "{e}");
+        let e = DesignLine::new(&[(0.0, 0.0, 0.3)], |_| "x".into()).unwrap_err();
+        assert!(e.contains("cant 0.3 m"), "{e}");
+        let e = DesignLine::one_curve(&OneCurve {
+            start: 0.0,
+            radius: 300.0,
+            transition: 50.0,
+            length: 10.0,
+            cant: 0.0,
+            direction: 0.5,
+        })
+        .unwrap_err();
+        assert!(e.contains("curve_direction"), "{e}");
+    }
+
+    #[test]
+    fn a_line_file_is_read_and_its_errors_name_the_line() {
+        let dir = std::env::temp_dir().join(format!("line-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("good.csv");
+        std::fs::write(
+            &good,
+            "# a curve\ndistance,cant,curvature,note\n0,0,0,straight\n50,0.1,0.002,\n",
+        )
+        .unwrap();
+        let l = DesignLine::from_csv(&good).unwrap();
+        assert_eq!(
+            l.rows().collect::<Vec<_>>(),
+            vec![(0.0, 0.0, 0.0), (50.0, 0.002, 0.1)]
+        );
+        let bad = dir.join("bad.csv");
+        std::fs::write(&bad, "distance,curvature,cant\n0,0,0\n50,abc,0\n").unwrap();
+        let e = DesignLine::from_csv(&bad).unwrap_err();
+        assert!(e.contains("bad.csv: line 3, column 2 ('curvature')"), "{e}");
+        std::fs::write(&bad, "distance,curvature\n0,0\n").unwrap();
+        assert!(
+            DesignLine::from_csv(&bad)
+                .unwrap_err()
+                .contains("no column 'cant'")
+        );
+        std::fs::write(&bad, "distance,curvature,cant\n0,0,0\n10,0.5,0\n").unwrap();
+        assert!(
+            DesignLine::from_csv(&bad)
+                .unwrap_err()
+                .contains("bad.csv: line 3")
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
