@@ -25,14 +25,11 @@
 //! second order (products of the frame's rates with the bodies' small velocities, which act
 //! longitudinally or vertically; `V^2 k c` in the vertical) are left out.
 //!
-//! The cant is linear between the rows, so the frame's roll acceleration is 0 except at a
-//! row where the cant's slope changes (the ends of a cant ramp), where the frame's roll rate
-//! jumps by `V dphi_d'`. A free body cannot follow such a jump: its absolute roll rate, and the
-//! absolute lateral velocity of its centre of gravity at height `h` above the frame's roll
-//! axis, are continuous, so its coordinates jump: the roll rate by `-V dphi_d'`, the lateral
-//! velocity by `+h V dphi_d'` ([`roll_kick`]; applied to the car body and the bogie frames at
-//! the end of the integration substep in which they pass the row). A wheelset's roll and
-//! height are held by the rails, so its coordinates do not jump.
+//! The frame rolls with the cant: in the roundings of the cant ramps ([`crate::line`]) with the
+//! roll acceleration `alpha = V^2 phi_d''`, which moves a point at height `h` above the roll
+//! axis (the rail-level centre line) by `-h alpha` laterally. So each body's lateral equation
+//! gains `+m h alpha` (its centre of gravity at `h`) and the car body's and bogie frames' roll
+//! equations `-I_x alpha` (a wheelset's roll is held by the rails).
 //!
 //! # Suspension between bodies in different frames
 //! A suspension element joins two bodies whose frames differ. The deflections are computed
@@ -64,10 +61,11 @@
 //! rest (`flange_contact`).
 //!
 //! # Sensors
-//! Their frames are those of their bodies: the axle-box accelerometer reads `a_nc` on top of
-//! the straight-track specific force, the bogie frame's accelerometer `a_nc + a V^2 k'` at the
-//! bogie's distance (the frame's tangential acceleration at `a` ahead of the pivot), the yaw
-//! gyroscope `psi' + V k`, the roll gyroscope `phi_w' + V phi_d'`.
+//! Their frames are those of their bodies: the axle-box accelerometer reads `a_nc - r_0 alpha`
+//! on top of the straight-track specific force, the bogie frame's accelerometer
+//! `a_nc + a V^2 k' - h_b alpha` at the bogie's distance (the frame's tangential acceleration
+//! at `a` ahead of the pivot), the yaw gyroscope `psi' + V k`, the roll gyroscope
+//! `phi_w' + V phi_d'`.
 
 use crate::dynamics::{GRAVITY, Vehicle};
 use crate::line::DesignLine;
@@ -93,6 +91,8 @@ pub struct Curving {
     pub roll: [f64; NBODY],
     /// See `roll`.
     pub roll_rate: [f64; NBODY],
+    /// The frame's roll acceleration `V^2 phi_d''` \[rad/s2\] (in the roundings).
+    pub roll_acceleration: [f64; NBODY],
 }
 
 /// Distances of the bodies from the car body's centre, forward positive \[m\].
@@ -150,14 +150,8 @@ impl Curving {
             out.curvature[i] = d.curvature;
             out.roll[i] = roll;
             out.roll_rate[i] = -v * d.cant_ds / two_l;
+            out.roll_acceleration[i] = -v * v * d.cant_ds2 / two_l;
         }
         out
     }
-}
-
-/// The jumps of a free body's roll rate and lateral velocity when its frame's roll rate jumps
-/// by `jump` \[rad/s\] (module docs): `(d roll rate, d lateral velocity)` for a centre of
-/// gravity at `height` above rail level.
-pub fn roll_kick(jump: f64, height: f64) -> (f64, f64) {
-    (-jump, height * jump)
 }

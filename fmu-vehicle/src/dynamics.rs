@@ -513,10 +513,15 @@ impl Vehicle {
             let slots = [dof::CAR, dof::bogie(0), dof::bogie(1)]
                 .into_iter()
                 .chain((0..4).map(dof::wheelset));
+            let height = crate::curving::body_heights(self);
             for (body, base) in slots.enumerate() {
                 let yaw = if body < 3 { base + dof::YAW } else { base + 1 };
-                f6[body][1] -= self.mass[base] * c.lateral[body];
+                f6[body][1] -=
+                    self.mass[base] * (c.lateral[body] - height[body] * c.roll_acceleration[body]);
                 f6[body][5] -= self.mass[yaw] * c.yaw_acceleration[body];
+                if body < 3 {
+                    f6[body][3] -= self.mass[base + dof::ROLL] * c.roll_acceleration[body];
+                }
             }
         }
 
@@ -537,7 +542,7 @@ impl Vehicle {
             // D'Alembert force at its axle ([`crate::curving`], "Wheel-rail contact").
             let (k, frame_roll_rate) = match curving {
                 Some(c) => {
-                    transfer -= r0 * mw * c.lateral[b] / l;
+                    transfer -= r0 * mw * (c.lateral[b] - r0 * c.roll_acceleration[b]) / l;
                     (c.curvature[b], c.roll_rate[b])
                 }
                 None => (0.0, 0.0),

@@ -193,6 +193,8 @@ pub mod vr {
     pub const CURVE_CANT: u32 = 85;
     /// `curve_start` (Real parameter, m).
     pub const CURVE_START: u32 = 86;
+    /// `line_rounding` (Real parameter, m).
+    pub const LINE_ROUNDING: u32 = 87;
     // Integer
     /// `track_seed` (Integer parameter).
     pub const TRACK_SEED: u32 = 0;
@@ -624,6 +626,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::CURVE_TRANSITION, "curve_transition", "m", 60.0, "One curve: length of each clothoid transition, along which the cant ramps linearly").min(0.0),
     VarSpec::real_parameter(vr::CURVE_LENGTH, "curve_length", "m", 200.0, "One curve: length of its circular part").min(0.0),
     VarSpec::real_parameter(vr::CURVE_CANT, "curve_cant", "m", 0.0, "One curve: cant of its circular part, raising the outer rail (at most 0.2)").min(0.0).max(crate::line::MAX_CANT),
+    VarSpec::real_parameter(vr::LINE_ROUNDING, "line_rounding", "m", 10.0, "Length over which the design line's kinks (the ends of transitions and cant ramps) are rounded: a rail cannot kink").min(1.0).max(100.0),
     VarSpec::real_parameter(vr::CURVE_START, "curve_start", "m", 100.0, "One curve: distance at which its entry transition starts").min(0.0),
     VarSpec::boolean_parameter(
         vr::LATERAL_IRREGULARITY,
@@ -909,6 +912,12 @@ fn resource_path(model: &RailVehicle, name: &str) -> PathBuf {
 fn design_line(model: &RailVehicle, v: &Values, log: &Logger) -> Result<DesignLine, String> {
     let file = v.string[vr::LINE_FILE as usize].trim();
     let radius = v.real[vr::CURVE_RADIUS as usize];
+    let rounding = v.real[vr::LINE_ROUNDING as usize];
+    if !(rounding >= 1.0 && rounding <= 100.0) {
+        return Err(format!(
+            "parameter 'line_rounding' = {rounding} m must lie in 1-100 m"
+        ));
+    }
     if !file.is_empty() {
         if radius != 0.0 {
             return Err(format!(
@@ -917,19 +926,22 @@ fn design_line(model: &RailVehicle, v: &Values, log: &Logger) -> Result<DesignLi
         }
         let path = resource_path(model, file);
         log.info(&format!("design line from {}", path.display()));
-        return DesignLine::from_csv(&path);
+        return DesignLine::from_csv(&path, rounding);
     }
     if radius == 0.0 {
         return Ok(DesignLine::straight());
     }
-    DesignLine::one_curve(&OneCurve {
-        start: v.real[vr::CURVE_START as usize],
-        radius,
-        transition: v.real[vr::CURVE_TRANSITION as usize],
-        length: v.real[vr::CURVE_LENGTH as usize],
-        cant: v.real[vr::CURVE_CANT as usize],
-        direction: f64::from(v.integer[vr::CURVE_DIRECTION as usize]),
-    })
+    DesignLine::one_curve(
+        &OneCurve {
+            start: v.real[vr::CURVE_START as usize],
+            radius,
+            transition: v.real[vr::CURVE_TRANSITION as usize],
+            length: v.real[vr::CURVE_LENGTH as usize],
+            cant: v.real[vr::CURVE_CANT as usize],
+            direction: f64::from(v.integer[vr::CURVE_DIRECTION as usize]),
+        },
+        rounding,
+    )
 }
 
 impl Model for RailVehicle {

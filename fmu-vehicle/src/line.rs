@@ -6,13 +6,24 @@
 //! left, `y` positive), and cant `c(s)` \[m\], the height of the right rail above the left one:
 //! positive raises the outer rail of a left-hand curve, so a normally canted curve has `c` of
 //! the sign of `k`. Both are linear between the rows of the line (a line file's rows, or the
-//! points of [`DesignLine::one_curve`]) and held before the first row and after the last. So:
+//! points of [`DesignLine::one_curve`]) and held before the first row and after the last, with
+//! each row's change of slope rounded (below). So:
 //! - a straight is a stretch with `k = 0`, a circular curve one with constant `k`;
 //! - a transition whose curvature goes linearly from one value to another is a clothoid (its
 //!   curvature is linear in the arc length by definition), with the cant ramped linearly along
 //!   it: the shapes of EN 13803 and of nearly every railway's design rules;
 //! - a line starts straight and level where its first row says so; the vehicle starts at
 //!   `s = 0` in its straight-track equilibrium.
+//!
+//! **Rounding.** A continuous rail cannot follow a kink in the cant or the curvature: laid and
+//! tamped, the end of a ramp is rounded over metres. A kink would also make the track plane's
+//! roll rate jump, an impulse no vehicle meets. So at each row the two straight pieces are
+//! joined by a parabola over `rounding` metres centred on the row (`f + D (s - s_i + b)^2 /
+//! (4 b)` with `D` the change of slope, `b` half the length), which makes curvature and cant
+//! continuously differentiable with a bounded second derivative `D / (2 b)`. Where rows are
+//! closer than the rounding, `b` is at most half the distance to the next row on either side.
+//! Outside the roundings the line is exactly the linear one (a transition is a clothoid
+//! there).
 //!
 //! The track plane is rolled by the cant about the track centre line at rail level: its roll
 //! angle (left side up positive, the convention of every roll in the model) is
@@ -24,8 +35,9 @@
 //! integral `P(s) = int_0^s T`, the design centre line at `s + x`, seen from the tangent at `s`
 //! (small angles), is at the lateral offset `P(s + x) - P(s) - x T(s)` and turned by
 //! `T(s + x) - T(s)`. With `k` linear on each segment `T` is quadratic and `P` cubic there, so
-//! both are exact: each segment carries `T` and `P` at its start, summed from the line's
-//! first row (the offsets do not depend on where the sums start).
+//! both are exact; each rounding adds its own exact polynomial terms (a parabola in `k`, so
+//! quartic in `P`). Each segment carries `T` and `P` at its start, summed from the line's first
+//! row (the offsets do not depend on where the sums start).
 
 use std::path::Path;
 
@@ -46,6 +58,8 @@ pub struct DesignPoint {
     pub cant: f64,
     /// Its derivative along the line \[-\].
     pub cant_ds: f64,
+    /// Its second derivative \[1/m\] (not 0 only in the roundings).
+    pub cant_ds2: f64,
     /// Heading `T(s)`, the integral of the curvature from the first row \[rad\] (only
     /// differences of `T` and `P` have a meaning: module docs).
     pub heading: f64,
@@ -53,15 +67,59 @@ pub struct DesignPoint {
     pub heading_integral: f64,
 }
 
-/// A design line (module docs): rows of (distance, curvature, cant), linear between them.
+/// A design line (module docs): rows of (distance, curvature, cant), linear between them,
+/// rounded at the rows.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DesignLine {
     s: Vec<f64>,
     curvature: Vec<f64>,
     cant: Vec<f64>,
-    /// `T` and `P` at each row.
+    /// `T` and `P` at each row, of the linear line.
     heading: Vec<f64>,
     heading_integral: Vec<f64>,
+    /// The roundings, in the order of the rows (they do not overlap).
+    roundings: Vec<Rounding>,
+    /// Per rounding, the sums over the roundings before it of what each adds to `T` once passed
+    /// (`dk b^2 / 6`) and to `P` (`dk b^3 / 6 + dk b^2 / 6 (s - end)`, kept as a constant and a
+    /// slope in `s`).
+    passed_t: Vec<f64>,
+    passed_p: Vec<(f64, f64)>,
+}
+
+/// The parabola joining the two straight pieces at one row.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+struct Rounding {
+    /// The row's distance \[m\].
+    at: f64,
+    /// Half its length \[m\].
+    half: f64,
+    /// Changes of the curvature's and the cant's slopes at the row.
+    dk: f64,
+    dc: f64,
+}
+
+impl Rounding {
+    fn start(&self) -> f64 {
+        self.at - self.half
+    }
+
+    fn end(&self) -> f64 {
+        self.at + self.half
+    }
+
+    /// What the rounding adds to a function whose slope changes by `d` at the row, and to its
+    /// first and second derivatives and its first and second integrals, at `s` within it.
+    fn terms(&self, d: f64, s: f64) -> [f64; 5] {
+        let (x, b) = (s - self.start(), self.half);
+        let past = (s - self.at).max(0.0);
+        [
+            d * (x * x / (4.0 * b) - past),
+            d * (x / (2.0 * b) - if s > self.at { 1.0 } else { 0.0 }),
+            d / (2.0 * b),
+            d * (x.powi(3) / (12.0 * b) - past * past / 2.0),
+            d * (x.powi(4) / (48.0 * b) - past.powi(3) / 6.0),
+        ]
+    }
 }
 
 /// One curve as the FMU's parameters give it (module docs of [`crate::fmu`]).
@@ -82,12 +140,19 @@ pub struct OneCurve {
 }
 
 impl DesignLine {
-    /// A line from its rows. `rows` are (distance, curvature, cant); `what(i)` names row `i` in
-    /// messages (a file's line, a parameter set).
+    /// A line from its rows, rounded over `rounding` metres at each (0: kinks kept). `rows`
+    /// are (distance, curvature, cant); `what(i)` names row `i` in messages (a file's line, a
+    /// parameter set).
     pub fn new(
         rows: &[(f64, f64, f64)],
+        rounding: f64,
         what: impl Fn(usize) -> String,
     ) -> Result<DesignLine, String> {
+        if !(rounding >= 0.0 && rounding.is_finite()) {
+            return Err(format!(
+                "rounding {rounding} m must be a finite length, not negative"
+            ));
+        }
         if rows.is_empty() {
             return Err(format!("{}: a design line needs at least one row", what(0)));
         }
@@ -126,6 +191,9 @@ impl DesignLine {
             cant: rows.iter().map(|r| r.2).collect(),
             heading: vec![0.0; n],
             heading_integral: vec![0.0; n],
+            roundings: vec![],
+            passed_t: vec![],
+            passed_p: vec![],
         };
         // T and P from the first row, segment by segment (exact for linear curvature).
         for i in 0..n - 1 {
@@ -136,6 +204,43 @@ impl DesignLine {
                 line.heading_integral[i] + t * len + k0 * len * len / 2.0 + k1 * len.powi(3) / 6.0;
             line.heading[i + 1] = t + k0 * len + k1 * len * len / 2.0;
         }
+        // Slopes of the segments, with the held stretches' 0 before the first row and after
+        // the last.
+        let slopes: Vec<(f64, f64)> = (0..n)
+            .map(|i| (line.segment_curvature(i).1, line.segment_cant_slope(i)))
+            .collect();
+        let slope = |i: Option<usize>| i.map_or((0.0, 0.0), |i| slopes[i]);
+        let (mut t, mut p) = (0.0, (0.0, 0.0));
+        for i in 0..n {
+            let (k_before, c_before) = slope(i.checked_sub(1));
+            let (k_after, c_after) = slope(Some(i));
+            let (dk, dc) = (k_after - k_before, c_after - c_before);
+            let mut half = rounding / 2.0;
+            if i > 0 {
+                half = half.min((line.s[i] - line.s[i - 1]) / 2.0);
+            }
+            if i + 1 < n {
+                half = half.min((line.s[i + 1] - line.s[i]) / 2.0);
+            }
+            if (dk == 0.0 && dc == 0.0) || half <= 0.0 {
+                continue;
+            }
+            let r = Rounding {
+                at: line.s[i],
+                half,
+                dk,
+                dc,
+            };
+            line.roundings.push(r);
+            line.passed_t.push(t);
+            line.passed_p.push(p);
+            let b = half;
+            t += dk * b * b / 6.0;
+            p.0 += dk * b.powi(3) / 6.0 - dk * b * b / 6.0 * r.end();
+            p.1 += dk * b * b / 6.0;
+        }
+        line.passed_t.push(t);
+        line.passed_p.push(p);
         Ok(line)
     }
 
@@ -159,7 +264,7 @@ impl DesignLine {
 
     /// The straight line: one row of zeros.
     pub fn straight() -> DesignLine {
-        DesignLine::new(&[(0.0, 0.0, 0.0)], |_| String::new()).expect("a valid line")
+        DesignLine::new(&[(0.0, 0.0, 0.0)], 0.0, |_| String::new()).expect("a valid line")
     }
 
     /// Whether the line is straight and level everywhere (the model then skips every design
@@ -170,7 +275,7 @@ impl DesignLine {
 
     /// One curve: a straight to `start`, a clothoid transition with a linear cant ramp, the
     /// circular part, the exit transition, and a straight after it.
-    pub fn one_curve(c: &OneCurve) -> Result<DesignLine, String> {
+    pub fn one_curve(c: &OneCurve, rounding: f64) -> Result<DesignLine, String> {
         let name = |what: &str| format!("one-curve parameters ({what})");
         if !(c.radius > 0.0 && c.radius.is_finite()) {
             return Err(format!(
@@ -221,7 +326,7 @@ impl DesignLine {
         }
         s += c.transition.max(1e-3);
         rows.push((s, 0.0, 0.0));
-        DesignLine::new(&rows, |i| {
+        DesignLine::new(&rows, rounding, |i| {
             format!("{} row {}", name("the points they make"), i + 1)
         })
     }
@@ -229,7 +334,7 @@ impl DesignLine {
     /// Reads a line file: CSV with the header `distance,curvature,cant` (m, 1/m, m; other
     /// columns ignored, blank lines and lines starting with `#` skipped). Errors name the file,
     /// the line and the column.
-    pub fn from_csv(path: &Path) -> Result<DesignLine, String> {
+    pub fn from_csv(path: &Path, rounding: f64) -> Result<DesignLine, String> {
         let text = std::fs::read_to_string(path)
             .map_err(|e| format!("line file {}: {e}", path.display()))?;
         let file = path.display();
@@ -283,7 +388,7 @@ impl DesignLine {
                 "{file}: no rows (a header 'distance,curvature,cant' and at least one row are needed)"
             ));
         }
-        DesignLine::new(&rows, |i| format!("{file}: line {}", line_of[i]))
+        DesignLine::new(&rows, rounding, |i| format!("{file}: line {}", line_of[i]))
     }
 
     /// The segment holding `s`: the last row at or before it, or `None` before the first.
@@ -294,6 +399,28 @@ impl DesignLine {
 
     /// The geometry at distance `s`.
     pub fn at(&self, s: f64) -> DesignPoint {
+        let mut d = self.linear_at(s);
+        // Roundings wholly behind `s` (they end in order), then the one `s` may be in.
+        let done = self.roundings.partition_point(|r| r.end() <= s);
+        d.heading += self.passed_t[done];
+        let (p0, p1) = self.passed_p[done];
+        d.heading_integral += p0 + p1 * s;
+        if let Some(r) = self.roundings.get(done).filter(|r| r.start() < s) {
+            let k = r.terms(r.dk, s);
+            let c = r.terms(r.dc, s);
+            d.curvature += k[0];
+            d.curvature_ds += k[1];
+            d.heading += k[3];
+            d.heading_integral += k[4];
+            d.cant += c[0];
+            d.cant_ds += c[1];
+            d.cant_ds2 += c[2];
+        }
+        d
+    }
+
+    /// The line without its roundings.
+    fn linear_at(&self, s: f64) -> DesignPoint {
         let Some(i) = self.segment(s) else {
             let d = s - self.s[0];
             let k = self.curvature[0];
@@ -302,6 +429,7 @@ impl DesignLine {
                 curvature_ds: 0.0,
                 cant: self.cant[0],
                 cant_ds: 0.0,
+                cant_ds2: 0.0,
                 heading: self.heading[0] + k * d,
                 heading_integral: self.heading_integral[0] + self.heading[0] * d + k * d * d / 2.0,
             };
@@ -315,25 +443,10 @@ impl DesignLine {
             curvature_ds: k1,
             cant: self.cant[i] + c1 * t,
             cant_ds: c1,
+            cant_ds2: 0.0,
             heading: t0 + k0 * t + k1 * t * t / 2.0,
             heading_integral: p0 + t0 * t + k0 * t * t / 2.0 + k1 * t.powi(3) / 6.0,
         }
-    }
-
-    /// The rows strictly after `a` and at or before `b`, with the change of the cant's slope
-    /// there (`slope after - slope before`): where the track plane's roll rate jumps.
-    pub fn cant_kinks(&self, a: f64, b: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
-        let first = self.s.partition_point(|&x| x <= a);
-        let last = self.s.partition_point(|&x| x <= b);
-        (first..last).filter_map(move |i| {
-            let before = if i == 0 {
-                0.0
-            } else {
-                self.segment_cant_slope(i - 1)
-            };
-            let jump = self.segment_cant_slope(i) - before;
-            (jump != 0.0).then_some((self.s[i], jump))
-        })
     }
 
     /// The rows (distance, curvature, cant), as given.
@@ -346,19 +459,22 @@ impl DesignLine {
 mod tests {
     use super::*;
 
-    fn line(rows: &[(f64, f64, f64)]) -> DesignLine {
-        DesignLine::new(rows, |i| format!("row {i}")).unwrap()
+    fn line(rows: &[(f64, f64, f64)], rounding: f64) -> DesignLine {
+        DesignLine::new(rows, rounding, |i| format!("row {i}")).unwrap()
     }
 
     /// Heading and offset integrals against a midpoint-rule quadrature of the curvature.
     #[test]
     fn the_integrals_match_quadrature() {
-        let l = line(&[
-            (-5.0, 0.001, 0.0),
-            (30.0, 0.0, 0.0),
-            (70.0, 1.0 / 300.0, 0.1),
-            (120.0, -0.002, 0.0),
-        ]);
+        let l = line(
+            &[
+                (-5.0, 0.001, 0.0),
+                (30.0, 0.0, 0.0),
+                (70.0, 1.0 / 300.0, 0.1),
+                (120.0, -0.002, 0.0),
+            ],
+            10.0,
+        );
         let (mut t, mut p, ds) = (0.0, 0.0, 1e-3);
         let mut s = 0.0;
         while s < 160.0 {
@@ -386,14 +502,17 @@ mod tests {
     #[test]
     fn a_transition_is_a_clothoid() {
         let (r, len) = (300.0, 60.0);
-        let l = DesignLine::one_curve(&OneCurve {
-            start: 100.0,
-            radius: r,
-            transition: len,
-            length: 200.0,
-            cant: 0.1,
-            direction: 1.0,
-        })
+        let l = DesignLine::one_curve(
+            &OneCurve {
+                start: 100.0,
+                radius: r,
+                transition: len,
+                length: 200.0,
+                cant: 0.1,
+                direction: 1.0,
+            },
+            0.0,
+        )
         .unwrap();
         let base = l.at(100.0);
         for x in [10.0, 30.0, 60.0] {
@@ -408,29 +527,78 @@ mod tests {
             (mid.curvature, mid.cant, mid.curvature_ds),
             (1.0 / r, 0.1, 0.0)
         );
-        let kinks: Vec<_> = l.cant_kinks(0.0, 1000.0).collect();
-        assert_eq!(kinks.len(), 4);
-        assert!((kinks[0].1 - 0.1 / len).abs() < 1e-15 && (kinks[1].1 + 0.1 / len).abs() < 1e-15);
         // A right-hand curve mirrors it.
-        let right = DesignLine::one_curve(&OneCurve {
-            direction: -1.0,
-            ..OneCurve {
-                start: 100.0,
-                radius: r,
-                transition: len,
-                length: 200.0,
-                cant: 0.1,
-                direction: 1.0,
-            }
-        })
+        let right = DesignLine::one_curve(
+            &OneCurve {
+                direction: -1.0,
+                ..OneCurve {
+                    start: 100.0,
+                    radius: r,
+                    transition: len,
+                    length: 200.0,
+                    cant: 0.1,
+                    direction: 1.0,
+                }
+            },
+            0.0,
+        )
         .unwrap();
         assert_eq!(right.at(250.0).curvature, -1.0 / r);
         assert_eq!(right.at(250.0).cant, -0.1);
     }
 
+    /// The rounding joins the straight pieces with matching value and slope at both of its
+    /// ends, has the second derivative D / (2 b) inside, leaves the line alone outside, and
+    /// shrinks where rows are closer than it.
+    #[test]
+    fn the_roundings_are_smooth_and_local() {
+        let rows = [
+            (0.0, 0.0, 0.0),
+            (50.0, 0.002, 0.06),
+            (56.0, 0.002, 0.06),
+            (200.0, 0.0, 0.0),
+        ];
+        let (l, sharp) = (line(&rows, 10.0), line(&rows, 0.0));
+        let e = 1e-7;
+        for s in [45.0, 47.0, 53.0, 59.0, 195.0, 205.0] {
+            // The ends of each rounding (b = 5 at 0 m and 200 m, 3 at 50 m and 56 m).
+            for x in [s - e, s + e] {
+                let (a, b) = (l.at(x), sharp.at(x));
+                assert!((a.cant - b.cant).abs() < 1e-9 && (a.curvature - b.curvature).abs() < 1e-9);
+            }
+            let (a, b) = (l.at(s - e), l.at(s + e));
+            assert!(
+                (a.cant_ds - b.cant_ds).abs() < 1e-8,
+                "{s}: {} {}",
+                a.cant_ds,
+                b.cant_ds
+            );
+            assert!((a.curvature_ds - b.curvature_ds).abs() < 1e-9);
+        }
+        // Inside: the parabola's curvature, and continuity through the row itself.
+        let mid = l.at(48.0);
+        assert!(
+            (mid.cant_ds2 + 0.06 / 50.0 / 6.0).abs() < 1e-15,
+            "{}",
+            mid.cant_ds2
+        );
+        let (a, b) = (l.at(50.0 - e), l.at(50.0 + e));
+        assert!((a.cant_ds - b.cant_ds).abs() < 1e-8 && (a.cant - b.cant).abs() < 1e-9);
+        // Away from the rows it is the linear line, and so is the heading's change there.
+        for s in [20.0, 100.0, 150.0] {
+            let (a, b) = (l.at(s), sharp.at(s));
+            assert_eq!(
+                (a.curvature, a.cant, a.cant_ds2),
+                (b.curvature, b.cant, 0.0)
+            );
+        }
+        let turn = |x: &DesignLine| x.at(150.0).heading - x.at(100.0).heading;
+        assert!((turn(&l) - turn(&sharp)).abs() < 1e-15);
+    }
+
     #[test]
     fn impossible_lines_are_refused_with_the_row() {
-        let e = DesignLine::new(&[(0.0, 0.0, 0.0), (0.0, 0.001, 0.0)], |i| {
+        let e = DesignLine::new(&[(0.0, 0.0, 0.0), (0.0, 0.001, 0.0)], 10.0, |i| {
             format!("f.csv: line {}", i + 2)
         })
         .unwrap_err();
@@ -438,18 +606,21 @@ mod tests {
             e.contains("f.csv: line 3") && e.contains("strictly increasing"),
             "{e}"
         );
-        let e = DesignLine::new(&[(0.0, 0.1, 0.0)], |_| "x".into()).unwrap_err();
+        let e = DesignLine::new(&[(0.0, 0.1, 0.0)], 10.0, |_| "x".into()).unwrap_err();
         assert!(e.contains("radius 10.0 m"), "{e}");
-        let e = DesignLine::new(&[(0.0, 0.0, 0.3)], |_| "x".into()).unwrap_err();
+        let e = DesignLine::new(&[(0.0, 0.0, 0.3)], 10.0, |_| "x".into()).unwrap_err();
         assert!(e.contains("cant 0.3 m"), "{e}");
-        let e = DesignLine::one_curve(&OneCurve {
-            start: 0.0,
-            radius: 300.0,
-            transition: 50.0,
-            length: 10.0,
-            cant: 0.0,
-            direction: 0.5,
-        })
+        let e = DesignLine::one_curve(
+            &OneCurve {
+                start: 0.0,
+                radius: 300.0,
+                transition: 50.0,
+                length: 10.0,
+                cant: 0.0,
+                direction: 0.5,
+            },
+            10.0,
+        )
         .unwrap_err();
         assert!(e.contains("curve_direction"), "{e}");
     }
@@ -464,24 +635,24 @@ mod tests {
             "# a curve\ndistance,cant,curvature,note\n0,0,0,straight\n50,0.1,0.002,\n",
         )
         .unwrap();
-        let l = DesignLine::from_csv(&good).unwrap();
+        let l = DesignLine::from_csv(&good, 10.0).unwrap();
         assert_eq!(
             l.rows().collect::<Vec<_>>(),
             vec![(0.0, 0.0, 0.0), (50.0, 0.002, 0.1)]
         );
         let bad = dir.join("bad.csv");
         std::fs::write(&bad, "distance,curvature,cant\n0,0,0\n50,abc,0\n").unwrap();
-        let e = DesignLine::from_csv(&bad).unwrap_err();
+        let e = DesignLine::from_csv(&bad, 10.0).unwrap_err();
         assert!(e.contains("bad.csv: line 3, column 2 ('curvature')"), "{e}");
         std::fs::write(&bad, "distance,curvature\n0,0\n").unwrap();
         assert!(
-            DesignLine::from_csv(&bad)
+            DesignLine::from_csv(&bad, 10.0)
                 .unwrap_err()
                 .contains("no column 'cant'")
         );
         std::fs::write(&bad, "distance,curvature,cant\n0,0,0\n10,0.5,0\n").unwrap();
         assert!(
-            DesignLine::from_csv(&bad)
+            DesignLine::from_csv(&bad, 10.0)
                 .unwrap_err()
                 .contains("bad.csv: line 3")
         );

@@ -54,7 +54,7 @@
 //! quantization) are [`crate::sensors`]; all off by default. The `_clean` and `_true` outputs
 //! stay the true quantities, without them.
 
-use crate::curving::{self, Curving};
+use crate::curving::Curving;
 use crate::dynamics::{Diagnostics, Dof, GRAVITY, Vehicle, WheelsetTrack, dof};
 use crate::line::DesignLine;
 use crate::sensors::{SensorSpec, Sensors};
@@ -424,9 +424,7 @@ impl Simulation {
             let dt = h / n as f64;
             let filtering = self.sensors.filter_step().is_some();
             for k in 0..n {
-                let before = self.s;
                 self.rk4(dt, v);
-                self.roll_kicks(before, v);
                 // The anti-alias filters see every substep; the last one's end is measured below.
                 if filtering && k + 1 < n {
                     self.feed_filters(v, dt, 1);
@@ -445,28 +443,6 @@ impl Simulation {
         let dt = h / n as f64;
         self.feed_filters(0.0, dt, n - 1);
         self.outputs = self.measure(0.0, true, dt, h);
-    }
-
-    /// The jumps of the car body's and bogie frames' roll rates and lateral velocities where
-    /// they passed the end of a cant ramp since the leading wheelset was at `before`
-    /// ([`crate::curving`]).
-    fn roll_kicks(&mut self, before: f64, v: f64) {
-        let Some(line) = &self.line else { return };
-        let x = curving::body_positions(&self.vehicle);
-        let h = curving::body_heights(&self.vehicle);
-        let two_l = 2.0 * self.vehicle.params.wheelset.half_gauge;
-        for (body, base) in [dof::CAR, dof::bogie(0), dof::bogie(1)]
-            .into_iter()
-            .enumerate()
-        {
-            let shift = x[body] - x[3];
-            for (_, slope_jump) in line.cant_kinks(before + shift, self.s + shift) {
-                // phi_d = -c / (2 l): the frame's roll rate jumps by -V dc' / (2 l).
-                let (roll, lateral) = curving::roll_kick(-v * slope_jump / two_l, h[body]);
-                self.qd[base + dof::ROLL] += roll;
-                self.qd[base + dof::Y] += lateral;
-            }
-        }
     }
 
     /// Feeds the anti-alias filters the sensed signals at the current state `times` times,
@@ -532,12 +508,16 @@ impl Simulation {
             0.0
         };
         let (ws_acc, gyro, frame_acc, roll_rate) = match curving {
-            Some(c) => (
-                ws_acc + c.lateral[3],
-                gyro + v * c.curvature[3],
-                frame_acc + c.lateral[1] + a * c.yaw_acceleration[1],
-                roll_rate + c.roll_rate[3],
-            ),
+            Some(c) => {
+                let h = crate::curving::body_heights(&self.vehicle);
+                (
+                    ws_acc + c.lateral[3] - h[3] * c.roll_acceleration[3],
+                    gyro + v * c.curvature[3],
+                    frame_acc + c.lateral[1] + a * c.yaw_acceleration[1]
+                        - h[1] * c.roll_acceleration[1],
+                    roll_rate + c.roll_rate[3],
+                )
+            }
             None => (ws_acc, gyro, frame_acc, roll_rate),
         };
         let ws_vertical = GRAVITY + v * v * vertical_ds2;
