@@ -25,7 +25,7 @@ pub struct EstimatorState {
 /// Estimates the lateral alignment from recorded sensor signals, exactly as the estimator FMU
 /// does when stepped every `step` seconds with these samples (bit-equal outputs).
 #[pyfunction]
-#[pyo3(signature = (speed, ws_acc_y, ws_yaw_rate, frame_acc_y, *, step, ws_roll_rate=None, settings=None, calibration=None, smooth=false, check_covariance=false, resume=None))]
+#[pyo3(signature = (speed, ws_acc_y, ws_yaw_rate, frame_acc_y, *, step, ws_roll_rate=None, design_curvature=None, design_cant=None, settings=None, calibration=None, smooth=false, check_covariance=false, resume=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn estimate<'py>(
     py: Python<'py>,
@@ -35,6 +35,8 @@ pub fn estimate<'py>(
     frame_acc_y: PyArrayLike1<'py, f64, AllowTypeChange>,
     step: f64,
     ws_roll_rate: Option<PyArrayLike1<'py, f64, AllowTypeChange>>,
+    design_curvature: Option<PyArrayLike1<'py, f64, AllowTypeChange>>,
+    design_cant: Option<PyArrayLike1<'py, f64, AllowTypeChange>>,
     settings: Option<&Bound<'py, PyDict>>,
     calibration: Option<PathBuf>,
     smooth: bool,
@@ -66,12 +68,22 @@ pub fn estimate<'py>(
         slice(&frame_acc_y),
     );
     let roll = ws_roll_rate.as_ref().map(|r| slice(r));
+    let (curvature, cant) = match (&design_curvature, &design_cant) {
+        (Some(k), Some(c)) => (Some(slice(k)), Some(slice(c))),
+        (None, None) => (None, None),
+        _ => {
+            return Err(bad(
+                "design_curvature and design_cant come together: give both arrays, or neither (straight, level track)",
+            ));
+        }
+    };
     let columns = Columns {
         speed: &v,
         ws_acc_y: &a,
         ws_yaw_rate: &y,
         frame_acc_y: &f,
         ws_roll_rate: roll.as_deref(),
+        design: curvature.as_deref().zip(cant.as_deref()),
     };
     let how = How {
         smooth,

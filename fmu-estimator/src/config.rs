@@ -75,6 +75,9 @@ pub struct Config {
     /// Prior standard deviations of the four sensors' biases (`bias_sigma_*`; 0: not
     /// estimated), [`crate::bias`].
     pub bias_sigma: [f64; 4],
+    /// The vehicle's design-response model (`design_response_file`; `None`: empty name),
+    /// [`crate::design`].
+    pub design: Option<std::sync::Arc<crate::design::DesignModel>>,
 }
 
 /// Reads the `Params` from the FMI values.
@@ -120,6 +123,32 @@ pub fn user_file(name: &str, resources: Option<&Path>) -> Option<PathBuf> {
         Ok(here) if here.is_file() => Some(here),
         _ => shipped,
     }
+}
+
+/// The design-response model `design_response_file` names: the shipped one built in when it is
+/// named and not in the resources, else the file ([`user_file`]).
+fn design_model(
+    v: &Values,
+    resources: Option<&Path>,
+) -> Result<Option<std::sync::Arc<crate::design::DesignModel>>, Error> {
+    let name = v.string[vr::DESIGN_RESPONSE_FILE as usize].trim();
+    if name.is_empty() {
+        return Ok(None);
+    }
+    let in_resources = resources.is_some_and(|d| d.join(name).is_file());
+    let model = if name == crate::design::SHIPPED_NAME && !in_resources {
+        crate::design::DesignModel::shipped()
+    } else {
+        let path = user_file(name, resources).ok_or_else(|| {
+            Error::DesignFile(format!(
+                "design_response_file '{name}': not found (relative names are looked up in the FMU's resources, then in the working directory)"
+            ))
+        })?;
+        crate::design::DesignModel::read(&path)
+    };
+    model
+        .map(|m| Some(std::sync::Arc::new(m)))
+        .map_err(Error::DesignFile)
 }
 
 /// Where the calibration file named by the parameters is, if anywhere.
@@ -311,6 +340,7 @@ impl Config {
                 r(vr::BIAS_SIGMA_FRAME_ACC_Y),
                 r(vr::BIAS_SIGMA_WS_ROLL_RATE),
             ],
+            design: design_model(v, resources)?,
         };
         Ok((
             match calibrated {

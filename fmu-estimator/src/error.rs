@@ -59,6 +59,9 @@ pub enum Error {
     /// The learned filter's tap bank cannot be read or used.
     #[error(transparent)]
     Bank(#[from] BankError),
+    /// `design_response_file` could not be read or is inconsistent.
+    #[error("{0}")]
+    DesignFile(String),
     /// The learned filter of `tap_file` could not be built from its bank.
     #[error("tap_file '{tap_file}': {source}")]
     TapFile {

@@ -36,6 +36,10 @@ pub struct Estimator {
     learned: Option<Learned>,
     /// The sensors' biases.
     bias: crate::bias::Bias,
+    /// The design line's response ([`crate::design`]).
+    design: crate::design::Design,
+    /// Whether the design line went beyond the design model's envelope (warned once).
+    design_warned: bool,
     /// Whether the last step's speed was outside the taps' range (for the warning on entry).
     outside: bool,
     /// Whether `outside_training` has set in this run (warned once).
@@ -68,7 +72,8 @@ impl Estimator {
                 v.real[vr::CONTACT_SCALE as usize] = l.contact_scale();
                 v.real[vr::CONICITY_ESTIMATE as usize] = l.conicity();
                 v.real[vr::NOVELTY as usize] = l.novelty();
-                v.boolean[vr::OUTSIDE_TRAINING as usize] = l.outside_training();
+                v.boolean[vr::OUTSIDE_TRAINING as usize] =
+                    l.outside_training() || self.design.outside();
             }
             None => {
                 o[vr::ALIGNMENT as usize] = xi;
@@ -80,7 +85,7 @@ impl Estimator {
                 v.real[vr::CONTACT_SCALE as usize] = 0.0;
                 v.real[vr::CONICITY_ESTIMATE as usize] = 0.0;
                 v.real[vr::NOVELTY as usize] = 0.0;
-                v.boolean[vr::OUTSIDE_TRAINING as usize] = false;
+                v.boolean[vr::OUTSIDE_TRAINING as usize] = self.design.outside();
             }
         }
         let o = &mut v.real;
@@ -144,6 +149,8 @@ impl Model for Estimator {
             holding: false,
             learned: None,
             bias: crate::bias::Bias::new([0.0; 4]),
+            design: crate::design::Design::new(None),
+            design_warned: false,
             outside: false,
             novelty_warned: false,
             bias_warned: false,
@@ -186,6 +193,8 @@ impl Model for Estimator {
             .map_err(|e| e.to_string())?;
         self.core = Some(core);
         self.bias = crate::bias::Bias::new(config.bias_sigma);
+        self.design = crate::design::Design::new(config.design.clone());
+        self.design_warned = false;
         self.holding = false;
         self.outside = false;
         self.novelty_warned = false;
@@ -215,6 +224,10 @@ impl Model for Estimator {
                 v.real[vr::FRAME_ACC_Y as usize],
                 v.real[vr::WS_ROLL_RATE as usize],
             ],
+            design: [
+                v.real[vr::DESIGN_CURVATURE as usize],
+                v.real[vr::DESIGN_CANT as usize],
+            ],
         };
         let settings = step::Settings {
             min_speed: self.min_speed,
@@ -226,6 +239,7 @@ impl Model for Estimator {
             core,
             self.learned.as_mut(),
             &mut self.bias,
+            &mut self.design,
             &mut v.real[vr::DISTANCE as usize],
             h,
             input,

@@ -41,6 +41,7 @@ pub mod bias;
 pub mod calibration;
 pub mod config;
 pub mod core;
+pub mod design;
 pub mod discretize;
 pub mod engine;
 pub mod error;

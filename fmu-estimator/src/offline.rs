@@ -32,6 +32,9 @@ pub struct Sample {
     /// The wheelset roll-rate gyroscope (0 when the record has none; only the learned filter's
     /// four-sensor taps read it).
     pub ws_roll_rate: f64,
+    /// The design line at the wheelset: curvature \[1/m\] and cant \[m\] (0 on straight
+    /// track), [`crate::design`].
+    pub design: [f64; 2],
 }
 
 impl Sample {
@@ -54,6 +57,7 @@ impl Sample {
                 ws_yaw_rate: ws_yaw_rate[k],
                 frame_acc_y: frame_acc_y[k],
                 ws_roll_rate: 0.0,
+                design: [0.0; 2],
             })
             .collect()
     }
@@ -169,6 +173,8 @@ pub struct Columns<'a> {
     pub frame_acc_y: &'a [f64],
     /// The roll-rate gyroscope, when the record has one (0 otherwise, as in [`Sample`]).
     pub ws_roll_rate: Option<&'a [f64]>,
+    /// The design line's curvature and cant, when the record has them (0 otherwise).
+    pub design: Option<(&'a [f64], &'a [f64])>,
 }
 
 impl Columns<'_> {
@@ -180,6 +186,8 @@ impl Columns<'_> {
             ("ws_yaw_rate", Some(self.ws_yaw_rate)),
             ("frame_acc_y", Some(self.frame_acc_y)),
             ("ws_roll_rate", self.ws_roll_rate),
+            ("design_curvature", self.design.map(|d| d.0)),
+            ("design_cant", self.design.map(|d| d.1)),
         ];
         for (name, column) in others {
             if let Some(c) = column
@@ -202,6 +210,7 @@ impl Columns<'_> {
             ws_yaw_rate: self.ws_yaw_rate[k],
             frame_acc_y: self.frame_acc_y[k],
             ws_roll_rate: self.ws_roll_rate.map_or(0.0, |r| r[k]),
+            design: self.design.map_or([0.0; 2], |(c, h)| [c[k], h[k]]),
         }
     }
 }
@@ -374,6 +383,8 @@ pub struct Resume {
     pub distance: f64,
     /// The sensors' biases ([`crate::bias`]).
     pub bias: crate::bias::Bias,
+    /// The design line's response and its history ([`crate::design`]).
+    pub design: crate::design::Design,
 }
 
 impl Resume {
@@ -384,6 +395,7 @@ impl Resume {
             learned,
             distance: 0.0,
             bias: crate::bias::Bias::new(config.bias_sigma),
+            design: crate::design::Design::new(config.design.clone()),
         }
     }
 }
@@ -416,6 +428,7 @@ fn run_from(
         mut learned,
         mut distance,
         mut bias,
+        mut design,
     } = start;
     let mut estimates = learned.as_ref().map(|_| Vec::with_capacity(n));
     let mut contact = learned.as_ref().map(|_| Vec::with_capacity(n));
@@ -441,12 +454,14 @@ fn run_from(
         let input = step::Input {
             speed: s.speed,
             sensors: [s.ws_acc_y, s.ws_yaw_rate, s.frame_acc_y, s.ws_roll_rate],
+            design: s.design,
         };
         let stepped = step::step(
             settings,
             &mut core,
             learned.as_mut(),
             &mut bias,
+            &mut design,
             &mut distance,
             h,
             input,
@@ -498,6 +513,7 @@ fn run_from(
         learned,
         distance,
         bias,
+        design,
     };
     Ok((out, end))
 }
@@ -516,6 +532,7 @@ mod tests {
                 ws_yaw_rate: 0.01 * (k as f64 * 0.03).cos(),
                 frame_acc_y: 0.05 * (k as f64 * 0.02).sin(),
                 ws_roll_rate: 0.0,
+                design: [0.0; 2],
             })
             .collect()
     }
@@ -695,6 +712,7 @@ mod tests {
                 ws_yaw_rate: &y,
                 frame_acc_y: &f,
                 ws_roll_rate: with_roll.then_some(roll.as_slice()),
+                design: None,
             };
             let rows = if with_roll {
                 Sample::with_roll_rate(recorded.clone(), &roll)
@@ -723,6 +741,7 @@ mod tests {
             ws_yaw_rate: &y[1..],
             frame_acc_y: &f,
             ws_roll_rate: None,
+            design: None,
         };
         let err = process_columns(&config, None, 1e-3, &short, false).unwrap_err();
         assert!(
@@ -837,6 +856,7 @@ mod tests {
                 ws_yaw_rate: &rows.iter().map(|s| s.ws_yaw_rate).collect::<Vec<_>>(),
                 frame_acc_y: &rows.iter().map(|s| s.frame_acc_y).collect::<Vec<_>>(),
                 ws_roll_rate: None,
+                design: None,
             };
             let t = std::time::Instant::now();
             let out = process_columns_checked(
@@ -881,6 +901,7 @@ mod tests {
             ws_yaw_rate: &y[r.clone()],
             frame_acc_y: &f[r],
             ws_roll_rate: None,
+            design: None,
         };
         for overrides in [vec![], vec![("estimator", "1")]] {
             let overrides: Vec<(String, String)> = overrides

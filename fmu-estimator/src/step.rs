@@ -8,6 +8,7 @@
 //! |---|---|
 //! | roll-rate channel | read only when the learned taps use it; otherwise 0, so an unconnected or NaN roll-rate input changes nothing |
 //! | implausible sensors | replaced by NaN ([`crate::plausible::sensors`]): the measurement update is skipped, the prediction kept |
+//! | design geometry | its response is removed ([`crate::design`]) when a model is loaded, before the biases are observed (a canted standstill is not a bias) |
 //! | biases | a standstill refines them from the samples the two rows above leave, each sensor on its own; every sample has them removed ([`crate::bias`]) |
 //! | distance | advances by `speed * h` for every finite speed, also while the filter holds |
 //! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
@@ -16,6 +17,7 @@
 
 use crate::bias::Bias;
 use crate::core::Core;
+use crate::design::Design;
 use crate::engine::Skip;
 use crate::error::{SampleError, StepError};
 use crate::filter::Vec4;
@@ -28,6 +30,9 @@ pub struct Input {
     pub speed: f64,
     /// `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`, `ws_roll_rate`.
     pub sensors: [f64; 4],
+    /// The design line at the leading wheelset: curvature \[1/m\], cant \[m\] (0 on
+    /// straight track; read only with a design-response model).
+    pub design: [f64; 2],
 }
 
 /// What the step did.
@@ -62,11 +67,14 @@ pub struct Settings {
 /// speed is an error ([`crate::plausible::speed`]), as is a filter that cannot step.
 // Inlined into fmi2DoStep: as a call it cost 5-10 % of the FMU's step (bench do_step, same run).
 #[inline(always)]
+// The per-sample state each caller owns (filter, learned filter, biases, design, distance).
+#[allow(clippy::too_many_arguments)]
 pub fn step(
     settings: Settings,
     core: &mut Core,
     learned: Option<&mut Learned>,
     bias: &mut Bias,
+    design: &mut Design,
     distance: &mut f64,
     h: f64,
     input: Input,
@@ -75,10 +83,20 @@ pub fn step(
     crate::plausible::sample_step(h)?;
     crate::plausible::speed(speed)?;
     let mut x = input.sensors;
-    if !learned.as_ref().is_some_and(|l| l.uses_roll_rate()) {
+    let roll_rate = learned.as_ref().is_some_and(|l| l.uses_roll_rate());
+    if !roll_rate {
         x[3] = 0.0;
     }
     let implausible = crate::plausible::sensors(&mut x);
+    if design.active() {
+        let at = *distance + if speed.is_finite() { speed * h } else { 0.0 };
+        let moving = if speed.is_finite() { speed } else { 0.0 };
+        let r = design.response(at, moving, input.design);
+        let used = if roll_rate { 4 } else { 3 };
+        for i in 0..used {
+            x[i] -= r[i];
+        }
+    }
     bias.observe(speed, h, &x);
     if speed.is_finite() {
         *distance += speed * h;

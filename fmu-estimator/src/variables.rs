@@ -148,6 +148,10 @@ pub mod vr {
     pub const FRAME_ACC_Y_BIAS: u32 = 63;
     /// `ws_roll_rate_bias` (Real output, rad/s).
     pub const WS_ROLL_RATE_BIAS: u32 = 64;
+    /// `design_curvature` (Real input, 1/m).
+    pub const DESIGN_CURVATURE: u32 = 65;
+    /// `design_cant` (Real input, m).
+    pub const DESIGN_CANT: u32 = 66;
     // Integer
     /// `discretization` (Integer parameter).
     pub const DISCRETIZATION: u32 = 0;
@@ -181,6 +185,8 @@ pub mod vr {
     pub const CALIBRATION_FILE: u32 = 0;
     /// `tap_file` (String parameter).
     pub const TAP_FILE: u32 = 1;
+    /// `design_response_file` (String parameter).
+    pub const DESIGN_RESPONSE_FILE: u32 = 2;
 }
 
 const P: Params = Params::DEFAULTS;
@@ -242,6 +248,9 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::boolean_parameter(vr::USE_CALIBRATION_FILE, "use_calibration_file", true, "Take Q and R from the calibration file when it holds them"),
     VarSpec::boolean_parameter(vr::P0_STATIONARY, "p0_stationary", true, "Start the time-varying filter from the stationary covariance at the first step's speed (no start-up transient); false: from p0_xi and typical body amplitudes, as the paper"),
     VarSpec::boolean_output(vr::UPDATED, "updated", false, "Whether the last step applied a measurement update"),
+    VarSpec::real_input(vr::DESIGN_CURVATURE, "design_curvature", "1/m", 0.0, "Design curvature of the line at the wheelset, positive turning left (0 on straight track): its response is removed from the sensors (design_response_file)"),
+    VarSpec::real_input(vr::DESIGN_CANT, "design_cant", "m", 0.0, "Design cant at the wheelset, right rail above left (positive in a canted left-hand curve; 0 on level track)"),
+    VarSpec::string_parameter(vr::DESIGN_RESPONSE_FILE, "design_response_file", crate::design::SHIPPED_NAME, "The vehicle's response to the design line (alignment-studies design-response), removed from the sensors where design_curvature or design_cant is not 0; absolute, or relative to the resources, then to the working directory; shipped: design-response.toml (the ML95); empty: none"),
     VarSpec::real_input(vr::WS_ROLL_RATE, "ws_roll_rate", "rad/s", 0.0, "Wheelset roll angular velocity (gyroscope), optional: read only when use_roll_rate is true"),
     VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),

@@ -913,7 +913,7 @@ fn design_line(model: &RailVehicle, v: &Values, log: &Logger) -> Result<DesignLi
     let file = v.string[vr::LINE_FILE as usize].trim();
     let radius = v.real[vr::CURVE_RADIUS as usize];
     let rounding = v.real[vr::LINE_ROUNDING as usize];
-    if !(rounding >= 1.0 && rounding <= 100.0) {
+    if !(1.0..=100.0).contains(&rounding) {
         return Err(format!(
             "parameter 'line_rounding' = {rounding} m must lie in 1-100 m"
         ));

@@ -11,7 +11,8 @@
 use alignment_studies::Error;
 use alignment_studies::cli::cases::Group;
 use alignment_studies::cli::{
-    StudyArgs, calibrate, cases, fit, learn, orchestrator_summary, run, smooth, taps, variants,
+    StudyArgs, calibrate, cases, design, fit, learn, orchestrator_summary, run, smooth, taps,
+    variants,
 };
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -65,6 +66,11 @@ enum Command {
     /// and the standard case on held-out seeds (use them with estimator.tap_file and
     /// estimator.calibration_file).
     Fit(fit::FitArgs),
+    /// Fit the vehicle's response to the design line (curves and cant) for the estimator's
+    /// design correction: the vehicle without irregularities on random curved lines at every
+    /// bank speed, causal FIRs from the design's history to each sensor; writes the
+    /// design_response_file (fmu-estimator/resources/design-response.toml for the ML95).
+    DesignResponse(design::DesignArgs),
     /// Filter and smooth recorded sensor signals offline with the estimator (RTS smoother): a
     /// CSV with time, speed, ws_acc_y, ws_yaw_rate, frame_acc_y (e.g. a run's results.csv).
     Smooth(smooth::SmoothArgs),
@@ -94,6 +100,7 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Envelope(a) => variants::envelope(&a, &say)?,
         Command::Variants(a) => variants::execute(&a, &say)?,
         Command::Learn(a) => learn::execute(&a)?,
+        Command::DesignResponse(a) => design::execute(&a)?,
         Command::Taps(a) => taps::execute(&a, &|m| eprintln!("{m}"))?,
         Command::Fit(a) => {
             let md = fit::execute(&a, &|m| eprintln!("{m}"))?;

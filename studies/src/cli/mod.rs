@@ -5,6 +5,7 @@
 
 pub mod calibrate;
 pub mod cases;
+pub mod design;
 pub mod fit;
 pub mod learn;
 pub mod run;

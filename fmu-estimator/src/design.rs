@@ -1,0 +1,426 @@
+//! The design geometry's response removed from the sensors, so that both filters see what they
+//! were made for: the response to the irregularities alone.
+//!
+//! # Why
+//! On a curve the sensors carry the design line (curvature `k`, cant `c`) on top of the
+//! irregularities: the yaw rate `V k`, the uncompensated lateral acceleration
+//! `a_nc = V^2 k - g c / (2 l)`, and the vehicle's quasi-static response (the wheelsets' shift,
+//! the bodies' roll and its gravity), which is larger than the irregularities' own signals.
+//! Measured on the standard curved line (docs/accuracy.md, "Curves"): left in, whole Jrel 53;
+//! with only `V k` and `a_nc` removed, 1.8; with the exact response removed (the same line run
+//! without irregularities), the straight-track figure.
+//!
+//! # The model
+//! With the design known at the leading wheelset (the inputs `design_curvature` and
+//! `design_cant`, EN 13848's reference), the response is, for a linear vehicle at speed `V`, a
+//! causal linear function of the design's history along the line, because every body that
+//! carries a sensor rides at or behind the leading wheelset. So per sensor:
+//! - the rigid part, exact at any speed: `a_nc` on both accelerometers, `V k` on the yaw gyro;
+//! - the rest, the vehicle's own response: a causal FIR on the design's history on a grid of
+//!   `cell` metres (block means of `k` and `c`; `taps` cells), fitted per bank speed on the
+//!   vehicle's runs along random curved lines without irregularities
+//!   (`alignment-studies design-response`, docs/studies.md) and blended linearly between bank
+//!   speeds (the nearest outside them). It is updated when a cell completes; between, it is held.
+//!
+//! The model belongs to a vehicle (`design_response_file`); the shipped one to the ML95. With
+//! the inputs at 0 (straight track) nothing is removed.
+//!
+//! # Envelope
+//! The model knows the curvatures and cant deficiencies of its training lines; beyond them (and
+//! where the fitted vehicle needed flange contact) the vehicle is not linear any more, and
+//! [`Design::outside`] says so (the FMU's `outside_training`).
+
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The shipped model's name (`design_response_file`'s default), built into the library.
+pub const SHIPPED_NAME: &str = "design-response.toml";
+
+/// The shipped model's text (the ML95, `alignment-studies design-response`).
+const SHIPPED: &str = include_str!("../resources/design-response.toml");
+
+/// The sensors in the estimator's order: `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`,
+/// `ws_roll_rate`.
+pub const SENSORS: [&str; 4] = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate"];
+
+/// One sensor's FIR at one speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SensorResponse {
+    /// Bank speed \[m/s\].
+    pub speed: f64,
+    /// One of [`SENSORS`].
+    pub sensor: String,
+    /// Constant term (the fit's intercept; about 0).
+    pub offset: f64,
+    /// Response per unit curvature, one per cell of history, newest first.
+    pub curvature: Vec<f64>,
+    /// Response per metre of cant, likewise.
+    pub cant: Vec<f64>,
+}
+
+/// A vehicle's design-response model, as its file holds it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignModel {
+    /// File format (1).
+    pub format: u32,
+    /// The vehicle it was fitted on (text for people).
+    pub vehicle: String,
+    /// Grid cell \[m\].
+    pub cell: f64,
+    /// Half the distance between the contact points of the fitted vehicle \[m\] (for `a_nc`).
+    pub half_gauge: f64,
+    /// Gravity used \[m/s2\].
+    pub gravity: f64,
+    /// The largest curvature of the training lines \[1/m\].
+    pub max_curvature: f64,
+    /// The largest uncompensated lateral acceleration of the training runs \[m/s2\].
+    pub max_uncompensated: f64,
+    /// One per bank speed and sensor, bank speeds ascending.
+    pub response: Vec<SensorResponse>,
+}
+
+impl DesignModel {
+    /// Reads and checks a model file; errors name the file and what is wrong.
+    pub fn read(path: &Path) -> Result<DesignModel, String> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
+        let model: DesignModel = toml::from_str(&text)
+            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
+        model
+            .check()
+            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
+        Ok(model)
+    }
+
+    /// The shipped model (the ML95).
+    pub fn shipped() -> Result<DesignModel, String> {
+        let model: DesignModel =
+            toml::from_str(SHIPPED).map_err(|e| format!("the built-in {SHIPPED_NAME}: {e}"))?;
+        model
+            .check()
+            .map_err(|e| format!("the built-in {SHIPPED_NAME}: {e}"))?;
+        Ok(model)
+    }
+
+    /// The model's consistency: format, positive constants, every speed with the four
+    /// sensors, equal tap counts, finite numbers.
+    pub fn check(&self) -> Result<(), String> {
+        if self.format != 1 {
+            return Err(format!("format {} (this build reads 1)", self.format));
+        }
+        for (name, v) in [
+            ("cell", self.cell),
+            ("half_gauge", self.half_gauge),
+            ("gravity", self.gravity),
+            ("max_curvature", self.max_curvature),
+            ("max_uncompensated", self.max_uncompensated),
+        ] {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(format!("'{name}' = {v} must be positive and finite"));
+            }
+        }
+        if self.response.is_empty() || !self.response.len().is_multiple_of(SENSORS.len()) {
+            return Err(format!(
+                "{} response tables: four (one per sensor) per bank speed are needed",
+                self.response.len()
+            ));
+        }
+        let taps = self.response[0].curvature.len();
+        if taps == 0 {
+            return Err("the response tables have no taps".into());
+        }
+        let mut last_speed = f64::NEG_INFINITY;
+        for (i, chunk) in self.response.chunks(SENSORS.len()).enumerate() {
+            let speed = chunk[0].speed;
+            if !(speed > last_speed && speed > 0.0 && speed.is_finite()) {
+                return Err(format!(
+                    "bank speed {speed} m/s (table {}): speeds must be positive and ascending",
+                    i * SENSORS.len() + 1
+                ));
+            }
+            last_speed = speed;
+            for (r, name) in chunk.iter().zip(SENSORS) {
+                let finite = |x: &[f64]| x.iter().all(|v| v.is_finite());
+                if r.speed != speed || r.sensor != name {
+                    return Err(format!(
+                        "at {speed} m/s the tables must be {SENSORS:?} in order; found '{}' at {} m/s",
+                        r.sensor, r.speed
+                    ));
+                }
+                if r.curvature.len() != taps || r.cant.len() != taps {
+                    return Err(format!(
+                        "'{name}' at {speed} m/s has {} and {} taps; every table has {taps}",
+                        r.curvature.len(),
+                        r.cant.len()
+                    ));
+                }
+                if !(finite(&r.curvature) && finite(&r.cant) && r.offset.is_finite()) {
+                    return Err(format!("'{name}' at {speed} m/s has a non-finite number"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The bank speeds.
+    fn speeds(&self) -> impl Iterator<Item = f64> + '_ {
+        self.response.chunks(SENSORS.len()).map(|c| c[0].speed)
+    }
+
+    fn taps(&self) -> usize {
+        self.response[0].curvature.len()
+    }
+
+    /// The FIR part for history `h` (newest first) at bank speed index `i`.
+    fn fir(&self, i: usize, h: &VecDeque<[f64; 2]>) -> [f64; 4] {
+        let chunk = &self.response[i * SENSORS.len()..(i + 1) * SENSORS.len()];
+        std::array::from_fn(|s| {
+            let r = &chunk[s];
+            r.offset
+                + h.iter()
+                    .zip(r.curvature.iter().zip(&r.cant))
+                    .map(|(x, (a, b))| a * x[0] + b * x[1])
+                    .sum::<f64>()
+        })
+    }
+
+    /// The FIR part at `speed`, blended linearly between the bank speeds around it.
+    fn fir_at(&self, speed: f64, h: &VecDeque<[f64; 2]>) -> [f64; 4] {
+        let speeds: Vec<f64> = self.speeds().collect();
+        let n = speeds.len();
+        let above = speeds.partition_point(|&v| v <= speed);
+        if above == 0 {
+            return self.fir(0, h);
+        }
+        if above == n {
+            return self.fir(n - 1, h);
+        }
+        let (i, j) = (above - 1, above);
+        let w = (speed - speeds[i]) / (speeds[j] - speeds[i]);
+        let (a, b) = (self.fir(i, h), self.fir(j, h));
+        std::array::from_fn(|s| a[s] * (1.0 - w) + b[s] * w)
+    }
+}
+
+/// The design correction's state: the model, the history grid, the held FIR part.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Design {
+    model: Option<Arc<DesignModel>>,
+    /// Index of the cell being filled, and its sums of `k` and `c` and sample count.
+    cell: i64,
+    sum: [f64; 2],
+    count: u32,
+    /// Complete cells' means, newest first, at most the model's taps.
+    history: VecDeque<[f64; 2]>,
+    /// The FIR part from the last complete cell.
+    fir: [f64; 4],
+    /// Whether the design seen so far stayed inside the model's envelope.
+    inside: bool,
+    /// Complete cells in a row whose mean was 0 (straight, level track): once the whole
+    /// history is, the FIR part is 0 without a sum.
+    level_cells: usize,
+}
+
+impl Design {
+    /// A correction with `model` (`None`: off, every input ignored).
+    pub fn new(model: Option<Arc<DesignModel>>) -> Design {
+        Design {
+            model,
+            cell: 0,
+            sum: [0.0; 2],
+            count: 0,
+            history: VecDeque::new(),
+            fir: [0.0; 4],
+            inside: true,
+            level_cells: 0,
+        }
+    }
+
+    /// Whether a model is loaded.
+    pub fn active(&self) -> bool {
+        self.model.is_some()
+    }
+
+    /// Whether the design or the cant deficiency met so far is beyond the model's training
+    /// envelope (module docs).
+    pub fn outside(&self) -> bool {
+        !self.inside
+    }
+
+    /// What the design adds to the four sensors at this sample: the leading wheelset at
+    /// `distance` (after the sample's advance), moving at `speed` (0 standing: only the cant's
+    /// gravity), the design `[curvature, cant]` there.
+    pub fn response(&mut self, distance: f64, speed: f64, design: [f64; 2]) -> [f64; 4] {
+        let Some(model) = self.model.clone() else {
+            return [0.0; 4];
+        };
+        let [k, c] = design;
+        if !(k.is_finite() && c.is_finite()) {
+            return [0.0; 4];
+        }
+        let a_nc = speed * speed * k - model.gravity * c / (2.0 * model.half_gauge);
+        if k.abs() > model.max_curvature * 1.05 || a_nc.abs() > model.max_uncompensated * 1.05 {
+            self.inside = false;
+        }
+        if speed > 0.0 && distance.is_finite() {
+            let cell = (distance / model.cell).floor() as i64;
+            if cell != self.cell && self.count > 0 {
+                let n = f64::from(self.count);
+                let mean = [self.sum[0] / n, self.sum[1] / n];
+                self.level_cells = if mean == [0.0; 2] {
+                    self.level_cells + 1
+                } else {
+                    0
+                };
+                self.history.push_front(mean);
+                self.history.truncate(model.taps());
+                self.fir = if self.level_cells >= model.taps() {
+                    model.fir_at(speed, &VecDeque::new())
+                } else {
+                    model.fir_at(speed, &self.history)
+                };
+                self.sum = [0.0; 2];
+                self.count = 0;
+            }
+            self.cell = cell;
+            self.sum[0] += k;
+            self.sum[1] += c;
+            self.count += 1;
+        }
+        let fir = if speed > 0.0 { self.fir } else { [0.0; 4] };
+        [a_nc + fir[0], speed * k + fir[1], a_nc + fir[2], fir[3]]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(taps: usize) -> DesignModel {
+        let response = [10.0, 20.0]
+            .iter()
+            .flat_map(|&speed| {
+                SENSORS
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, s)| SensorResponse {
+                        speed,
+                        sensor: s.to_string(),
+                        offset: 0.0,
+                        curvature: (0..taps)
+                            .map(|j| speed * (i + 1) as f64 * (j + 1) as f64)
+                            .collect(),
+                        cant: vec![0.5 * speed; taps],
+                    })
+            })
+            .collect();
+        DesignModel {
+            format: 1,
+            vehicle: "test".into(),
+            cell: 0.2,
+            half_gauge: 0.75,
+            gravity: 9.81,
+            max_curvature: 0.01,
+            max_uncompensated: 2.0,
+            response,
+        }
+    }
+
+    /// The correction is the rigid part plus the direct convolution of the cells' means with
+    /// the taps, blended between the bank speeds.
+    #[test]
+    fn the_correction_is_the_documented_sum() {
+        let m = Arc::new(model(3));
+        let mut d = Design::new(Some(m.clone()));
+        let (v, h) = (15.0, 1e-3);
+        let design = |s: f64| [1e-3 * (s / 10.0).sin(), 0.01 * (s / 7.0).cos()];
+        let mut s = 0.0;
+        let mut cells: Vec<Vec<[f64; 2]>> = vec![];
+        let mut last = vec![];
+        for _ in 0..2000 {
+            s += v * h;
+            let x = design(s);
+            let got = d.response(s, v, x);
+            let cell = (s / 0.2).floor() as usize;
+            if cells.len() <= cell {
+                cells.resize(cell + 1, vec![]);
+            }
+            // The model's FIR part from the cells completed before this sample's cell.
+            let done: Vec<[f64; 2]> = cells[..cell]
+                .iter()
+                .rev()
+                .filter(|c| !c.is_empty())
+                .take(3)
+                .map(|c| {
+                    let n = c.len() as f64;
+                    [
+                        c.iter().map(|x| x[0]).sum::<f64>() / n,
+                        c.iter().map(|x| x[1]).sum::<f64>() / n,
+                    ]
+                })
+                .collect();
+            cells[cell].push(x);
+            let fir = |speed: f64, i: usize| {
+                done.iter()
+                    .enumerate()
+                    .map(|(j, c)| {
+                        speed * (i + 1) as f64 * (j + 1) as f64 * c[0] + 0.5 * speed * c[1]
+                    })
+                    .sum::<f64>()
+            };
+            let a_nc = v * v * x[0] - 9.81 * x[1] / 1.5;
+            let want: Vec<f64> = (0..4)
+                .map(|i| {
+                    let f = 0.5 * fir(10.0, i) + 0.5 * fir(20.0, i);
+                    f + [a_nc, v * x[0], a_nc, 0.0][i]
+                })
+                .collect();
+            for i in 0..4 {
+                assert!(
+                    (got[i] - want[i]).abs() < 1e-12,
+                    "{s}: {i} {} {}",
+                    got[i],
+                    want[i]
+                );
+            }
+            last = got.to_vec();
+        }
+        assert!(last.iter().all(|x| x.abs() > 0.0));
+        // Standing: the cant's gravity only.
+        assert_eq!(
+            d.response(s, 0.0, [0.002, 0.1]),
+            [-9.81 * 0.1 / 1.5, 0.0, -9.81 * 0.1 / 1.5, 0.0]
+        );
+        assert!(!d.outside());
+        d.response(s, 15.0, [0.02, 0.0]);
+        assert!(d.outside());
+        // Off: nothing.
+        assert_eq!(
+            Design::new(None).response(1.0, 15.0, [0.002, 0.1]),
+            [0.0; 4]
+        );
+    }
+
+    #[test]
+    fn broken_models_are_refused_by_name() {
+        let mut m = model(3);
+        m.response[5].cant.pop();
+        assert!(
+            m.check()
+                .unwrap_err()
+                .contains("'ws_yaw_rate' at 20 m/s has 3 and 2 taps")
+        );
+        let mut m = model(3);
+        m.response.swap(0, 1);
+        assert!(m.check().unwrap_err().contains("in order"));
+        let mut m = model(3);
+        m.cell = 0.0;
+        assert!(m.check().unwrap_err().contains("'cell'"));
+        let mut m = model(3);
+        m.response[0].curvature[1] = f64::NAN;
+        assert!(m.check().unwrap_err().contains("non-finite"));
+        assert!(model(3).check().is_ok());
+    }
+}
