@@ -277,6 +277,7 @@ impl Model for Estimator {
                 self.note_speed_range(input.speed, log);
                 self.note_novelty(v.real[vr::DISTANCE as usize], log);
                 self.note_bias(v.real[vr::DISTANCE as usize], log);
+                self.note_design(v.real[vr::DISTANCE as usize], input.design, log);
                 self.write_outputs(v);
                 Ok(outcome)
             }
@@ -353,6 +354,17 @@ impl Estimator {
                             .into()
                     });
             }
+        }
+    }
+
+    /// The design line beyond the design model's envelope ([`crate::design`]): said once.
+    fn note_design(&mut self, distance: f64, design: [f64; 2], log: &Logger) {
+        if self.design.outside() && !self.design_warned {
+            log.warning(&format!(
+                "at {distance:.1} m the design line (curvature {:.2e} 1/m, cant {:.3} m) is beyond what design_response_file was fitted on: the vehicle may be in flange contact or beyond its linear range, and the estimate is less trustworthy (outside_training set; said once)",
+                design[0], design[1]
+            ));
+            self.design_warned = true;
         }
     }
 

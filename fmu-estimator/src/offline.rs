@@ -489,7 +489,7 @@ fn run_from(
             c.push(l.contact_scale());
             conicity.push(l.conicity());
             novelty.push(l.novelty());
-            outside.push(l.outside_training());
+            outside.push(l.outside_training() || design.outside());
         }
     }
     out.learned = estimates;

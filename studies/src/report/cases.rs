@@ -154,6 +154,20 @@ pub fn cases(
     } else {
         None
     };
+    // The curve table: the vehicle FMU's curved line (ours; another vehicle FMU has none).
+    let curves = if groups.contains(&Group::Robustness) {
+        if crate::study::interface::has_parameter(&fmus.vehicle, "line_file") {
+            Some(crate::study::curves::run(fmus, seeds)?)
+        } else {
+            log(&format!(
+                "robustness: the curve table needs a vehicle FMU with a design line (parameter line_file); {} has none",
+                fmus.vehicle.display()
+            ));
+            None
+        }
+    } else {
+        None
+    };
     // The figures are drawn into the directory.
     create_dir(out)?;
     let mut report = Report::default();
@@ -185,6 +199,12 @@ pub fn cases(
             md.push('\n');
             let json = serde_json::to_string_pretty(sensors).unwrap_or_default();
             report.file(out.join("sensors.json"), json);
+        }
+        if let (Group::Robustness, Some(curves)) = (group, &curves) {
+            md.push_str(&crate::study::curves::markdown(seeds, curves));
+            md.push('\n');
+            let json = serde_json::to_string_pretty(curves).unwrap_or_default();
+            report.file(out.join("curves.json"), json);
         }
     }
     let report_path = out.join("report.md");

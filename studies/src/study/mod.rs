@@ -3,6 +3,7 @@
 
 pub mod calibrate;
 pub mod cases;
+pub mod curves;
 pub mod design;
 pub mod identify;
 pub mod interface;

@@ -1,0 +1,181 @@
+//! The standard curved case (the robustness study's curve table): the 2.1 km metro-like line
+//! of the vehicle FMU's `metro-line.csv` at 18 m/s (what `studies/curved.ssd` runs), against
+//! the same irregularities on straight track, for the paper's filter and the default.
+//!
+//! Each seed's vehicle run is recorded once on the line and once straight (the same track seed
+//! lays the same irregularities at the same distances), and both estimators process them
+//! offline as the FMU steps: on the line told the design (`design_curvature`, `design_cant`,
+//! the mode an infrastructure manager runs), and the default once more told nothing. The
+//! curves of radius 500 m and more are also judged on their own stretches, against the same
+//! stretches of the straight run.
+
+use super::metrics::{BandMetrics, evaluate};
+use super::records::{Output, Record, estimate, estimate_learned, record_table};
+use super::runs::{Fmus, seeded};
+use super::standard::{DS, TRIM};
+use crate::Error;
+use orchestrator::system::Value;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The line (in the vehicle FMU's resources), its speed \[m/s\] and the run's length \[s\].
+pub const LINE: &str = "metro-line.csv";
+const SPEED: f64 = 18.0;
+const RUN: f64 = 114.0;
+/// The stretches of `metro-line.csv` around its curves of radius 500 m and more (1200 m and
+/// 1500 m, with their transitions and 30-40 m either side) \[m\].
+pub const WIDE_CURVES: [(f64, f64); 2] = [(560.0, 970.0), (1460.0, 1840.0)];
+
+/// One seed's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct CurveRun {
+    /// Track seed.
+    pub seed: u32,
+    /// Straight track: the paper's filter, the default.
+    pub straight: [BandMetrics; 2],
+    /// The line, design known: the paper's filter, the default.
+    pub known: [BandMetrics; 2],
+    /// The line, the default told nothing.
+    pub untold: BandMetrics,
+    /// The wide curves' stretches, the default: straight, then design known (each the mean of
+    /// the two stretches' Jrel, whole band).
+    pub wide: [f64; 2],
+}
+
+fn record(fmus: &Fmus, seed: u32, curved: bool) -> Result<Record, Error> {
+    let mut settings = seeded(seed);
+    if curved {
+        settings.push(("line_file".into(), Value::String(LINE.into())));
+    }
+    let (mut rec, table) = record_table(
+        fmus,
+        settings,
+        RUN,
+        Some(&|_| SPEED),
+        None,
+        &["design_curvature", "design_cant"],
+    )?;
+    let col = |n: &str| {
+        table
+            .column(&format!("vehicle.{n}"))
+            .map(|x| x[1..].to_vec())
+            .ok_or_else(|| Error::Input(format!("the vehicle FMU has no output '{n}'")))
+    };
+    let (k, c) = (col("design_curvature")?, col("design_cant")?);
+    for (i, s) in rec.samples.iter_mut().enumerate() {
+        s.design = [k[i], c[i]];
+    }
+    Ok(rec)
+}
+
+/// The estimate of `settings` (`paper`: the paper's filter) over `rec`, the design removed
+/// when `told`.
+fn judged(
+    rec: &Record,
+    paper: bool,
+    told: bool,
+    window: Option<(f64, f64)>,
+) -> Result<BandMetrics, Error> {
+    let mut samples = rec.samples.clone();
+    if !told {
+        for s in &mut samples {
+            s.design = [0.0; 2];
+        }
+    }
+    let (distance, est) = if paper {
+        estimate(
+            &samples,
+            1e-3,
+            &[("estimator".into(), "1".into())],
+            None,
+            false,
+        )?
+    } else {
+        estimate_learned(&samples, 1e-3, &[], Output::Alignment)?
+    };
+    let (a, b) = window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+    let keep = |d: &[f64], x: &[f64]| -> (Vec<f64>, Vec<f64>) {
+        d.iter()
+            .zip(x)
+            .filter(|(d, _)| **d >= a && **d <= b)
+            .map(|(d, x)| (*d, *x))
+            .unzip()
+    };
+    let (ed, ex) = keep(&distance, &est);
+    let (td, tx) = keep(&rec.distance, &rec.alignment);
+    Ok(evaluate(&ed, &ex, &td, &tx, DS, TRIM)?)
+}
+
+fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
+    let (straight, line) = (record(fmus, seed, false)?, record(fmus, seed, true)?);
+    let wide = |rec: &Record, told: bool| -> Result<f64, Error> {
+        let mut sum = 0.0;
+        for w in WIDE_CURVES {
+            sum += judged(rec, false, told, Some(w))?.whole.jrel;
+        }
+        Ok(sum / WIDE_CURVES.len() as f64)
+    };
+    Ok(CurveRun {
+        seed,
+        straight: [
+            judged(&straight, true, false, None)?,
+            judged(&straight, false, false, None)?,
+        ],
+        known: [
+            judged(&line, true, true, None)?,
+            judged(&line, false, true, None)?,
+        ],
+        untold: judged(&line, false, false, None)?,
+        wide: [wide(&straight, false)?, wide(&line, true)?],
+    })
+}
+
+/// Every seed, in parallel.
+pub fn run(fmus: &Fmus, seeds: &[u32]) -> Result<Vec<CurveRun>, Error> {
+    seeds.par_iter().map(|&s| run_one(fmus, s)).collect()
+}
+
+fn mean(x: impl Iterator<Item = f64>) -> f64 {
+    let v: Vec<f64> = x.collect();
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+fn bands(runs: &[CurveRun], pick: impl Fn(&CurveRun) -> &BandMetrics) -> String {
+    format!(
+        "{:.3} / {:.3} / {:.3} / {:.3} (worst seed {:.3})",
+        mean(runs.iter().map(|r| pick(r).whole.jrel)),
+        mean(runs.iter().map(|r| pick(r).d1.jrel)),
+        mean(runs.iter().map(|r| pick(r).d2.jrel)),
+        mean(runs.iter().map(|r| pick(r).d3.jrel)),
+        runs.iter()
+            .map(|r| pick(r).whole.jrel)
+            .fold(0.0f64, f64::max)
+    )
+}
+
+/// The table (means over the seeds).
+pub fn markdown(seeds: &[u32], runs: &[CurveRun]) -> String {
+    let mut s = format!(
+        "### Curves: the standard curved case\n\nThe vehicle FMU's `{LINE}` (2.1 km, four curves of radius 400-1500 m, transitions 40-100 m, cant 30-120 mm) at {SPEED} m/s, {RUN} s, against the same irregularities on straight track. Jrel whole / D1 / D2 / D3, mean over seeds {seeds:?}.\n\n| run | paper's filter | default (learned) |\n|---|---|---|\n"
+    );
+    s.push_str(&format!(
+        "| straight track | {} | {} |\n",
+        bands(runs, |r| &r.straight[0]),
+        bands(runs, |r| &r.straight[1])
+    ));
+    s.push_str(&format!(
+        "| the line, design known | {} | {} |\n",
+        bands(runs, |r| &r.known[0]),
+        bands(runs, |r| &r.known[1])
+    ));
+    s.push_str(&format!(
+        "| the line, told nothing | | {} |\n",
+        bands(runs, |r| &r.untold)
+    ));
+    s.push_str(&format!(
+        "\nCurves of radius 500 m and more (stretches {WIDE_CURVES:?} m), default, whole: straight {:.3}, design known {:.3}.\n",
+        mean(runs.iter().map(|r| r.wide[0])),
+        mean(runs.iter().map(|r| r.wide[1]))
+    ));
+    s
+}
