@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -208,3 +209,32 @@ def test_recordings_at_2_ms_are_read_at_their_rate_and_meet_the_tolerance(tmp_pa
     print("segment SD errors at 2 ms:", {k: np.round(v * 100, 2).tolist() for k, v in e.items()})
     for k in fleet.BANDS:
         assert np.nanmax(np.abs(e[k])) < TOLERANCE, (k, e[k])
+
+
+def test_a_fleet_on_a_curved_line_meets_the_tolerance_with_the_design_in_its_recordings(tmp_path):
+    """10 passes (track seed 3) over the first 1.1 km of the standard curved case's line (two
+    curves, radius 600 and 1200 m), their recordings carrying the design line: the segment SDs
+    meet the straight fleet's tolerance; the same passes without the design columns do not."""
+    out = tmp_path / "curved"
+    out.mkdir()
+    synthetic.synthesize(out, packaged_fmus()["RailVehicle"], passes=MORE_PASSES, track_seed=3,
+                         length=1100.0, seed=3, line_file="metro-line.csv")
+    files = fleet.expand([out])
+    cols, _ = recordings.read_recording(files[0])
+    assert np.max(np.abs(cols["design_curvature"])) == pytest.approx(1 / 600, rel=1e-9)
+    options = fleet.Options()
+    truth = fleet.truth_sds(out / "truth.parquet", options)
+    coverages = [fleet.estimate_pass(f, options)[0] for f in files]
+    e = segment_errors(coverages, truth, options, MORE_PASSES)
+    print("segment SD errors on the curved line:", {k: np.round(v * 100, 2).tolist() for k, v in e.items()})
+    for k in fleet.BANDS:
+        assert np.nanmax(np.abs(e[k])) < TOLERANCE, (k, e[k])
+    # Without the design columns (a user who leaves them out), the curves swamp D2.
+    blind = tmp_path / "blind"
+    blind.mkdir()
+    for f in files:
+        c, _ = recordings.read_recording(f)
+        recordings.write_parquet(blind / Path(f).name, {k: v for k, v in c.items() if not k.startswith("design")}, {})
+    coverages = [fleet.estimate_pass(str(f), options)[0] for f in sorted(blind.iterdir())]
+    e = segment_errors(coverages, truth, options, MORE_PASSES)
+    assert np.nanmax(np.abs(e["d2"])) > 5 * TOLERANCE

@@ -120,7 +120,9 @@ def estimate_recording(path: str, settings: Mapping[str, Any] | None = None) -> 
     nominal step (:func:`track_alignment.recordings.nominal_step`): the FMU's, bit for bit."""
     cols, step = read_recording(path)
     out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
-                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), settings=dict(settings or {}))
+                           step=step, ws_roll_rate=cols.get("ws_roll_rate"),
+                           design_curvature=cols.get("design_curvature"), design_cant=cols.get("design_cant"),
+                           settings=dict(settings or {}))
     return cols, out
 
 

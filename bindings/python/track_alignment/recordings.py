@@ -12,6 +12,7 @@ A recording is a table with one row per sample, taken every ``step`` seconds:
 | ``frame_acc_y`` | m/s2 | yes | bogie-frame lateral acceleration |
 | ``distance`` | m | no | position along the line (odometry, GNSS map-matching); without it the position is the integral of ``speed`` from 0 |
 | ``ws_roll_rate`` | rad/s | no | wheelset roll rate, for the four-sensor taps |
+| ``design_curvature``, ``design_cant`` | 1/m, m | no (both or neither) | the design line at the wheelset, from the line's data and the position; the estimator removes its response (curves) |
 
 Parquet files carry, in the file's key-value metadata, ``units`` (JSON ``{column: unit}``) and
 ``provenance`` (JSON: what produced the file, from which inputs and settings), the convention the
@@ -28,7 +29,7 @@ from typing import Any, Mapping
 import numpy as np
 
 REQUIRED = ("time", "speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y")
-OPTIONAL = ("distance", "ws_roll_rate")
+OPTIONAL = ("distance", "ws_roll_rate", "design_curvature", "design_cant")
 UNITS = {
     "time": "s",
     "speed": "m/s",
@@ -37,6 +38,8 @@ UNITS = {
     "ws_yaw_rate": "rad/s",
     "frame_acc_y": "m/s2",
     "ws_roll_rate": "rad/s",
+    "design_curvature": "1/m",
+    "design_cant": "m",
     "alignment": "m",
 }
 PROVENANCE_KEY = b"provenance"
@@ -89,6 +92,8 @@ def read_recording(path: str | Path) -> tuple[dict[str, np.ndarray], float]:
     if missing:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (has {', '.join(columns)})")
     keep = {c: columns[c] for c in (*REQUIRED, *OPTIONAL) if c in columns}
+    if ("design_curvature" in keep) != ("design_cant" in keep):
+        raise RecordingError(f"{path}: design_curvature and design_cant come together (the design line); it has only one")
     time = keep["time"]
     if len(time) < 2:
         raise RecordingError(f"{path}: {len(time)} row(s), at least 2 needed")

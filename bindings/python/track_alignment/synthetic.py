@@ -4,7 +4,7 @@ wear), written as Parquet recordings, plus the track's true alignment for evalua
 
 | file | columns |
 |---|---|
-| ``pass_NNNN.parquet`` | ``time``, ``speed``, ``distance``, ``ws_acc_y``, ``ws_yaw_rate``, ``frame_acc_y``, ``ws_roll_rate`` |
+| ``pass_NNNN.parquet`` | ``time``, ``speed``, ``distance``, ``ws_acc_y``, ``ws_yaw_rate``, ``frame_acc_y``, ``ws_roll_rate``; on a design line (``line_file``) also ``design_curvature``, ``design_cant`` |
 | ``truth.parquet`` | ``distance``, ``alignment`` (the track's lateral alignment at the leading wheelset) |
 | ``manifest.json`` | the command, its settings and the files above: a rerun into the directory replaces only these, and removes the passes of an earlier, larger fleet |
 
@@ -31,7 +31,8 @@ COMMAND = "python -m track_alignment.synthetic"
 SEED_STRIDE = 100_000
 MAX_SEED = (2**31 - 1 - 1000) // SEED_STRIDE - 1
 
-SIGNALS = ("forward_speed", "distance", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate", "alignment")
+SIGNALS = ("forward_speed", "distance", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate", "alignment",
+           "design_curvature", "design_cant")
 
 
 def synthesize(
@@ -45,11 +46,14 @@ def synthesize(
     kalker_scales: tuple[float, ...] = (1.0, 0.75),
     seed: int = 0,
     step: float = 1e-3,
+    line_file: str | None = None,
 ) -> list[Path]:
     """Writes the fleet into ``out_dir`` and returns the recordings' paths. Speeds are drawn
     uniformly from ``speeds`` (seeded by ``seed``); Kalker scales cycle through
     ``kalker_scales``; pass ``i`` has noise seed :func:`noise_seed` ``(seed, i)``. ``out_dir``
-    is checked before the first run (``OutputError``); the files appear only when all are written."""
+    is checked before the first run (``OutputError``); the files appear only when all are written.
+    ``line_file``: the vehicle FMU's design line (its parameter of that name, e.g. ``metro-line.csv``
+    in its resources); the recordings then carry ``design_curvature`` and ``design_cant``."""
     if not (1 <= passes <= SEED_STRIDE) or not length > 0 or not (0 < speeds[0] <= speeds[1] < float("inf")):
         raise ValueError(f"passes {passes} (1-{SEED_STRIDE}), length {length} m and speeds {speeds} must be positive")
     if not 0 <= seed <= MAX_SEED:
@@ -72,6 +76,8 @@ def synthesize(
                 "speed": speed,
                 "kalker_scale": kalker_scales[i % len(kalker_scales)],
             }
+            if line_file:
+                parameters["line_file"] = line_file
             # Whole steps until the leading wheelset has passed `length`.
             stop = step * np.ceil(length / speed / step)
             run = _native.simulate(vehicle_fmu, float(stop), step=step, parameters=parameters, variables=list(SIGNALS))
@@ -82,6 +88,7 @@ def synthesize(
                 "speed": cols["forward_speed"],
                 "distance": cols["distance"],
                 **{k: cols[k] for k in ("ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate")},
+                **({k: cols[k] for k in ("design_curvature", "design_cant")} if line_file else {}),
             }
             provenance = {"source": "track_alignment.synthetic", "vehicle_fmu": Path(vehicle_fmu).name,
                           "parameters": parameters, "step": step, "pass": i}
@@ -91,7 +98,7 @@ def synthesize(
                 out.stage("truth.parquet", lambda tmp: write_parquet(
                     tmp, {"distance": cols["distance"], "alignment": cols["alignment"]},
                     {"source": "track_alignment.synthetic", "track_seed": track_seed}))
-        out.commit({"vehicle_fmu": str(vehicle_fmu), "passes": passes, "track_seed": track_seed, "seed": seed,
+        out.commit({"vehicle_fmu": str(vehicle_fmu), "line_file": line_file, "passes": passes, "track_seed": track_seed, "seed": seed,
                     "length_m": length, "speeds_m_s": list(speeds), "kalker_scales": list(kalker_scales), "step_s": step})
     except BaseException:
         out.abort()
@@ -120,9 +127,12 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=whole(0, MAX_SEED), default=0,
                    help=f"seed of the passes' speeds and sensor noise: pass i has noise seed 1000 + {SEED_STRIDE} seed + i (0)")
     p.add_argument("--length", type=positive, default=1000.0, help="length of the line in m (1000)")
+    p.add_argument("--line-file", default=None,
+                   help="the vehicle FMU's design line (its line_file parameter, e.g. metro-line.csv): a curved line")
     a = p.parse_args(argv)
     try:
-        paths = synthesize(a.out, a.vehicle_fmu, passes=a.passes, track_seed=a.track_seed, length=a.length, seed=a.seed)
+        paths = synthesize(a.out, a.vehicle_fmu, passes=a.passes, track_seed=a.track_seed, length=a.length, seed=a.seed,
+                           line_file=a.line_file)
     except OutputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
