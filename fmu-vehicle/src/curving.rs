@@ -1,4 +1,4 @@
-//! The vehicle on a curved, canted design line ([`crate::line`]): what the track-following
+//! The vehicle on a curved, canted design line ([`crate::line`](mod@crate::line)): what the track-following
 //! frames add to the equations of motion of [`crate::dynamics`].
 //!
 //! # Frames and coordinates
@@ -25,7 +25,7 @@
 //! second order (products of the frame's rates with the bodies' small velocities, which act
 //! longitudinally or vertically; `V^2 k c` in the vertical) are left out.
 //!
-//! The frame rolls with the cant: in the roundings of the cant ramps ([`crate::line`]) with the
+//! The frame rolls with the cant: in the roundings of the cant ramps ([`crate::line`](mod@crate::line)) with the
 //! roll acceleration `alpha = V^2 phi_d''`, which moves a point at height `h` above the roll
 //! axis (the rail-level centre line) by `-h alpha` laterally. So each body's lateral equation
 //! gains `+m h alpha` (its centre of gravity at `h`) and the car body's and bogie frames' roll
@@ -35,7 +35,7 @@
 //! A suspension element joins two bodies whose frames differ. The deflections are computed
 //! with every body's displacement expressed in the car body's frame: the frame of a body at
 //! `s_c + x`, seen from the car body's, is turned by `dpsi = T(s_c + x) - T(s_c)`, shifted
-//! laterally by `dy = P(s_c + x) - P(s_c) - x T(s_c)` ([`crate::line`]) and rolled by
+//! laterally by `dy = P(s_c + x) - P(s_c) - x T(s_c)` ([`crate::line`](mod@crate::line)) and rolled by
 //! `dphi = phi_d(s_c + x) - phi_d(s_c)`. A body's displacement 6-vector gains
 //! `(0, dy - h dphi, 0, dphi, 0, dpsi)`, `h` its centre of gravity's height (the frame rolls
 //! about the rail-level centre line), and its velocity the time derivatives,

@@ -254,7 +254,7 @@ pub struct Outputs {
     pub ws_roll_rate: f64,
     /// `ws_roll_rate` without noise; 0 when standing.
     pub ws_roll_rate_clean: f64,
-    /// Design curvature at the leading wheelset \[1/m\], left positive ([`crate::line`]).
+    /// Design curvature at the leading wheelset \[1/m\], left positive ([`crate::line`](mod@crate::line)).
     pub design_curvature: f64,
     /// Design cant at the leading wheelset, right rail above left \[m\].
     pub design_cant: f64,
@@ -267,7 +267,7 @@ pub struct Simulation {
     pub vehicle: Vehicle,
     /// The irregularities, grown as the vehicle runs.
     pub track: Track,
-    /// The design line the irregularities are laid on ([`crate::line`]); `None` when it is
+    /// The design line the irregularities are laid on ([`crate::line`](mod@crate::line)); `None` when it is
     /// straight and level, so no design term is even evaluated.
     pub line: Option<DesignLine>,
     /// Integration and run-in settings.
