@@ -109,12 +109,15 @@ def test_the_fmu_and_the_bindings_remove_the_same_response(curved):
     assert np.array_equal(got[:70], want[:70])
     assert np.max(np.abs(got - want)) < 2e-5
     assert np.max(np.abs(want)) > 5e-3
-    assert not result["outside_training"].any()
+    # The 600 m curve's predicted shift (16 mm) is within the flange margin: both flag it alike.
+    flags = result["outside_training"][1:].astype(bool)
+    assert flags.any() and not flags[:70].any()
+    assert np.mean(flags != ours["outside_training"][:n - 1]) < 1e-3
 
 
 def test_a_curve_beyond_the_envelope_sets_outside_training():
     """A 250 m curve with little cant is beyond what the shipped design response was fitted on
-    (radius 360 m at most): outside_training sets."""
+    (radius 360 m at most): outside_training sets in it and clears 60 m after its end (370 m)."""
     r = ta.simulate(packaged_fmus()["RailVehicle"], 30.0, step=1e-3,
                     parameters={"speed": 15.0, "curve_radius": 250.0, "curve_cant": 0.02,
                                 "curve_start": 50.0, "flange_contact": True},
@@ -123,7 +126,8 @@ def test_a_curve_beyond_the_envelope_sets_outside_training():
     out, _ = estimate(r)
     d = r["distance"]
     assert not out["outside_training"][d < 50].any()
-    assert out["outside_training"][d > 120].all()
+    assert out["outside_training"][(d > 120) & (d < 420)].all()
+    assert not out["outside_training"][d > 440].any()
 
 
 def test_a_missing_or_broken_design_response_file_is_named(tmp_path):

@@ -70,7 +70,7 @@ pub fn execute(a: &DesignArgs) -> Result<Report, Error> {
         model.vehicle, options.lines, options.length, options.seed, options.taps, options.cell
     );
     let mut md = String::from(
-        "# Design response\n\nValidation residual rms against the rms of what was to fit (after the rigid part), and the ridge chosen, per bank speed:\n\n| speed m/s | ws_acc_y m/s2 | ws_yaw_rate rad/s | frame_acc_y m/s2 | ws_roll_rate rad/s |\n|---|---|---|---|---|\n",
+        "# Design response\n\nValidation residual rms against the rms of what was to fit (after the rigid part), and the ridge chosen, per bank speed:\n\n| speed m/s | ws_acc_y m/s2 | ws_yaw_rate rad/s | frame_acc_y m/s2 | ws_roll_rate rad/s | ws_y m (the shift, for the flange check) |\n|---|---|---|---|---|---|\n",
     );
     for q in &quality {
         md.push_str(&format!("| {} |", q.speed));
@@ -80,8 +80,8 @@ pub fn execute(a: &DesignArgs) -> Result<Report, Error> {
         md.push('\n');
     }
     md.push_str(&format!(
-        "\nEnvelope: curvature up to {:.2e} 1/m, uncompensated lateral acceleration up to {:.2} m/s2.\n",
-        model.max_curvature, model.max_uncompensated
+        "\nEnvelope: curvature up to {:.2e} 1/m, uncompensated lateral acceleration up to {:.2} m/s2, predicted shift up to the flange clearance {} m.\n",
+        model.max_curvature, model.max_uncompensated, model.flange_clearance
     ));
     let mut report = Report {
         markdown: md,

@@ -58,6 +58,10 @@ pub struct CurveRun {
     /// The tight curve ([`TIGHT`]), design known, the default: the run's figures, and the share
     /// of its samples in the circular part with `outside_training` set.
     pub tight: (BandMetrics, f64),
+    /// The line with flange contact on, design known, the default: the run's figures, the
+    /// share of its samples with `outside_training` set, and the wide curves' stretches' whole
+    /// Jrel (mean of the two).
+    pub flange: (BandMetrics, f64, f64),
 }
 
 /// How a run is laid: the line, straight, or the tight curve with flange contact.
@@ -66,12 +70,17 @@ enum Lay {
     Line,
     Straight,
     Tight,
+    LineWithFlanges,
 }
 
 fn record(fmus: &Fmus, seed: u32, lay: Lay) -> Result<Record, Error> {
     let mut settings = seeded(seed);
     match lay {
         Lay::Line => settings.push(("line_file".into(), Value::String(LINE.into()))),
+        Lay::LineWithFlanges => {
+            settings.push(("line_file".into(), Value::String(LINE.into())));
+            settings.push(("flange_contact".into(), Value::Boolean(true)));
+        }
         Lay::Straight => {}
         Lay::Tight => {
             for (n, v) in TIGHT {
@@ -140,10 +149,8 @@ fn judged(
     Ok(evaluate(&ed, &ex, &td, &tx, DS, TRIM)?)
 }
 
-/// The default told the design over the tight curve: its figures and the share of the circular
-/// part's samples with `outside_training` set.
-fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
-    let rec = record(fmus, seed, Lay::Tight)?;
+/// The default told the design over `rec`: the estimate and `outside_training` per sample.
+fn flagged(rec: &Record) -> Result<(Vec<f64>, Vec<f64>, Vec<bool>), Error> {
     let values = offline::settings(&[])?;
     let (config, _) = offline::config(&values, None)?;
     let learned = offline::learned(&values, &config)?;
@@ -155,7 +162,28 @@ fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
         .iter()
         .map(|e| e.alignment)
         .collect();
-    let flags = out.outside_training.unwrap_or_default();
+    Ok((out.distance, est, out.outside_training.unwrap_or_default()))
+}
+
+/// The line with flange contact: the run's figures, the share flagged, the wide curves' whole.
+fn with_flanges(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64, f64), Error> {
+    let rec = record(fmus, seed, Lay::LineWithFlanges)?;
+    let (distance, est, flags) = flagged(&rec)?;
+    let share = flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64;
+    let m = evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
+    let wide = WIDE_CURVES
+        .iter()
+        .map(|w| judged(&rec, false, true, Some(*w)).map(|m| m.whole.jrel))
+        .sum::<Result<f64, Error>>()?
+        / WIDE_CURVES.len() as f64;
+    Ok((m, share, wide))
+}
+
+/// The default told the design over the tight curve: its figures and the share of the circular
+/// part's samples with `outside_training` set.
+fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
+    let rec = record(fmus, seed, Lay::Tight)?;
+    let (distance, est, flags) = flagged(&rec)?;
     let (a, b) = (
         TIGHT[3].1 + TIGHT[1].1,
         TIGHT[3].1 + TIGHT[1].1 + TIGHT[4].1,
@@ -168,7 +196,7 @@ fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
         .map(|(_, f)| *f)
         .collect();
     let share = inside.iter().filter(|f| **f).count() as f64 / inside.len().max(1) as f64;
-    let m = evaluate(&out.distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
+    let m = evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
     Ok((m, share))
 }
 
@@ -197,6 +225,7 @@ fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
         untold: judged(&line, false, false, None)?,
         wide: [wide(&straight, false)?, wide(&line, true)?],
         tight: tight(fmus, seed)?,
+        flange: with_flanges(fmus, seed)?,
     })
 }
 
@@ -246,6 +275,12 @@ pub fn markdown(seeds: &[u32], runs: &[CurveRun]) -> String {
         "\nCurves of radius 500 m and more (stretches {WIDE_CURVES:?} m), default, whole: straight {:.3}, design known {:.3}.\n",
         mean(runs.iter().map(|r| r.wide[0])),
         mean(runs.iter().map(|r| r.wide[1]))
+    ));
+    s.push_str(&format!(
+        "\nWith flange contact on (the physical vehicle: the ML95's stiff bogie presses its leading wheelset against the flange in most of these curves), default told the design: {}; `outside_training` set on {:.0} % of the samples; the wide curves' stretches {:.3}.\n",
+        bands(runs, |r| &r.flange.0),
+        100.0 * mean(runs.iter().map(|r| r.flange.1)),
+        mean(runs.iter().map(|r| r.flange.2))
     ));
     let tight = bands(runs, |r| &r.tight.0);
     s.push_str(&format!(

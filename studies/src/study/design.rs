@@ -19,7 +19,7 @@
 
 use super::runs::{Fmus, Settings, vehicle_run_driven};
 use crate::Error;
-use fmu_estimator::design::{DesignModel, SENSORS, SensorResponse};
+use fmu_estimator::design::{DesignModel, SENSORS, SensorResponse, TABLES};
 use fmu_vehicle::simulation::NoiseRng;
 use nalgebra::{DMatrix, DVector};
 use orchestrator::system::Value;
@@ -116,7 +116,8 @@ struct Grid {
     design: [Vec<f64>; 2],
     /// The design with its samples placed off ([`JITTER`]), for the validation.
     rounded: [Vec<f64>; 2],
-    residual: [Vec<f64>; 4],
+    /// Per table ([`TABLES`]): the sensors beyond the rigid part, then the wheelset's shift.
+    residual: [Vec<f64>; 5],
     max_uncompensated: f64,
 }
 
@@ -173,6 +174,7 @@ fn clean_run(
         "ws_yaw_rate",
         "frame_acc_y",
         "ws_roll_rate",
+        "ws_y",
     ];
     let table = vehicle_run_driven(fmus, settings, &variables, stop, Some(&|_| speed))?;
     let col = |n: &str| -> Result<Vec<f64>, Error> {
@@ -196,12 +198,13 @@ fn clean_run(
             [a_nc, v[i] * k[i], a_nc, 0.0]
         })
         .collect();
-    let mut residual: [Vec<f64>; 4] = Default::default();
+    let mut residual: [Vec<f64>; 5] = Default::default();
     for (s, name) in SENSORS.iter().enumerate() {
         let x = col(name)?;
         let r: Vec<f64> = x.iter().zip(&rigid).map(|(x, r)| x - r[s]).collect();
         residual[s] = cells(&d, &r, cell, n);
     }
+    residual[4] = cells(&d, &col("ws_y")?, cell, n);
     // Each sample placed JITTER off (uniform), as odometry places a line database's design.
     let mut rng = NoiseRng::new(d.len() as u64);
     let jittered: Vec<f64> = d
@@ -262,6 +265,10 @@ fn misfit(h: &DVector<f64>, g: &Grid, s: usize, taps: usize, rounded: bool) -> (
 /// training residual's and signal's rms, the validation residual's and signal's rms).
 type Fitted = (Vec<f64>, Vec<f64>, f64, [f64; 4]);
 
+/// The flange clearance the vehicle FMU runs with unless set (its `flange_clearance` default)
+/// \[m\].
+const DEFAULT_FLANGE_CLEARANCE: f64 = 0.009;
+
 /// Ridge least squares over the training grids, the ridge chosen on the validation grids.
 fn solve(train: &[Grid], valid: &[Grid], taps: usize) -> Result<Vec<Fitted>, Error> {
     let m = 2 * taps;
@@ -307,7 +314,7 @@ fn solve(train: &[Grid], valid: &[Grid], taps: usize) -> Result<Vec<Fitted>, Err
         let n = n.max(1) as f64;
         ((e / n).sqrt(), (q / n).sqrt())
     };
-    (0..SENSORS.len())
+    (0..TABLES.len())
         .map(|s| {
             let mut b = DVector::<f64>::zeros(m);
             for g in train {
@@ -344,10 +351,10 @@ fn solve(train: &[Grid], valid: &[Grid], taps: usize) -> Result<Vec<Fitted>, Err
 pub struct FitQuality {
     /// Bank speed \[m/s\].
     pub speed: f64,
-    /// Per sensor ([`SENSORS`]): the chosen ridge, and the rms of the training residual, of
+    /// Per table ([`TABLES`]): the chosen ridge, and the rms of the training residual, of
     /// what was to fit there, of the validation residual and of what was to fit there, in the
-    /// sensor's unit.
-    pub rms: [(f64, [f64; 4]); 4],
+    /// table's unit.
+    pub rms: [(f64, [f64; 4]); 5],
 }
 
 /// Fits the model on the vehicle FMU of `fmus` (its line files written into `work`).
@@ -416,12 +423,12 @@ pub fn fit(
     let mut response = vec![];
     let mut quality = vec![];
     for (v, per_sensor) in fitted {
-        let mut rms = [(0.0, [0.0; 4]); 4];
+        let mut rms = [(0.0, [0.0; 4]); 5];
         for (s, (k, c, ridge, figures)) in per_sensor.into_iter().enumerate() {
             rms[s] = (ridge, figures);
             response.push(SensorResponse {
                 speed: v,
-                sensor: SENSORS[s].to_string(),
+                sensor: TABLES[s].to_string(),
                 offset: 0.0,
                 curvature: k,
                 cant: c,
@@ -429,14 +436,26 @@ pub fn fit(
         }
         quality.push(FitQuality { speed: v, rms });
     }
+    let flange_clearance = fmus
+        .vehicle_settings
+        .iter()
+        .rev()
+        .find(|(n, _)| n == "flange_clearance")
+        .and_then(|(_, v)| match v {
+            Value::Real(x) => Some(*x),
+            Value::String(t) => t.trim().parse().ok(),
+            _ => None,
+        })
+        .unwrap_or(DEFAULT_FLANGE_CLEARANCE);
     let model = DesignModel {
-        format: 1,
+        format: 2,
         vehicle: params.name.clone(),
         cell: options.cell,
         half_gauge,
         gravity: GRAVITY,
         max_curvature,
         max_uncompensated,
+        flange_clearance,
         response,
     };
     model.check().map_err(Error::Input)?;
@@ -451,8 +470,8 @@ pub fn to_toml(model: &DesignModel, header: &str) -> String {
         s.push_str(&format!("# {line}\n"));
     }
     s.push_str(&format!(
-        "format = {}\nvehicle = \"{}\"\ncell = {}\nhalf_gauge = {}\ngravity = {}\nmax_curvature = {:.6e}\nmax_uncompensated = {:.6e}\n",
-        model.format, model.vehicle, model.cell, model.half_gauge, model.gravity, model.max_curvature, model.max_uncompensated
+        "format = {}\nvehicle = \"{}\"\ncell = {}\nhalf_gauge = {}\ngravity = {}\nmax_curvature = {:.6e}\nmax_uncompensated = {:.6e}\nflange_clearance = {}\n",
+        model.format, model.vehicle, model.cell, model.half_gauge, model.gravity, model.max_curvature, model.max_uncompensated, model.flange_clearance
     ));
     let list = |x: &[f64]| {
         x.iter()
@@ -511,7 +530,7 @@ mod tests {
         let g = Grid {
             design: [k.clone(), c.clone()],
             rounded: [k, c],
-            residual: [y.clone(), y.clone(), y.clone(), y],
+            residual: [y.clone(), y.clone(), y.clone(), y.clone(), y],
             max_uncompensated: 0.0,
         };
         let valid = Grid {
