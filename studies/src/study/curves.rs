@@ -149,8 +149,11 @@ fn judged(
     Ok(evaluate(&ed, &ex, &td, &tx, DS, TRIM)?)
 }
 
-/// The default told the design over `rec`: the estimate and `outside_training` per sample.
-fn flagged(rec: &Record) -> Result<(Vec<f64>, Vec<f64>, Vec<bool>), Error> {
+/// The estimator's distance, its alignment and `outside_training`, per sample.
+type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
+
+/// The default told the design over `rec`.
+fn flagged(rec: &Record) -> Result<Flagged, Error> {
     let values = offline::settings(&[])?;
     let (config, _) = offline::config(&values, None)?;
     let learned = offline::learned(&values, &config)?;
