@@ -203,27 +203,38 @@ fn bench_options(c: &mut Criterion) {
 
 /// The learned filter (`estimator` 2, the FMU's default) at 20 m/s: a 0.2 m cell closes every
 /// 10 steps and costs the FIR products of two bank speeds, so the figure is the mean over cells.
+/// With the design inputs in a curve, the design response's FIRs too (every cell).
 fn bench_learned(c: &mut Criterion) {
     let h = 1e-3;
-    for (lag, roll, taps, label) in [
+    for (lag, roll, taps, curve, label) in [
         (
             10.0,
             false,
             c"learned.taps",
+            false,
             "learned, causal + 10 m lag (default)",
         ),
-        (0.0, false, c"learned.taps", "learned, causal only"),
+        (0.0, false, c"learned.taps", false, "learned, causal only"),
         (
             10.0,
             true,
             c"learned.taps",
+            false,
             "learned + roll-rate gyro, causal + 10 m lag",
         ),
         (
             10.0,
             false,
             c"learned-conicity.taps",
+            false,
             "learned over conicities (learned-conicity.taps), causal + 10 m lag",
+        ),
+        (
+            10.0,
+            false,
+            c"learned.taps",
+            true,
+            "default in a 600 m curve, design known (SetReal 7)",
         ),
     ] {
         // gain 0, the default: the learned filter's Kalman channel takes the scheduled
@@ -242,7 +253,10 @@ fn bench_learned(c: &mut Criterion) {
             vr::FRAME_ACC_Y,
             vr::SPEED,
             vr::WS_ROLL_RATE,
+            vr::DESIGN_CURVATURE,
+            vr::DESIGN_CANT,
         ];
+        let n_in = if curve { 7 } else { 5 };
         let outputs = [vr::ALIGNMENT, vr::ALIGNMENT_LAGGED];
         let (mut t, mut k) = (0.0, 0u64);
         c.bench_function(
@@ -251,12 +265,20 @@ fn bench_learned(c: &mut Criterion) {
                 b.iter(|| {
                     k += 1;
                     let x = (k as f64 * 1e-3).sin();
-                    let vals = [0.1 * x, 0.001 * x, 0.02 * x, 20.0, 0.001 * x];
+                    let vals = [
+                        0.1 * x,
+                        0.001 * x,
+                        0.02 * x,
+                        20.0,
+                        0.001 * x,
+                        1.0 / 600.0,
+                        0.08,
+                    ];
                     let mut out = [0.0; 2];
-                    // SAFETY: `comp` is live; `inputs` and `vals` hold the 5 elements passed,
-                    // `outputs` and `out` the 2.
+                    // SAFETY: `comp` is live; `inputs` and `vals` hold the 7 elements, of which
+                    // `n_in` are passed, `outputs` and `out` the 2.
                     unsafe {
-                        fmi2SetReal(comp, inputs.as_ptr(), 5, vals.as_ptr());
+                        fmi2SetReal(comp, inputs.as_ptr(), n_in, vals.as_ptr());
                         fmi2DoStep(comp, t, h, 1);
                         fmi2GetReal(comp, outputs.as_ptr(), 2, out.as_mut_ptr());
                     }
