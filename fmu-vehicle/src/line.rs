@@ -335,60 +335,19 @@ impl DesignLine {
     /// columns ignored, blank lines and lines starting with `#` skipped). Errors name the file,
     /// the line and the column.
     pub fn from_csv(path: &Path, rounding: f64) -> Result<DesignLine, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("line file {}: {e}", path.display()))?;
-        let file = path.display();
-        let names = ["distance", "curvature", "cant"];
-        let mut index: Option<Vec<usize>> = None;
-        let mut width = 0;
-        let mut rows = vec![];
-        let mut line_of = vec![];
-        for (i, raw) in text.lines().enumerate() {
-            let line_no = i + 1;
-            let line = raw.trim();
-            if line.is_empty() || line.starts_with('#') {
-                continue;
-            }
-            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-            let Some(idx) = &index else {
-                let mut idx = vec![];
-                for n in names {
-                    match cells.iter().position(|c| *c == n) {
-                        Some(p) => idx.push(p),
-                        None => {
-                            return Err(format!(
-                                "{file}: line {line_no}: header has no column '{n}' (found: {}); expected 'distance,curvature,cant'",
-                                cells.join(",")
-                            ));
-                        }
-                    }
-                }
-                width = cells.len();
-                index = Some(idx);
-                continue;
-            };
-            if cells.len() != width {
-                return Err(format!(
-                    "{file}: line {line_no}: {} column(s), the header has {width}",
-                    cells.len()
-                ));
-            }
-            let mut row = [0.0; 3];
-            for (k, n) in names.iter().enumerate() {
-                let cell = cells[idx[k]];
-                row[k] = cell.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                    format!("{file}: line {line_no}, column {} ('{n}'): '{cell}' is not a finite number", idx[k] + 1)
-                })?;
-            }
-            rows.push((row[0], row[1], row[2]));
-            line_of.push(line_no);
-        }
+        // 64 MiB: a line of a million rows.
+        let text = fmi_abi::resource::read_text(path, "line file", 1 << 26)?;
+        let file = path.display().to_string();
+        let expected = "distance,curvature,cant";
+        let rows =
+            crate::track::csv_rows(&file, &text, &["distance", "curvature", "cant"], expected)?;
         if rows.is_empty() {
             return Err(format!(
-                "{file}: no rows (a header 'distance,curvature,cant' and at least one row are needed)"
+                "{file}: no rows (a header '{expected}' and at least one row are needed)"
             ));
         }
-        DesignLine::new(&rows, rounding, |i| format!("{file}: line {}", line_of[i]))
+        let values: Vec<(f64, f64, f64)> = rows.iter().map(|(_, r)| (r[0], r[1], r[2])).collect();
+        DesignLine::new(&values, rounding, |i| format!("{file}: line {}", rows[i].0))
     }
 
     /// The segment holding `s`: the last row at or before it, or `None` before the first.
@@ -502,18 +461,15 @@ mod tests {
     #[test]
     fn a_transition_is_a_clothoid() {
         let (r, len) = (300.0, 60.0);
-        let l = DesignLine::one_curve(
-            &OneCurve {
-                start: 100.0,
-                radius: r,
-                transition: len,
-                length: 200.0,
-                cant: 0.1,
-                direction: 1.0,
-            },
-            0.0,
-        )
-        .unwrap();
+        let left = OneCurve {
+            start: 100.0,
+            radius: r,
+            transition: len,
+            length: 200.0,
+            cant: 0.1,
+            direction: 1.0,
+        };
+        let l = DesignLine::one_curve(&left, 0.0).unwrap();
         let base = l.at(100.0);
         for x in [10.0, 30.0, 60.0] {
             let d = l.at(100.0 + x);
@@ -531,14 +487,7 @@ mod tests {
         let right = DesignLine::one_curve(
             &OneCurve {
                 direction: -1.0,
-                ..OneCurve {
-                    start: 100.0,
-                    radius: r,
-                    transition: len,
-                    length: 200.0,
-                    cant: 0.1,
-                    direction: 1.0,
-                }
+                ..left
             },
             0.0,
         )

@@ -11,15 +11,22 @@ pub(super) struct Profile {
     pub channels: [Vec<f64>; 3],
 }
 
-/// Parses the CSV text of `path` (used only in messages).
-pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
-    let file = path.display();
-    let mut header: Option<(usize, Vec<usize>, usize)> = None; // (line, column index per COLUMNS, width)
-    let mut prof = Profile {
-        distance: Vec::new(),
-        channels: [Vec::new(), Vec::new(), Vec::new()],
-    };
-    let mut prev_line = 0;
+/// One data line of a CSV file: its line number and the named columns' values, in the order
+/// asked for.
+pub(crate) type Row = (usize, Vec<f64>);
+
+/// The rows of CSV `text` (`file` names it in messages) with the columns `names`, in that
+/// order: blank lines and lines starting with `#` skipped, the first other line the header
+/// (other columns allowed, none twice), every value a finite number. `expected` is the header
+/// the messages suggest. Errors name the file, the line and the column.
+pub(crate) fn rows(
+    file: &str,
+    text: &str,
+    names: &[&str],
+    expected: &str,
+) -> Result<Vec<Row>, String> {
+    let mut header: Option<(Vec<usize>, usize)> = None; // (column index per name, width)
+    let mut out = vec![];
     for (i, raw) in text.lines().enumerate() {
         let line_no = i + 1;
         let line = raw.trim();
@@ -27,15 +34,15 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
             continue;
         }
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        let Some((_, index, width)) = &header else {
-            let mut index = Vec::with_capacity(COLUMNS.len());
-            for name in COLUMNS {
-                match cells.iter().position(|c| *c == name) {
+        let Some((index, width)) = &header else {
+            let mut index = Vec::with_capacity(names.len());
+            for name in names {
+                match cells.iter().position(|c| c == name) {
                     Some(p) => index.push(p),
                     None => {
                         return Err(format!(
                             "{file}: line {line_no}: header has no column '{name}' (found: {}); \
-                             expected the header 'distance,alignment,vertical,cross_level'",
+                             expected the header '{expected}'",
                             cells.join(",")
                         ));
                     }
@@ -49,7 +56,7 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
                     ));
                 }
             }
-            header = Some((line_no, index, cells.len()));
+            header = Some((index, cells.len()));
             continue;
         };
         if cells.len() != *width {
@@ -58,11 +65,11 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
                 cells.len()
             ));
         }
-        let mut row = [0.0; 4];
-        for (k, name) in COLUMNS.iter().enumerate() {
+        let mut row = Vec::with_capacity(names.len());
+        for (k, name) in names.iter().enumerate() {
             let col = index[k];
             let cell = cells[col];
-            row[k] = match cell.parse::<f64>() {
+            row.push(match cell.parse::<f64>() {
                 Ok(x) if x.is_finite() => x,
                 _ => {
                     return Err(format!(
@@ -70,17 +77,34 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
                         col + 1
                     ));
                 }
-            };
+            });
         }
+        out.push((line_no, row));
+    }
+    if header.is_none() {
+        return Err(format!("{file}: no header line '{expected}'"));
+    }
+    Ok(out)
+}
+
+/// Parses the CSV text of `path` (used only in messages).
+pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
+    let file = path.display().to_string();
+    let rows = rows(&file, text, &COLUMNS, &COLUMNS.join(","))?;
+    let mut prof = Profile {
+        distance: Vec::with_capacity(rows.len()),
+        channels: [Vec::new(), Vec::new(), Vec::new()],
+    };
+    let distance_column = distance_column(text);
+    let mut prev_line = 0;
+    for (line_no, row) in rows {
         if let Some(&last) = prof.distance.last()
             && row[0] <= last
         {
             return Err(format!(
-                "{file}: line {line_no}, column {} ('distance'): distance {} m is not greater than \
+                "{file}: line {line_no}, column {distance_column} ('distance'): distance {} m is not greater than \
                  {} m on line {prev_line}; distances must be strictly increasing",
-                index[0] + 1,
-                row[0],
-                last
+                row[0], last
             ));
         }
         prof.distance.push(row[0]);
@@ -89,11 +113,6 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
         }
         prev_line = line_no;
     }
-    if header.is_none() {
-        return Err(format!(
-            "{file}: no header line 'distance,alignment,vertical,cross_level'"
-        ));
-    }
     if prof.distance.len() < 2 {
         return Err(format!(
             "{file}: needs at least two data lines, found {}",
@@ -101,6 +120,15 @@ pub(super) fn parse(path: &Path, text: &str) -> Result<Profile, String> {
         ));
     }
     Ok(prof)
+}
+
+/// The 1-based column of `distance` in the header of `text` (which [`rows`] has accepted).
+fn distance_column(text: &str) -> usize {
+    text.lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .and_then(|h| h.split(',').map(str::trim).position(|c| c == "distance"))
+        .map_or(1, |p| p + 1)
 }
 
 /// A natural cubic spline (zero second derivative at both ends) through `(x, y)`, `x` strictly
