@@ -40,6 +40,11 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
+/// The tightest curvature a design input may have (the vehicle FMU's design line's) \[1/m\].
+pub const MAX_CURVATURE: f64 = 1.0 / 25.0;
+/// The largest cant a design input may have \[m\].
+pub const MAX_CANT: f64 = 0.2;
+
 /// The shipped model's name (`design_response_file`'s default), built into the library.
 pub const SHIPPED_NAME: &str = "design-response.toml";
 
@@ -140,6 +145,12 @@ impl DesignModel {
             if !(v > 0.0 && v.is_finite()) {
                 return Err(format!("'{name}' = {v} must be positive and finite"));
             }
+        }
+        if self.flange_clearance <= FLANGE_MARGIN {
+            return Err(format!(
+                "'flange_clearance' = {} m must exceed the irregularities' margin {FLANGE_MARGIN} m",
+                self.flange_clearance
+            ));
         }
         if self.response.is_empty() || !self.response.len().is_multiple_of(TABLES.len()) {
             return Err(format!(
@@ -255,6 +266,8 @@ pub struct Design {
     /// Complete cells in a row whose mean was 0 (straight, level track): once the whole
     /// history is, the FIR part is 0 without a sum.
     level_cells: usize,
+    /// The last valid design input.
+    last: [f64; 2],
 }
 
 impl Design {
@@ -270,6 +283,7 @@ impl Design {
             outside_until: f64::NEG_INFINITY,
             at: 0.0,
             level_cells: 0,
+            last: [0.0; 2],
         }
     }
 
@@ -292,11 +306,19 @@ impl Design {
         let Some(model) = self.model.clone() else {
             return [0.0; 4];
         };
-        let [k, c] = design;
-        if !(k.is_finite() && c.is_finite()) {
-            return [0.0; 4];
-        }
         self.at = distance;
+        // A design no line has (not finite, tighter than 25 m, cant beyond 0.2 m) is a wrong
+        // input: the last valid one is held, and the estimate is flagged.
+        let [k, c] = if design.iter().all(|x| x.is_finite())
+            && design[0].abs() <= MAX_CURVATURE
+            && design[1].abs() <= MAX_CANT
+        {
+            self.last = design;
+            design
+        } else {
+            self.outside_until = distance + HOLD;
+            self.last
+        };
         let a_nc = speed * speed * k - model.gravity * c / (2.0 * model.half_gauge);
         if k.abs() > model.max_curvature * 1.05 || a_nc.abs() > model.max_uncompensated * 1.05 {
             self.outside_until = distance + HOLD;
@@ -306,12 +328,17 @@ impl Design {
             if cell != self.cell && self.count > 0 {
                 let n = f64::from(self.count);
                 let mean = [self.sum[0] / n, self.sum[1] / n];
-                self.level_cells = if mean == [0.0; 2] {
-                    self.level_cells + 1
-                } else {
-                    0
-                };
-                self.history.push_front(mean);
+                // Cells a long step jumped over take the completed cell's mean, as the fit's
+                // grid fills them (at most the history's length).
+                let cells = (cell - self.cell).clamp(1, model.taps() as i64) as usize;
+                for _ in 0..cells {
+                    self.level_cells = if mean == [0.0; 2] {
+                        self.level_cells + 1
+                    } else {
+                        0
+                    };
+                    self.history.push_front(mean);
+                }
                 self.history.truncate(model.taps());
                 self.fir = if self.level_cells >= model.taps() {
                     model.fir_at(speed, &VecDeque::new())
@@ -329,7 +356,13 @@ impl Design {
             self.sum[1] += c;
             self.count += 1;
         }
-        let fir = if speed > 0.0 { self.fir } else { [0.0; 5] };
+        // Standing, the vehicle keeps its quasi-static state (shift, roll): the accelerometers'
+        // part is held, the gyroscopes' is 0.
+        let fir = if speed > 0.0 {
+            self.fir
+        } else {
+            [self.fir[0], 0.0, self.fir[2], 0.0, self.fir[4]]
+        };
         [a_nc + fir[0], speed * k + fir[1], a_nc + fir[2], fir[3]]
     }
 }
@@ -426,10 +459,16 @@ mod tests {
             last = got.to_vec();
         }
         assert!(last.iter().all(|x| x.abs() > 0.0));
-        // Standing: the cant's gravity only.
+        // Standing: the cant's gravity, and the accelerometers' quasi-static part held.
+        let held = d.fir;
         assert_eq!(
             d.response(s, 0.0, [0.002, 0.1]),
-            [-9.81 * 0.1 / 1.5, 0.0, -9.81 * 0.1 / 1.5, 0.0]
+            [
+                -9.81 * 0.1 / 1.5 + held[0],
+                0.0,
+                -9.81 * 0.1 / 1.5 + held[2],
+                0.0
+            ]
         );
         assert!(!d.outside());
         d.response(s, 15.0, [0.02, 0.0]);
@@ -443,6 +482,26 @@ mod tests {
             Design::new(None).response(1.0, 15.0, [0.002, 0.1]),
             [0.0; 4]
         );
+    }
+
+    /// A long step fills the cells it jumps over with the completed cell's mean, as the fit's
+    /// grid does; a design no line has is replaced by the last valid one, and flagged.
+    #[test]
+    fn long_steps_and_wrong_inputs() {
+        let mut d = Design::new(Some(Arc::new(model(8))));
+        d.response(0.05, 20.0, [1e-3, 0.01]);
+        d.response(0.15, 20.0, [1e-3, 0.01]);
+        d.response(1.05, 20.0, [2e-3, 0.02]); // from cell 0 to cell 5
+        assert_eq!(d.history.len(), 5);
+        assert!(d.history.iter().all(|c| *c == [1e-3, 0.01]));
+        assert!(!d.outside());
+        for wrong in [[f64::NAN, 0.0], [1.0, 0.0], [0.0, 1e300]] {
+            let mut e = d.clone();
+            let got = e.response(1.1, 20.0, wrong);
+            let want = d.clone().response(1.1, 20.0, [2e-3, 0.02]);
+            assert_eq!(got, want, "{wrong:?}");
+            assert!(e.outside(), "{wrong:?}");
+        }
     }
 
     /// A predicted shift within FLANGE_MARGIN of the flange clearance flags the estimate, for

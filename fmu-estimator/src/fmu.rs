@@ -125,7 +125,7 @@ impl Model for Estimator {
         model_identifier: "AlignmentEstimator",
         // By build.rs from the sources and what shapes the modelDescription: new when they change.
         guid: env!("ESTIMATOR_GUID"),
-        description: "Estimate of the lateral alignment of a straight railway track from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer: by default the learned filter (estimator = 2, with the Kalman filter as one of its channels); estimator = 1 is the paper's Kalman filter (Munoz, Ros, Escalona).",
+        description: "Estimate of the lateral alignment of a railway track (from its design line where design_curvature and design_cant are given) from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer: by default the learned filter (estimator = 2, with the Kalman filter as one of its channels); estimator = 1 is the paper's Kalman filter (Munoz, Ros, Escalona).",
         author: "railway track-geometry toolkit",
         version: env!("CARGO_PKG_VERSION"),
         default_start: 0.0,

@@ -95,7 +95,8 @@ pub struct Processed {
     pub conicity: Option<Vec<f64>>,
     /// The FMU's `novelty` output per sample (with the learned filter).
     pub novelty: Option<Vec<f64>>,
-    /// The FMU's `outside_training` output per sample (with the learned filter).
+    /// The FMU's `outside_training` output per sample (with the learned filter or a design
+    /// response model).
     pub outside_training: Option<Vec<bool>>,
     /// The filter covariance checked after every step (when asked for: an eigen-decomposition
     /// per step, [`process_columns_checked`]).
@@ -490,13 +491,16 @@ fn run_from(
             conicity.push(l.conicity());
             novelty.push(l.novelty());
             outside.push(l.outside_training() || design.outside());
+        } else if design.active() {
+            // The paper's filter: the FMU's flag is the design's alone.
+            outside.push(design.outside());
         }
     }
     out.learned = estimates;
     out.bias = biases;
     out.conicity = contact.is_some().then_some(conicity);
     out.novelty = contact.is_some().then_some(novelty);
-    out.outside_training = contact.is_some().then_some(outside);
+    out.outside_training = (contact.is_some() || design.active()).then_some(outside);
     out.contact_scale = contact;
     out.covariance = checked_p;
     if smooth {

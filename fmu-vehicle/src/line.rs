@@ -46,6 +46,10 @@ use std::path::Path;
 pub const MAX_CURVATURE: f64 = 1.0 / 25.0;
 /// Largest cant the model accepts \[m\]: EN 13803 allows at most 180-200 mm.
 pub const MAX_CANT: f64 = 0.2;
+/// Steepest cant ramp the model accepts \[m/m\]: 10 mm per metre, four times EN 13803's usual
+/// limit (about 1:400). A steeper one (a cant without a transition) rolls the track plane too
+/// fast for any vehicle, and in the rounding its roll acceleration made the model diverge.
+pub const MAX_CANT_GRADIENT: f64 = 0.01;
 
 /// The design geometry at one distance.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -176,6 +180,17 @@ impl DesignLine {
                     what(i),
                     1.0 / k.abs()
                 ));
+            }
+            if i > 0 {
+                let gradient = (c - rows[i - 1].2) / (s - rows[i - 1].0);
+                if gradient.abs() > MAX_CANT_GRADIENT {
+                    return Err(format!(
+                        "{}: the cant changes by {:.1} mm per metre from the previous row, more than the model's limit of {} mm per metre (a cant needs a transition)",
+                        what(i),
+                        gradient.abs() * 1e3,
+                        MAX_CANT_GRADIENT * 1e3
+                    ));
+                }
             }
             if c.abs() > MAX_CANT {
                 return Err(format!(
@@ -559,6 +574,27 @@ mod tests {
         assert!(e.contains("radius 10.0 m"), "{e}");
         let e = DesignLine::new(&[(0.0, 0.0, 0.3)], 10.0, |_| "x".into()).unwrap_err();
         assert!(e.contains("cant 0.3 m"), "{e}");
+        // A canted curve without a transition: its cant would step within a millimetre.
+        let abrupt = OneCurve {
+            start: 10.0,
+            radius: 600.0,
+            transition: 0.0,
+            length: 100.0,
+            cant: 0.08,
+            direction: 1.0,
+        };
+        let e = DesignLine::one_curve(&abrupt, 10.0).unwrap_err();
+        assert!(e.contains("a cant needs a transition"), "{e}");
+        assert!(
+            DesignLine::one_curve(
+                &OneCurve {
+                    cant: 0.0,
+                    ..abrupt
+                },
+                10.0
+            )
+            .is_ok()
+        );
         let e = DesignLine::one_curve(
             &OneCurve {
                 start: 0.0,

@@ -211,9 +211,15 @@ fn clean_run(
         .iter()
         .map(|x| x + JITTER * (2.0 * (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64 - 1.0))
         .collect();
+    // The estimator applies tap 0 to the last complete cell, while a sample's own cell is still
+    // filling: so the design history is regressed one cell late.
+    let late = |x: Vec<f64>| -> Vec<f64> { std::iter::once(0.0).chain(x).take(n).collect() };
     Ok(Grid {
-        design: [cells(&d, &k, cell, n), cells(&d, &c, cell, n)],
-        rounded: [cells(&jittered, &k, cell, n), cells(&jittered, &c, cell, n)],
+        design: [late(cells(&d, &k, cell, n)), late(cells(&d, &c, cell, n))],
+        rounded: [
+            late(cells(&jittered, &k, cell, n)),
+            late(cells(&jittered, &c, cell, n)),
+        ],
         residual,
         max_uncompensated,
     })
