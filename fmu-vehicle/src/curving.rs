@@ -40,9 +40,13 @@
 //! `(0, dy - h dphi, 0, dphi, 0, dpsi)`, `h` its centre of gravity's height (the frame rolls
 //! about the rail-level centre line), and its velocity the time derivatives,
 //! `V (k(s_c + x) - k(s_c))` for `dpsi` and `V (T(s_c + x) - T(s_c) - x k(s_c))` for `dy`.
-//! This is exact to first order in the offsets; the forces it gives are applied in each body's
-//! own frame (rotating them by the offsets would change them by products of the offsets with
-//! the dynamic forces, second order). So, in a curve of radius `R`: the car body's centre sits
+//! The deflections are exact to first order in the offsets; the forces they give are applied
+//! in each body's own frame (rotating them by the offsets would change them by products of the
+//! offsets with the dynamic forces, second order). One first-order term is left out: the
+//! static spring preloads `F0` between two bodies whose frames are rolled against each other
+//! by `dphi` (in a cant ramp only) have a lateral component `F0 dphi` in either frame (about
+//! 800 N per bogie on the standard curved line's steepest ramp, opposite at the two bogies);
+//! their moments' change with the offsets (the geometric stiffness) is in. So, in a curve of radius `R`: the car body's centre sits
 //! `x_k^2 / (2 R)` inside the line through its bogie pivots (the chord), the bogies turn by
 //! `x_k / R` against the body, and the wheelsets by `a / R` against their bogie, each
 //! resisted by the secondary and primary longitudinal stiffness.
