@@ -35,6 +35,7 @@
 //! both cases [`Design::outside`] says so (the FMU's `outside_training`), there and for
 //! [`HOLD`] metres after.
 
+use crate::learned::grid::Grid;
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
@@ -219,9 +220,10 @@ impl DesignModel {
 
     /// The FIR part at `speed`, blended linearly between the bank speeds around it.
     fn fir_at(&self, speed: f64, h: &VecDeque<[f64; 2]>) -> [f64; 5] {
-        let speeds: Vec<f64> = self.speeds().collect();
-        let n = speeds.len();
-        let above = speeds.partition_point(|&v| v <= speed);
+        // Per closed cell, on the estimator's path: the bank speeds read in place.
+        let speed_of = |i: usize| self.response[i * TABLES.len()].speed;
+        let n = self.response.len() / TABLES.len();
+        let above = self.speeds().take_while(|&v| v <= speed).count();
         if above == 0 {
             return self.fir(0, h);
         }
@@ -229,7 +231,7 @@ impl DesignModel {
             return self.fir(n - 1, h);
         }
         let (i, j) = (above - 1, above);
-        let w = (speed - speeds[i]) / (speeds[j] - speeds[i]);
+        let w = (speed - speed_of(i)) / (speed_of(j) - speed_of(i));
         let (a, b) = (self.fir(i, h), self.fir(j, h));
         std::array::from_fn(|s| a[s] * (1.0 - w) + b[s] * w)
     }
@@ -243,6 +245,9 @@ impl DesignModel {
 /// counts from there.
 pub const FLANGE_MARGIN: f64 = 0.005;
 
+/// The grid's Kalman-channel high-pass cut-off \[m\]: that channel carries 0 here, so any value.
+const UNUSED_HIGHPASS: f64 = 1000.0;
+
 /// How long the estimate stays outside after the design leaves the model \[m\]: the learned
 /// filter's 60 m of history still holds what the sensors read there.
 pub const HOLD: f64 = 60.0;
@@ -251,10 +256,10 @@ pub const HOLD: f64 = 60.0;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Design {
     model: Option<Arc<DesignModel>>,
-    /// Index of the cell being filled, and its sums of `k` and `c` and sample count.
-    cell: i64,
-    sum: [f64; 2],
-    count: u32,
+    /// The learned filter's distance grid (`crate::learned::grid`: block means, the cells a
+    /// long step crosses repeating the mean, boundaries robust to a master's clock rounding),
+    /// fed `[k, c, 0, 0, 0]`; `None` without a model.
+    grid: Option<Grid>,
     /// Complete cells' means, newest first, at most the model's taps.
     history: VecDeque<[f64; 2]>,
     /// The FIR part from the last complete cell (the four sensors, the predicted shift).
@@ -274,10 +279,8 @@ impl Design {
     /// A correction with `model` (`None`: off, every input ignored).
     pub fn new(model: Option<Arc<DesignModel>>) -> Design {
         Design {
+            grid: model.as_ref().map(|m| Grid::new(m.cell, UNUSED_HIGHPASS)),
             model,
-            cell: 0,
-            sum: [0.0; 2],
-            count: 0,
             history: VecDeque::new(),
             fir: [0.0; 5],
             outside_until: f64::NEG_INFINITY,
@@ -323,15 +326,16 @@ impl Design {
         if k.abs() > model.max_curvature * 1.05 || a_nc.abs() > model.max_uncompensated * 1.05 {
             self.outside_until = distance + HOLD;
         }
-        if speed > 0.0 && distance.is_finite() {
-            let cell = (distance / model.cell).floor() as i64;
-            if cell != self.cell && self.count > 0 {
-                let n = f64::from(self.count);
-                let mean = [self.sum[0] / n, self.sum[1] / n];
-                // Cells a long step jumped over take the completed cell's mean, as the fit's
-                // grid fills them (at most the history's length).
-                let cells = (cell - self.cell).clamp(1, model.taps() as i64) as usize;
-                for _ in 0..cells {
+        let closed = match self.grid.as_mut() {
+            Some(grid) if speed > 0.0 => grid.add(distance, &[k, c, 0.0, 0.0, 0.0]),
+            _ => None,
+        };
+        if let Some(closed) = closed {
+            {
+                // The cells a long step crossed repeat the mean, as the fit's grid fills them.
+                let n = closed.cells.len();
+                for cell in &closed.cells[n.saturating_sub(model.taps())..] {
+                    let mean = [cell[0], cell[1]];
                     self.level_cells = if mean == [0.0; 2] {
                         self.level_cells + 1
                     } else {
@@ -348,13 +352,7 @@ impl Design {
                 if self.fir[4].abs() > model.flange_clearance - FLANGE_MARGIN {
                     self.outside_until = distance + HOLD;
                 }
-                self.sum = [0.0; 2];
-                self.count = 0;
             }
-            self.cell = cell;
-            self.sum[0] += k;
-            self.sum[1] += c;
-            self.count += 1;
         }
         // Standing, the vehicle keeps its quasi-static state (shift, roll): the accelerometers'
         // part is held, the gyroscopes' is 0.
@@ -414,7 +412,8 @@ mod tests {
             s += v * h;
             let x = design(s);
             let got = d.response(s, v, x);
-            let cell = (s / 0.2).floor() as usize;
+            // The grid's cells, boundaries EDGE early (`crate::learned::grid`).
+            let cell = ((s + crate::learned::grid::EDGE) / 0.2).floor() as usize;
             if cells.len() <= cell {
                 cells.resize(cell + 1, vec![]);
             }

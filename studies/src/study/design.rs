@@ -29,10 +29,10 @@ use std::path::Path;
 /// How far off (uniformly, each sample on its own) the validation places the design samples
 /// it feeds the taps \[m\]: half a cell, as odometry places a line database's design. The
 /// training lines' inputs are exact, and the smooth designs leave the taps' short-wave gain
-/// free: with the smallest ridge they reached 2300 per metre of cant summing to -0.04, and the
-/// FMU stepped by fmpy (whose distance differs from the bindings' by 1e-16 m, moving a sample
-/// to the next cell now and then) ended 0.2 mm away from the bindings. Judged on jittered
-/// inputs, the ridge keeps that gain in check.
+/// free: with the smallest ridge they reached 2300 per metre of cant summing to -0.04, and a
+/// sample now and then in the next cell (measured with a master's 1e-16 m clock rounding,
+/// before the design history used the learned filter's grid) moved the estimate by 0.2 mm.
+/// Judged on jittered inputs, the ridge keeps that gain in check.
 pub const JITTER: f64 = 0.1;
 
 /// Validation lines per speed (for the ridge), and the offset of their seeds from the
