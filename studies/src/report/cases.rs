@@ -140,34 +140,31 @@ pub fn cases(
     let results = cases::run_cases(fmus, &all, seeds, &|| progress(Progress::Done));
     progress(Progress::Finished);
     let results = results?;
-    // The sensor table: the vehicle FMU's sensor errors (ours; another vehicle FMU has none).
-    let sensors = if groups.contains(&Group::Robustness) {
-        if crate::study::interface::has_parameter(&fmus.vehicle, "sensor_grade") {
-            Some(crate::study::sensors::run(fmus, seeds)?)
-        } else {
+    // The robustness study's tables of what our vehicle FMU models and another may not: run
+    // when the FMU has `parameter`, else said why not.
+    let table = |parameter: &str, what: &str| {
+        let wanted = groups.contains(&Group::Robustness);
+        let possible = crate::study::interface::has_parameter(&fmus.vehicle, parameter);
+        if wanted && !possible {
             log(&format!(
-                "robustness: the sensor table needs a vehicle FMU with sensor errors (parameter sensor_grade); {} has none",
+                "robustness: the {what} (parameter {parameter}); {} has none",
                 fmus.vehicle.display()
             ));
-            None
         }
-    } else {
-        None
+        wanted && possible
     };
-    // The curve table: the vehicle FMU's curved line (ours; another vehicle FMU has none).
-    let curves = if groups.contains(&Group::Robustness) {
-        if crate::study::interface::has_parameter(&fmus.vehicle, "line_file") {
-            Some(crate::study::curves::run(fmus, seeds)?)
-        } else {
-            log(&format!(
-                "robustness: the curve table needs a vehicle FMU with a design line (parameter line_file); {} has none",
-                fmus.vehicle.display()
-            ));
-            None
-        }
-    } else {
-        None
-    };
+    let sensors = table(
+        "sensor_grade",
+        "sensor table needs a vehicle FMU with sensor errors",
+    )
+    .then(|| crate::study::sensors::run(fmus, seeds))
+    .transpose()?;
+    let curves = table(
+        "line_file",
+        "curve table needs a vehicle FMU with a design line",
+    )
+    .then(|| crate::study::curves::run(fmus, seeds))
+    .transpose()?;
     // The figures are drawn into the directory.
     create_dir(out)?;
     let mut report = Report::default();
