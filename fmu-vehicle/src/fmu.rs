@@ -626,7 +626,7 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_parameter(vr::CURVE_TRANSITION, "curve_transition", "m", 60.0, "One curve: length of each clothoid transition, along which the cant ramps linearly").min(0.0),
     VarSpec::real_parameter(vr::CURVE_LENGTH, "curve_length", "m", 200.0, "One curve: length of its circular part").min(0.0),
     VarSpec::real_parameter(vr::CURVE_CANT, "curve_cant", "m", 0.0, "One curve: cant of its circular part, raising the outer rail (at most 0.2)").min(0.0).max(crate::line::MAX_CANT),
-    VarSpec::real_parameter(vr::LINE_ROUNDING, "line_rounding", "m", 10.0, "Length over which the design line's kinks (the ends of transitions and cant ramps) are rounded: a rail cannot kink").min(1.0).max(100.0),
+    VarSpec::real_parameter(vr::LINE_ROUNDING, "line_rounding", "m", crate::line::DEFAULT_ROUNDING, "Length over which the design line's kinks (the ends of transitions and cant ramps) are rounded: a rail cannot kink").min(crate::line::MIN_ROUNDING).max(crate::line::MAX_ROUNDING),
     VarSpec::real_parameter(vr::CURVE_START, "curve_start", "m", 100.0, "One curve: distance at which its entry transition starts").min(0.0),
     VarSpec::boolean_parameter(
         vr::LATERAL_IRREGULARITY,
@@ -913,7 +913,7 @@ fn design_line(model: &RailVehicle, v: &Values, log: &Logger) -> Result<DesignLi
     let file = v.string[vr::LINE_FILE as usize].trim();
     let radius = v.real[vr::CURVE_RADIUS as usize];
     let rounding = v.real[vr::LINE_ROUNDING as usize];
-    if !(1.0..=100.0).contains(&rounding) {
+    if !(crate::line::MIN_ROUNDING..=crate::line::MAX_ROUNDING).contains(&rounding) {
         return Err(format!(
             "parameter 'line_rounding' = {rounding} m must lie in 1-100 m"
         ));

@@ -4,7 +4,7 @@
 //! - [`params`]: vehicle parameter sets (ML95-like metro car, Manchester Benchmark vehicle) with
 //!   the source of every value;
 //! - [`track`]: track irregularities (spectra, harmonic, measured profiles);
-//! - [`mod@line`]: the design line (curvature and cant) the irregularities are laid on;
+//! - [`line`] (the `design-line` crate): the design line (curvature and cant) the irregularities are laid on;
 //! - [`curving`]: what a curved, canted line adds to the equations and sensors;
 //! - [`contact`]: Hertz contact, Kalker creep coefficients, saturation, flange;
 //! - [`dynamics`]: the equations of motion and their derivation;
@@ -19,7 +19,8 @@ pub mod contact;
 pub mod curving;
 pub mod dynamics;
 pub mod fmu;
-pub mod line;
+/// The design line, in its own crate so that the estimator FMU reads the same line files.
+pub use design_line as line;
 pub mod modal;
 pub mod params;
 pub mod sensors;

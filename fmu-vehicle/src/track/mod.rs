@@ -107,8 +107,6 @@
 //! refused with an error naming the file.
 
 mod csv;
-/// The rows of a CSV file by column name, as the track and line files are read.
-pub(crate) use csv::rows as csv_rows;
 mod hermite;
 mod spectrum;
 mod synth;

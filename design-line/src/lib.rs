@@ -1,5 +1,6 @@
 //! The design line: the track's intended horizontal curvature and cant as functions of the
-//! distance, on which the irregularities ([`crate::track`]) are laid.
+//! distance, on which the vehicle FMU (`fmu-vehicle`) lays its irregularities and from which the
+//! estimator FMU (`fmu-estimator`, its `line_file`) takes the design it removes.
 //!
 //! # Definition
 //! Curvature `k(s)` \[1/m\], positive when the track turns left (the centre of the curve on the
@@ -39,7 +40,20 @@
 //! quartic in `P`). Each segment carries `T` and `P` at its start, summed from the line's first
 //! row (the offsets do not depend on where the sums start).
 
+// `!(x > y)` is how a check also refuses NaN, which every value from a file may be.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod csv;
+
 use std::path::Path;
+
+/// The length over which each row's change of slope is rounded, unless a user says otherwise
+/// \[m\]: the scale of a tamped ramp end (module docs, "Rounding").
+pub const DEFAULT_ROUNDING: f64 = 10.0;
+/// Shortest rounding \[m\]: below a metre the roll rate's rise is an impulse to the bodies.
+pub const MIN_ROUNDING: f64 = 1.0;
+/// Longest rounding \[m\]: beyond 100 m it would swallow the shortest transitions.
+pub const MAX_ROUNDING: f64 = 100.0;
 
 /// Tightest curve the model accepts \[1/m\]: a 25 m radius, below the tightest tram curves.
 /// Linear creep and a coned tread on knife-edge rails are far out of their range beyond that.
@@ -126,7 +140,7 @@ impl Rounding {
     }
 }
 
-/// One curve as the FMU's parameters give it (module docs of [`crate::fmu`]).
+/// One curve as the vehicle FMU's parameters give it (`curve_radius`, `curve_transition`, ...).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OneCurve {
     /// Where the entry transition starts \[m\].
@@ -354,8 +368,7 @@ impl DesignLine {
         let text = fmi_abi::resource::read_text(path, "line file", 1 << 26)?;
         let file = path.display().to_string();
         let expected = "distance,curvature,cant";
-        let rows =
-            crate::track::csv_rows(&file, &text, &["distance", "curvature", "cant"], expected)?;
+        let rows = csv::rows(&file, &text, &["distance", "curvature", "cant"], expected)?;
         if rows.is_empty() {
             return Err(format!(
                 "{file}: no rows (a header '{expected}' and at least one row are needed)"
