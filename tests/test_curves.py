@@ -140,3 +140,62 @@ def test_a_missing_or_broken_design_response_file_is_named(tmp_path):
     with pytest.raises(ValueError, match="design_curvature and design_cant"):
         ta.estimate(np.full(10, 20.0), np.zeros(10), np.zeros(10), np.zeros(10), step=1e-3,
                     design_curvature=np.zeros(10))
+
+
+def test_a_line_file_in_the_estimator_gives_what_the_design_inputs_give(curved):
+    """`line_file` instead of the inputs: the estimator reads the design at `line_start` plus
+    its own distance (from the speed), the vehicle's design outputs are the same line at the
+    same distance, so the estimates agree to rounding. In the bindings over the whole line,
+    and in the FMU (fmpy) started 140 m into it."""
+    names = ("forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y")
+    sensors = [curved[k] for k in names]
+    inputs = ta.estimate(*sensors, step=1e-3, design_curvature=curved["design_curvature"],
+                         design_cant=curved["design_cant"])
+    # The first sample is the vehicle's after its first step (run() drops the initial row).
+    start = float(curved["distance"][0])
+    line = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE), "line_start": start})
+    assert np.max(np.abs(line["alignment"] - inputs["alignment"])) < 1e-9
+    assert np.array_equal(line["outside_training"], inputs["outside_training"])
+    # Shifted by 30 m the design no longer matches the vehicle's: the estimate is worse.
+    shifted = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE), "line_start": start + 30.0})
+    truth = (curved["distance"], curved["alignment"])
+    j = lambda out: ta.band_metrics(out["distance"], out["alignment"], *truth)["whole"]["Jrel"]
+    assert j(shifted) > 2 * j(line)
+
+    n = 20000
+    k0 = int(140 / SPEED / 1e-3)
+    signals = np.zeros(n, dtype=[("time", float)] + [(k, float) for k in
+                                                     ("speed",) + names[1:]])
+    signals["time"] = np.arange(n) * 1e-3
+    for name, src in zip(("speed",) + names[1:], names):
+        signals[name] = curved[src][k0:k0 + n]
+    common = dict(stop_time=(n - 1) * 1e-3, step_size=1e-3, output_interval=1e-3, input=signals,
+                  output=["alignment", "outside_training"])
+    fmu = packaged_fmus()["AlignmentEstimator"]
+    from_line = fmpy.simulate_fmu(fmu, start_values={"line_file": str(LINE),
+                                                      "line_start": float(curved["distance"][k0])},
+                                  **common)
+    ours = ta.estimate(*(np.ascontiguousarray(signals[k]) for k in signals.dtype.names[1:]),
+                       step=1e-3,
+                       design_curvature=np.ascontiguousarray(curved["design_curvature"][k0:k0 + n]),
+                       design_cant=np.ascontiguousarray(curved["design_cant"][k0:k0 + n]))
+    got, want = from_line["alignment"][1:], ours["alignment"][:n - 1]
+    assert np.max(np.abs(want)) > 5e-3
+    assert np.max(np.abs(got - want)) < 1e-9
+    assert np.array_equal(from_line["outside_training"][1:].astype(bool),
+                          ours["outside_training"][:n - 1])
+
+
+def test_a_bad_line_file_is_named(tmp_path):
+    ones = dict(step=1e-3)
+    zeros = (np.full(10, 20.0), np.zeros(10), np.zeros(10), np.zeros(10))
+    bad = tmp_path / "bad-line.csv"
+    bad.write_text("distance,curvature,cant\n0,0,0\n100,0.5,0\n")
+    for path, match in [(tmp_path / "missing-line.csv", "missing-line.csv"),
+                        (bad, r"bad-line.csv: line 3")]:
+        with pytest.raises(ValueError, match=match):
+            ta.estimate(*zeros, settings={"line_file": str(path)}, **ones)
+    with pytest.raises(ValueError, match="needs design_response_file"):
+        ta.estimate(*zeros, settings={"line_file": str(LINE), "design_response_file": ""}, **ones)
+    with pytest.raises(ValueError, match="line_rounding"):
+        ta.estimate(*zeros, settings={"line_file": str(LINE), "line_rounding": 0.5}, **ones)

@@ -78,6 +78,9 @@ pub struct Config {
     /// The vehicle's design-response model (`design_response_file`; `None`: empty name),
     /// [`crate::design`].
     pub design: Option<std::sync::Arc<crate::design::DesignModel>>,
+    /// The design line `line_file` gives, and the line's distance at the run's start
+    /// (`line_start`); `None`: the design comes from the inputs.
+    pub line: Option<(std::sync::Arc<design_line::DesignLine>, f64)>,
 }
 
 /// Reads the `Params` from the FMI values.
@@ -149,6 +152,39 @@ fn design_model(
     model
         .map(|m| Some(std::sync::Arc::new(m)))
         .map_err(Error::DesignFile)
+}
+
+/// The design line `line_file` names ([`user_file`]), rounded as `line_rounding` says, with
+/// `line_start`; `None` when the name is empty.
+fn design_line_file(
+    v: &Values,
+    resources: Option<&Path>,
+) -> Result<Option<(std::sync::Arc<design_line::DesignLine>, f64)>, Error> {
+    let name = v.string[vr::LINE_FILE as usize].trim();
+    if name.is_empty() {
+        return Ok(None);
+    }
+    let rounding = v.real[vr::LINE_ROUNDING as usize];
+    if !(design_line::MIN_ROUNDING..=design_line::MAX_ROUNDING).contains(&rounding) {
+        return Err(Error::DesignFile(format!(
+            "parameter 'line_rounding' = {rounding} m must lie in {}-{} m",
+            design_line::MIN_ROUNDING,
+            design_line::MAX_ROUNDING
+        )));
+    }
+    let start = v.real[vr::LINE_START as usize];
+    if !start.is_finite() {
+        return Err(Error::DesignFile(format!(
+            "parameter 'line_start' = {start} m must be a finite distance"
+        )));
+    }
+    let path = user_file(name, resources).ok_or_else(|| {
+        Error::DesignFile(format!(
+            "line_file '{name}': not found (relative names are looked up in the FMU's resources, then in the working directory)"
+        ))
+    })?;
+    let line = design_line::DesignLine::from_csv(&path, rounding).map_err(Error::DesignFile)?;
+    Ok(Some((std::sync::Arc::new(line), start)))
 }
 
 /// Where the calibration file named by the parameters is, if anywhere.
@@ -341,7 +377,14 @@ impl Config {
                 r(vr::BIAS_SIGMA_WS_ROLL_RATE),
             ],
             design: design_model(v, resources)?,
+            line: design_line_file(v, resources)?,
         };
+        if config.line.is_some() && config.design.is_none() {
+            return Err(Error::DesignFile(format!(
+                "line_file '{}' needs design_response_file (it is empty): without the vehicle's response to the design there is nothing to remove",
+                v.string[vr::LINE_FILE as usize].trim()
+            )));
+        }
         Ok((
             match calibrated {
                 Some(c) => config.with_calibration(c),

@@ -273,6 +273,9 @@ pub struct Design {
     level_cells: usize,
     /// The last valid design input.
     last: [f64; 2],
+    /// The design line (`line_file`) and the line's distance at the run's start: where given,
+    /// the design at `start + distance` replaces the inputs.
+    line: Option<(Arc<design_line::DesignLine>, f64)>,
 }
 
 impl Design {
@@ -287,7 +290,38 @@ impl Design {
             at: 0.0,
             level_cells: 0,
             last: [0.0; 2],
+            line: None,
         }
+    }
+
+    /// The correction with the design read from `line` (the line, the line's distance at the
+    /// run's start) instead of the inputs.
+    pub fn with_line(mut self, line: Option<(Arc<design_line::DesignLine>, f64)>) -> Design {
+        self.line = line;
+        self
+    }
+
+    /// The design at the leading wheelset, `distance` metres into the run (before the sample's
+    /// advance, where the vehicle's outputs put it): the line's when `line_file` gave one, else
+    /// `inputs`.
+    pub fn given(&self, distance: f64, inputs: [f64; 2]) -> [f64; 2] {
+        match &self.line {
+            Some((line, start)) => {
+                let p = line.at(start + distance);
+                [p.curvature, p.cant]
+            }
+            None => inputs,
+        }
+    }
+
+    /// Whether the design comes from `line_file` (the inputs are then not read).
+    pub fn from_line(&self) -> bool {
+        self.line.is_some()
+    }
+
+    /// The last valid design used \[1/m, m\].
+    pub fn last(&self) -> [f64; 2] {
+        self.last
     }
 
     /// Whether a model is loaded.
@@ -481,6 +515,31 @@ mod tests {
             Design::new(None).response(1.0, 15.0, [0.002, 0.1]),
             [0.0; 4]
         );
+    }
+
+    /// With a line, the design is the line's at `start + distance` (the vehicle FMU's outputs,
+    /// `design-line`'s own definition), whatever the inputs; without, the inputs.
+    #[test]
+    fn a_line_replaces_the_inputs() {
+        let line = design_line::DesignLine::new(
+            &[(0.0, 0.0, 0.0), (100.0, 0.002, 0.1), (200.0, 0.002, 0.1)],
+            10.0,
+            |i| format!("row {i}"),
+        )
+        .expect("line");
+        let d = Design::new(Some(Arc::new(model(8))));
+        assert!(!d.from_line());
+        assert_eq!(d.given(50.0, [1e-3, 0.05]), [1e-3, 0.05]);
+        let d = d.with_line(Some((Arc::new(line), 30.0)));
+        assert!(d.from_line());
+        // 30 + 20 = 50 m: half-way up the ramp, 45 m from its rounded start.
+        let got = d.given(20.0, [0.0, 0.0]);
+        assert!(
+            (got[0] - 0.001).abs() < 1e-15 && (got[1] - 0.05).abs() < 1e-15,
+            "{got:?}"
+        );
+        // Beyond the last row the line holds its last values.
+        assert_eq!(d.given(1000.0, [0.0, 0.0]), [0.002, 0.1]);
     }
 
     /// A long step fills the cells it jumps over with the completed cell's mean, as the fit's

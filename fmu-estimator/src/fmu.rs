@@ -40,6 +40,8 @@ pub struct Estimator {
     design: crate::design::Design,
     /// Whether the design line went beyond the design model's envelope (warned once).
     design_warned: bool,
+    /// Whether design inputs were seen set while `line_file` gives the design (warned once).
+    inputs_ignored_warned: bool,
     /// Whether the last step's speed was outside the taps' range (for the warning on entry).
     outside: bool,
     /// Whether `outside_training` has set in this run (warned once).
@@ -151,6 +153,7 @@ impl Model for Estimator {
             bias: crate::bias::Bias::new([0.0; 4]),
             design: crate::design::Design::new(None),
             design_warned: false,
+            inputs_ignored_warned: false,
             outside: false,
             novelty_warned: false,
             bias_warned: false,
@@ -193,8 +196,10 @@ impl Model for Estimator {
             .map_err(|e| e.to_string())?;
         self.core = Some(core);
         self.bias = crate::bias::Bias::new(config.bias_sigma);
-        self.design = crate::design::Design::new(config.design.clone());
+        self.design =
+            crate::design::Design::new(config.design.clone()).with_line(config.line.clone());
         self.design_warned = false;
+        self.inputs_ignored_warned = false;
         self.holding = false;
         self.outside = false;
         self.novelty_warned = false;
@@ -357,8 +362,17 @@ impl Estimator {
         }
     }
 
-    /// The design line beyond the design model's envelope ([`crate::design`]): said once.
-    fn note_design(&mut self, distance: f64, design: [f64; 2], log: &Logger) {
+    /// The design line beyond the design model's envelope ([`crate::design`]), and design inputs
+    /// set while `line_file` gives the design (they are not read): each said once.
+    fn note_design(&mut self, distance: f64, inputs: [f64; 2], log: &Logger) {
+        if self.design.from_line() && inputs != [0.0; 2] && !self.inputs_ignored_warned {
+            log.warning(&format!(
+                "at {distance:.1} m design_curvature and design_cant are set ({:.2e} 1/m, {:.3} m) but line_file gives the design: the inputs are not read (said once)",
+                inputs[0], inputs[1]
+            ));
+            self.inputs_ignored_warned = true;
+        }
+        let design = self.design.last();
         if self.design.outside() && !self.design_warned {
             log.warning(&format!(
                 "at {distance:.1} m the design line (curvature {:.2e} 1/m, cant {:.3} m) is beyond what design_response_file was fitted on: the vehicle may be in flange contact or beyond its linear range, and the estimate is less trustworthy (outside_training set; said once)",

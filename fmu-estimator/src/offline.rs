@@ -396,7 +396,8 @@ impl Resume {
             learned,
             distance: 0.0,
             bias: crate::bias::Bias::new(config.bias_sigma),
-            design: crate::design::Design::new(config.design.clone()),
+            design: crate::design::Design::new(config.design.clone())
+                .with_line(config.line.clone()),
         }
     }
 }

@@ -152,6 +152,10 @@ pub mod vr {
     pub const DESIGN_CURVATURE: u32 = 65;
     /// `design_cant` (Real input, m).
     pub const DESIGN_CANT: u32 = 66;
+    /// `line_rounding` (Real parameter, m).
+    pub const LINE_ROUNDING: u32 = 67;
+    /// `line_start` (Real parameter, m).
+    pub const LINE_START: u32 = 68;
     // Integer
     /// `discretization` (Integer parameter).
     pub const DISCRETIZATION: u32 = 0;
@@ -187,6 +191,8 @@ pub mod vr {
     pub const TAP_FILE: u32 = 1;
     /// `design_response_file` (String parameter).
     pub const DESIGN_RESPONSE_FILE: u32 = 2;
+    /// `line_file` (String parameter).
+    pub const LINE_FILE: u32 = 3;
 }
 
 const P: Params = Params::DEFAULTS;
@@ -251,6 +257,9 @@ pub static VARIABLES: &[VarSpec] = &[
     VarSpec::real_input(vr::DESIGN_CURVATURE, "design_curvature", "1/m", 0.0, "Design curvature of the line at the wheelset, positive turning left (0 on straight track): its response is removed from the sensors (design_response_file)"),
     VarSpec::real_input(vr::DESIGN_CANT, "design_cant", "m", 0.0, "Design cant at the wheelset, right rail above left (positive in a canted left-hand curve; 0 on level track)"),
     VarSpec::string_parameter(vr::DESIGN_RESPONSE_FILE, "design_response_file", crate::design::SHIPPED_NAME, "The vehicle's response to the design line (alignment-studies design-response), removed from the sensors where design_curvature or design_cant is not 0; absolute, or relative to the resources, then to the working directory; shipped: design-response.toml (the ML95); empty: none"),
+    VarSpec::string_parameter(vr::LINE_FILE, "line_file", "", "The design line as a line file (CSV distance,curvature,cant, as the vehicle FMU reads it), absolute, or relative to the FMU's resources directory, then to the working directory: the design at line_start + distance replaces design_curvature and design_cant; empty (default): the inputs"),
+    VarSpec::real_parameter(vr::LINE_ROUNDING, "line_rounding", "m", design_line::DEFAULT_ROUNDING, "line_file: length over which each row's change of slope is rounded, as the vehicle FMU's line_rounding (1-100 m)").min(design_line::MIN_ROUNDING).max(design_line::MAX_ROUNDING),
+    VarSpec::real_parameter(vr::LINE_START, "line_start", "m", 0.0, "line_file: the line's distance at the start of the run (the estimator's distance 0)"),
     VarSpec::real_input(vr::WS_ROLL_RATE, "ws_roll_rate", "rad/s", 0.0, "Wheelset roll angular velocity (gyroscope), optional: read only when use_roll_rate is true"),
     VarSpec::integer_parameter(vr::ESTIMATOR, "estimator", 2, "What 'alignment' carries: 1 the paper's Kalman filter alone; 2 the learned filter (taps from tap_file, the Kalman filter as one of its channels), falling back to the Kalman filter outside the taps' speed range").min(1.0).max(2.0),
     VarSpec::real_parameter(vr::LAG, "lag", "m", 10.0, "Lag of the fixed-lag output alignment_lagged (estimator 2): one the tap bank holds (10 m shipped); 0 switches it off").min(0.0),
