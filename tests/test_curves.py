@@ -199,3 +199,35 @@ def test_a_bad_line_file_is_named(tmp_path):
         ta.estimate(*zeros, settings={"line_file": str(LINE), "design_response_file": ""}, **ones)
     with pytest.raises(ValueError, match="line_rounding"):
         ta.estimate(*zeros, settings={"line_file": str(LINE), "line_rounding": 0.5}, **ones)
+
+
+def test_the_smooth_command_reads_the_design_columns(curved, tmp_path):
+    """`alignment-studies smooth` on a curved recording with its design columns gives the
+    bindings' smoothed estimate told the same design; without them the curves swamp it."""
+    import orchestrator_cli as cli
+
+    n = int(60 / 1e-3)  # the first 60 s: two curves
+    rec = {k: v[:n] for k, v in curved.items()}
+    names = ["forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "design_curvature",
+             "design_cant"]
+    t = np.arange(n) * 1e-3
+    for with_design in (True, False):
+        cols = names if with_design else names[:4]
+        path = tmp_path / f"recording-{with_design}.csv"
+        np.savetxt(path, np.column_stack([t] + [rec[k] for k in cols]), delimiter=",",
+                   header=",".join(["time"] + cols), comments="", fmt="%.17g")
+        out = tmp_path / f"smoothed-{with_design}.csv"
+        cli.studies("smooth", path, "--out", out)
+        got = cli.read_results(out)["alignment_smoothed"]
+        kw = {"design_curvature": rec["design_curvature"],
+              "design_cant": rec["design_cant"]} if with_design else {}
+        want = ta.estimate(*(rec[k] for k in names[:4]), step=1e-3, smooth=True,
+                           **kw)["alignment_smoothed"]
+        # To 1e-6 of the estimate's range, as tests/test_smoother.py holds the command to numpy
+        # (measured: 5e-8).
+        assert np.max(np.abs(got - want)) < 1e-6 * np.max(np.abs(want))
+        error = ta.band_metrics(rec["distance"], got, rec["distance"],
+                                rec["alignment"])["whole"]["Jrel"]
+        if with_design:
+            told = error
+    assert error > 10 * told

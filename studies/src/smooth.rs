@@ -4,7 +4,9 @@
 //! command's provenance in its metadata, [`orchestrator::parquet`]), else CSV.
 //!
 //! Input: a table with a `time` column at a constant step and the columns `speed` (or
-//! `forward_speed`), `ws_acc_y`, `ws_yaw_rate` and `frame_acc_y`, each optionally prefixed by a
+//! `forward_speed`), `ws_acc_y`, `ws_yaw_rate` and `frame_acc_y`, optionally `ws_roll_rate` and
+//! the design line (`design_curvature` with `design_cant`; a curved line's recording without
+//! them is estimated as if straight, which the curves swamp), each optionally prefixed by a
 //! component name (`vehicle.ws_acc_y`). Every row is a sample, the first one too (the recording
 //! format, docs/recordings.md: a row per sample; a run's `results.csv` starts with the sensors'
 //! initial values, also a sample); the output has a row per input row. Output columns: `time`, `distance`, `alignment_filtered`,
@@ -124,7 +126,38 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
     let acc = find(&["ws_acc_y"])?;
     let yaw = find(&["ws_yaw_rate"])?;
     let frame = find(&["frame_acc_y"])?;
-    let samples = Sample::from_columns(speed, acc, yaw, frame);
+    let mut samples = Sample::from_columns(speed, acc, yaw, frame);
+    // Optional columns: absent, they are 0 (no roll-rate gyroscope; straight, level track).
+    let optional = |name: &str| -> Result<Option<&[f64]>, RecordingError> {
+        match cols.find(name) {
+            Ok(None) => Ok(None),
+            Ok(Some(_)) => find(&[name]).map(Some),
+            Err(message) => Err(RecordingError::Column {
+                file: file(),
+                message,
+            }),
+        }
+    };
+    if let Some(roll) = optional("ws_roll_rate")? {
+        samples = Sample::with_roll_rate(samples, roll);
+    }
+    match (optional("design_curvature")?, optional("design_cant")?) {
+        (None, None) => {}
+        (Some(k), Some(c)) => {
+            for (s, (k, c)) in samples.iter_mut().zip(k.iter().zip(c)) {
+                s.design = [*k, *c];
+            }
+        }
+        (k, _) => {
+            return Err(RecordingError::Column {
+                file: file(),
+                message: format!(
+                    "design_curvature and design_cant come together (the design line): it has only {}",
+                    if k.is_some() { "design_curvature" } else { "design_cant" }
+                ),
+            });
+        }
+    }
     Ok((time.to_vec(), h, samples))
 }
 
@@ -297,6 +330,32 @@ mod tests {
         let p = dir.join("in.csv");
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    /// The design line and the roll-rate gyroscope are read where the recording has them (the
+    /// format `track_alignment` writes), and the design's two columns come together.
+    #[test]
+    fn reads_the_optional_columns() {
+        let head = "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y";
+        let p = write(
+            "design",
+            &format!("{head},v.ws_roll_rate,design_curvature,design_cant\n0,20,0,0,0,0.01,0.002,0.1\n0.001,20,0,0,0,0.02,0.003,0.12\n"),
+        );
+        let (_, _, s) = read_samples(&p).unwrap();
+        assert_eq!(s[1].design, [0.003, 0.12]);
+        assert_eq!(s[1].ws_roll_rate, 0.02);
+        let p = write("plain", &format!("{head}\n0,20,0,0,0\n0.001,20,0,0,0\n"));
+        let (_, _, s) = read_samples(&p).unwrap();
+        assert_eq!((s[1].design, s[1].ws_roll_rate), ([0.0; 2], 0.0));
+        let p = write(
+            "half",
+            &format!("{head},design_cant\n0,20,0,0,0,0.1\n0.001,20,0,0,0,0.1\n"),
+        );
+        let e = read_samples(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("in.csv") && e.contains("only design_cant"),
+            "{e}"
+        );
     }
 
     #[test]
