@@ -9,7 +9,7 @@
 //! The durations announced are those of a run on 2 cores with the release build up to date.
 
 use crate::progress::{self, logged};
-use crate::{binaries, headline, package, python, workspace};
+use crate::{binaries, headline, headline_curves, package, python, workspace};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::Command;
@@ -87,6 +87,15 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
     print!(
         "{}",
         headline::headline(&v).with_context(|| format!("{}", json.display()))?
+    );
+    let curves_json = study_dir.join("curves.json");
+    let text = std::fs::read_to_string(&curves_json)
+        .with_context(|| format!("cannot read {}", curves_json.display()))?;
+    let curves: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not JSON", curves_json.display()))?;
+    print!(
+        "{}",
+        headline_curves::curves(&curves).with_context(|| format!("{}", curves_json.display()))?
     );
     println!(
         "\nFull reports: {} (the paper's cases) and {} (the estimators and options); the standard run: {}; the fleet map: {} and segments.parquet",

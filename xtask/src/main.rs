@@ -16,6 +16,7 @@ mod cli;
 mod demo;
 mod fmus;
 mod headline;
+mod headline_curves;
 mod package;
 mod progress;
 mod python;
