@@ -76,6 +76,8 @@ fn main() {
     // The tap banks are built into the library for offline use. Before the first
     // `alignment-studies taps` there are none: empty files, which `learned::shipped` reports as missing.
     let mut layout = state_layout::Fingerprint::of_fmu_crate();
+    // The design line (`line_file`) lives in its own crate and in the estimator's state.
+    layout.add_crate(&manifest.join("..").join("design-line"));
     for name in [
         "learned.taps",
         "learned-nominal.taps",

@@ -9,7 +9,9 @@ use std::path::PathBuf;
 
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").expect("cargo sets it"));
-    let layout = state_layout::Fingerprint::of_fmu_crate();
+    let mut layout = state_layout::Fingerprint::of_fmu_crate();
+    // The design line lives in its own crate and in the vehicle's state.
+    layout.add_crate(&manifest.join("..").join("design-line"));
     println!("cargo::rustc-env=VEHICLE_STATE_LAYOUT={}", layout.hex());
     let vehicles = ["ml95.toml", "manchester.toml"].map(|f| manifest.join("resources").join(f));
     println!(

@@ -151,13 +151,14 @@ def test_a_line_file_in_the_estimator_gives_what_the_design_inputs_give(curved):
     sensors = [curved[k] for k in names]
     inputs = ta.estimate(*sensors, step=1e-3, design_curvature=curved["design_curvature"],
                          design_cant=curved["design_cant"])
-    # The first sample is the vehicle's after its first step (run() drops the initial row).
-    start = float(curved["distance"][0])
-    line = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE), "line_start": start})
+    # Sample k is at the estimator's distance after its step, where the vehicle's outputs of
+    # the same row are (run() drops the initial row): line_start 0, the line's own start.
+    line = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE)})
+    assert np.max(np.abs(line["distance"] - curved["distance"])) < 1e-9
     assert np.max(np.abs(line["alignment"] - inputs["alignment"])) < 1e-9
     assert np.array_equal(line["outside_training"], inputs["outside_training"])
     # Shifted by 30 m the design no longer matches the vehicle's: the estimate is worse.
-    shifted = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE), "line_start": start + 30.0})
+    shifted = ta.estimate(*sensors, step=1e-3, settings={"line_file": str(LINE), "line_start": 30.0})
     truth = (curved["distance"], curved["alignment"])
     j = lambda out: ta.band_metrics(out["distance"], out["alignment"], *truth)["whole"]["Jrel"]
     assert j(shifted) > 2 * j(line)
@@ -172,8 +173,9 @@ def test_a_line_file_in_the_estimator_gives_what_the_design_inputs_give(curved):
     common = dict(stop_time=(n - 1) * 1e-3, step_size=1e-3, output_interval=1e-3, input=signals,
                   output=["alignment", "outside_training"])
     fmu = packaged_fmus()["AlignmentEstimator"]
+    # The window's first sample is at the vehicle's distance k0, one step past k0 - 1.
     from_line = fmpy.simulate_fmu(fmu, start_values={"line_file": str(LINE),
-                                                      "line_start": float(curved["distance"][k0])},
+                                                      "line_start": float(curved["distance"][k0 - 1])},
                                   **common)
     ours = ta.estimate(*(np.ascontiguousarray(signals[k]) for k in signals.dtype.names[1:]),
                        step=1e-3,
@@ -199,6 +201,11 @@ def test_a_bad_line_file_is_named(tmp_path):
         ta.estimate(*zeros, settings={"line_file": str(LINE), "design_response_file": ""}, **ones)
     with pytest.raises(ValueError, match="line_rounding"):
         ta.estimate(*zeros, settings={"line_file": str(LINE), "line_rounding": 0.5}, **ones)
+    with pytest.raises(ValueError, match="line_start"):
+        ta.estimate(*zeros, settings={"line_file": str(LINE), "line_start": float("nan")}, **ones)
+    with pytest.raises(ValueError, match="both give the design line"):
+        ta.estimate(*zeros, settings={"line_file": str(LINE)}, design_curvature=np.zeros(10),
+                    design_cant=np.zeros(10), **ones)
 
 
 def test_the_smooth_command_reads_the_design_columns(curved, tmp_path):
@@ -231,3 +238,9 @@ def test_the_smooth_command_reads_the_design_columns(curved, tmp_path):
         if with_design:
             told = error
     assert error > 10 * told
+    # The design from the columns and from --set line_file at once is refused before any work.
+    path = tmp_path / "recording-True.csv"
+    out = tmp_path / "both.csv"
+    failed = cli.studies("smooth", path, "--out", out, "--set", f"line_file={LINE}", check=2)
+    assert "both give the design line" in failed.stderr
+    assert not out.exists()

@@ -155,35 +155,40 @@ fn design_model(
 }
 
 /// The design line `line_file` names ([`user_file`]), rounded as `line_rounding` says, with
-/// `line_start`; `None` when the name is empty.
+/// `line_start`; `None` when the name is empty. The settings are checked before the file is
+/// read, and a line without a design response (`has_model`) is refused before either.
 fn design_line_file(
     v: &Values,
     resources: Option<&Path>,
+    has_model: bool,
 ) -> Result<Option<(std::sync::Arc<design_line::DesignLine>, f64)>, Error> {
     let name = v.string[vr::LINE_FILE as usize].trim();
     if name.is_empty() {
         return Ok(None);
     }
+    if !has_model {
+        return Err(Error::LineFile(format!(
+            "line_file '{name}' needs design_response_file (it is empty): without the vehicle's response to the design there is nothing to remove"
+        )));
+    }
     let rounding = v.real[vr::LINE_ROUNDING as usize];
     if !(design_line::MIN_ROUNDING..=design_line::MAX_ROUNDING).contains(&rounding) {
-        return Err(Error::DesignFile(format!(
-            "parameter 'line_rounding' = {rounding} m must lie in {}-{} m",
-            design_line::MIN_ROUNDING,
-            design_line::MAX_ROUNDING
-        )));
+        return Err(SettingError::LineRounding(rounding).into());
     }
     let start = v.real[vr::LINE_START as usize];
     if !start.is_finite() {
-        return Err(Error::DesignFile(format!(
-            "parameter 'line_start' = {start} m must be a finite distance"
-        )));
+        return Err(SettingError::LineStart(start).into());
     }
-    let path = user_file(name, resources).ok_or_else(|| {
-        Error::DesignFile(format!(
+    let not_found = || {
+        Error::LineFile(format!(
             "line_file '{name}': not found (relative names are looked up in the FMU's resources, then in the working directory)"
         ))
-    })?;
-    let line = design_line::DesignLine::from_csv(&path, rounding).map_err(Error::DesignFile)?;
+    };
+    let path = user_file(name, resources).ok_or_else(not_found)?;
+    if !path.is_file() {
+        return Err(not_found());
+    }
+    let line = design_line::DesignLine::from_csv(&path, rounding).map_err(Error::LineFile)?;
     Ok(Some((std::sync::Arc::new(line), start)))
 }
 
@@ -356,6 +361,8 @@ impl Config {
         if prior_sigma_xi.is_nan() {
             return Err(SettingError::PriorSigmaNan.into());
         }
+        let design = design_model(v, resources)?;
+        let line = design_line_file(v, resources, design.is_some())?;
         let config = Config {
             params,
             scheme,
@@ -376,15 +383,9 @@ impl Config {
                 r(vr::BIAS_SIGMA_FRAME_ACC_Y),
                 r(vr::BIAS_SIGMA_WS_ROLL_RATE),
             ],
-            design: design_model(v, resources)?,
-            line: design_line_file(v, resources)?,
+            design,
+            line,
         };
-        if config.line.is_some() && config.design.is_none() {
-            return Err(Error::DesignFile(format!(
-                "line_file '{}' needs design_response_file (it is empty): without the vehicle's response to the design there is nothing to remove",
-                v.string[vr::LINE_FILE as usize].trim()
-            )));
-        }
         Ok((
             match calibrated {
                 Some(c) => config.with_calibration(c),

@@ -301,8 +301,9 @@ impl Design {
         self
     }
 
-    /// The design at the leading wheelset, `distance` metres into the run (before the sample's
-    /// advance, where the vehicle's outputs put it): the line's when `line_file` gave one, else
+    /// The design at the leading wheelset `distance` metres into the run (the sample's, after
+    /// its advance: the estimator's `distance` output, where a master stepping the vehicle first
+    /// has the vehicle): the line's at `start + distance` when `line_file` gave one, else
     /// `inputs`.
     pub fn given(&self, distance: f64, inputs: [f64; 2]) -> [f64; 2] {
         match &self.line {

@@ -62,6 +62,9 @@ pub enum Error {
     /// `design_response_file` could not be read or is inconsistent.
     #[error("{0}")]
     DesignFile(String),
+    /// `line_file` is missing, malformed, or given without a design response to remove.
+    #[error("{0}")]
+    LineFile(String),
     /// The learned filter of `tap_file` could not be built from its bank.
     #[error("tap_file '{tap_file}': {source}")]
     TapFile {
@@ -164,6 +167,14 @@ pub enum SettingError {
         "parameter 'design_speed' = {0} must be 0 (follow the speed input) or a positive speed"
     )]
     DesignSpeed(f64),
+    /// `line_rounding` \[m\] is outside its range (the value given).
+    #[error(
+        "parameter 'line_rounding' = {0} m must lie in 1-100 m (the design line's rounding, as the vehicle FMU's)"
+    )]
+    LineRounding(f64),
+    /// `line_start` \[m\] is not finite (the value given).
+    #[error("parameter 'line_start' = {0} m must be a finite distance along the line")]
+    LineStart(f64),
     /// `prior_sigma_xi` is NaN (0 is allowed: it switches the prior's virtual measurement off).
     #[error("parameter 'prior_sigma_xi' is NaN")]
     PriorSigmaNan,

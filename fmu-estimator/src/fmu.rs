@@ -127,7 +127,7 @@ impl Model for Estimator {
         model_identifier: "AlignmentEstimator",
         // By build.rs from the sources and what shapes the modelDescription: new when they change.
         guid: env!("ESTIMATOR_GUID"),
-        description: "Estimate of the lateral alignment of a railway track (from its design line where design_curvature and design_cant are given) from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer: by default the learned filter (estimator = 2, with the Kalman filter as one of its channels); estimator = 1 is the paper's Kalman filter (Munoz, Ros, Escalona).",
+        description: "Estimate of the lateral alignment of a railway track (from its design line where design_curvature and design_cant or line_file give it) from a wheelset accelerometer, a wheelset yaw gyroscope and a bogie-frame accelerometer: by default the learned filter (estimator = 2, with the Kalman filter as one of its channels); estimator = 1 is the paper's Kalman filter (Munoz, Ros, Escalona).",
         author: "railway track-geometry toolkit",
         version: env!("CARGO_PKG_VERSION"),
         default_start: 0.0,
@@ -372,7 +372,13 @@ impl Estimator {
             ));
             self.inputs_ignored_warned = true;
         }
-        let design = self.design.last();
+        // What the correction used: the line's value, or the input as given (an invalid one,
+        // replaced by the last valid, is what the warning is about).
+        let design = if self.design.from_line() {
+            self.design.last()
+        } else {
+            inputs
+        };
         if self.design.outside() && !self.design_warned {
             log.warning(&format!(
                 "at {distance:.1} m the design line (curvature {:.2e} 1/m, cant {:.3} m) is beyond what design_response_file was fitted on: the vehicle may be in flange contact or beyond its linear range, and the estimate is less trustworthy (outside_training set; said once)",

@@ -153,7 +153,11 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
                 file: file(),
                 message: format!(
                     "design_curvature and design_cant come together (the design line): it has only {}",
-                    if k.is_some() { "design_curvature" } else { "design_cant" }
+                    if k.is_some() {
+                        "design_curvature"
+                    } else {
+                        "design_cant"
+                    }
                 ),
             });
         }
@@ -269,6 +273,15 @@ pub fn smooth_file(
     let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
     outfile::check(output, &inputs, replace).map_err(refused)?;
     let (time, h, samples) = read_samples(input)?;
+    let line_file = overrides
+        .iter()
+        .any(|(name, value)| name == "line_file" && !value.trim().is_empty());
+    if line_file && samples.iter().any(|s| s.design != [0.0; 2]) {
+        return Err(crate::Error::Input(format!(
+            "{}: its design_curvature and design_cant columns, and --set line_file, both give the design line: drop one",
+            input.display()
+        )));
+    }
     let provenance = serde_json::json!({
         "command": "alignment-studies smooth",
         "version": env!("CARGO_PKG_VERSION"),
@@ -339,7 +352,9 @@ mod tests {
         let head = "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y";
         let p = write(
             "design",
-            &format!("{head},v.ws_roll_rate,design_curvature,design_cant\n0,20,0,0,0,0.01,0.002,0.1\n0.001,20,0,0,0,0.02,0.003,0.12\n"),
+            &format!(
+                "{head},v.ws_roll_rate,design_curvature,design_cant\n0,20,0,0,0,0.01,0.002,0.1\n0.001,20,0,0,0,0.02,0.003,0.12\n"
+            ),
         );
         let (_, _, s) = read_samples(&p).unwrap();
         assert_eq!(s[1].design, [0.003, 0.12]);

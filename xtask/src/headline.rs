@@ -146,7 +146,7 @@ fn bands(row: &Value) -> Result<[f64; 4]> {
 }
 
 /// `1-5` for consecutive seeds, else `1, 3, 8`.
-fn seed_list(seeds: &[u64]) -> String {
+pub(crate) fn seed_list(seeds: &[u64]) -> String {
     match seeds {
         [first, .., last] if seeds.windows(2).all(|w| w[1] == w[0] + 1) => {
             format!("{first}-{last}")

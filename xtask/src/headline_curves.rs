@@ -30,9 +30,9 @@ const ROWS: [(&str, &str, Option<usize>); 4] = [
 pub fn curves(v: &Value) -> Result<String> {
     let runs = v.as_array().context("not a list of runs")?;
     anyhow::ensure!(!runs.is_empty(), "no runs");
-    let seeds: Vec<String> = runs
+    let seeds: Vec<u64> = runs
         .iter()
-        .map(|r| r["seed"].as_u64().map(|s| s.to_string()))
+        .map(|r| r["seed"].as_u64())
         .collect::<Option<_>>()
         .context("a run without a seed")?;
     let mut text = format!(
@@ -40,7 +40,7 @@ pub fn curves(v: &Value) -> Result<String> {
          400-1500 m, transitions of 40-100 m and cant up to 120 mm, at 18 m/s), design known \
          from design_curvature and design_cant (or line_file), mean Jrel over the held-out track \
          seeds {}:\n\n",
-        seeds.join(", ")
+        crate::headline::seed_list(&seeds)
     );
     text += "| estimator | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n";
     text += "|---|---|---|---|---|\n";
@@ -63,7 +63,7 @@ pub fn curves(v: &Value) -> Result<String> {
             .collect();
         text += &format!("| {label} | {} |\n", cells.join(" | "));
     }
-    text += "Told nothing, the curves swamp the estimate; where the vehicle runs against its \
+    text += "\nTold nothing, the curves swamp the estimate; where the vehicle runs against its \
              flanges the estimate is not usable either, and outside_training says so \
              (docs/accuracy.md, \"Curves\").\n";
     Ok(text)
@@ -97,7 +97,7 @@ mod tests {
     #[test]
     fn rows_are_the_means_over_the_seeds_of_the_right_fields() {
         let text = curves(&json!([run(1, 0.0), run(2, 0.02)])).unwrap();
-        assert!(text.contains("seeds 1, 2"), "{text}");
+        assert!(text.contains("seeds 1-2"), "{text}");
         for line in [
             "| learned filter (default), told the design | 0.210 | 0.211 | 0.212 | 0.213 |",
             "| paper's filter, told the design | 0.610 | 0.611 | 0.612 | 0.613 |",

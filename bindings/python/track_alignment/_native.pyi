@@ -19,6 +19,8 @@ def estimate(
     *,
     step: float,
     ws_roll_rate: ArrayLike | None = None,
+    design_curvature: ArrayLike | None = None,
+    design_cant: ArrayLike | None = None,
     settings: Mapping[str, Setting] | None = None,
     calibration: str | PathLike[str] | None = None,
     smooth: bool = False,
