@@ -4,7 +4,7 @@
 //! - [`params`]: vehicle parameter sets (ML95-like metro car, Manchester Benchmark vehicle) with
 //!   the source of every value;
 //! - [`track`]: track irregularities (spectra, harmonic, measured profiles);
-//! - [`line`] (the `design-line` crate): the design line (curvature and cant) the irregularities are laid on;
+//! - [`mod@line`] (the `design-line` crate): the design line (curvature and cant) the irregularities are laid on;
 //! - [`curving`]: what a curved, canted line adds to the equations and sensors;
 //! - [`contact`]: Hertz contact, Kalker creep coefficients, saturation, flange;
 //! - [`dynamics`]: the equations of motion and their derivation;

@@ -125,6 +125,18 @@ pub fn read_pass(path: &Path) -> Result<Pass, Error> {
             path.display()
         )));
     }
+    // The fit's regressors are the raw sensors: a curved line's design response would be
+    // fitted into the taps, while the estimator removes it before them. Refused until the fit
+    // removes it too.
+    if let Some(k) = samples.iter().position(|s| s.design != [0.0; 2]) {
+        return Err(Error::Input(format!(
+            "{}: the design line is not straight at sample {} (design_curvature {}, design_cant {}): a tap bank is fitted from recordings on straight, level track only",
+            path.display(),
+            k + 1,
+            samples[k].design[0],
+            samples[k].design[1]
+        )));
+    }
     let cols = orchestrator::csv::Csv::read_any(path).map_err(Error::Input)?;
     let start = cols
         .column(&["distance"])
@@ -451,5 +463,31 @@ pub mod synthetic {
             }
         }
         std::fs::write(path, t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A pass on a curved line is refused by name, one on straight track (zero design
+    /// columns) read.
+    #[test]
+    fn a_curved_pass_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "time,speed,ws_acc_y,ws_yaw_rate,frame_acc_y,design_curvature,design_cant\n";
+        let straight = dir.path().join("straight.csv");
+        std::fs::write(
+            &straight,
+            format!("{head}0.001,20,0,0,0,0,0\n0.002,20,0,0,0,0,0\n"),
+        )
+        .unwrap();
+        assert_eq!(super::read_pass(&straight).unwrap().samples.len(), 2);
+        let curved = dir.path().join("curved.csv");
+        std::fs::write(
+            &curved,
+            format!("{head}0.001,20,0,0,0,0,0\n0.002,20,0,0,0,0.001,0.05\n"),
+        )
+        .unwrap();
+        let e = super::read_pass(&curved).unwrap_err().to_string();
+        assert!(e.contains("curved.csv") && e.contains("sample 2"), "{e}");
     }
 }
