@@ -10,11 +10,10 @@
 //! stretches of the straight run.
 
 use super::metrics::{BandMetrics, evaluate};
-use super::records::{Output, Record, estimate, estimate_learned, record_table};
+use super::records::{Output, Record, estimate, estimate_learned, record_table, run_learned};
 use super::runs::{Fmus, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
-use fmu_estimator::offline;
 use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -154,10 +153,7 @@ type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
 
 /// The default told the design over `rec`.
 fn flagged(rec: &Record) -> Result<Flagged, Error> {
-    let values = offline::settings(&[])?;
-    let (config, _) = offline::config(&values, None)?;
-    let learned = offline::learned(&values, &config)?;
-    let out = offline::process_learned(&config, learned, 1e-3, &rec.samples, false)?;
+    let (out, _) = run_learned(&rec.samples, 1e-3, &[])?;
     let est: Vec<f64> = out
         .learned
         .as_ref()

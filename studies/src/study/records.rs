@@ -185,6 +185,23 @@ pub fn estimate(
     Ok((out.distance, est.into_iter().map(|e| e.0).collect()))
 }
 
+/// The estimator FMU's learned filter (`estimator` 2) with `settings` over `samples`, as the
+/// FMU runs it (the built-in tap bank): all it computes (the estimates, `outside_training`),
+/// and its lag \[m\].
+pub fn run_learned(
+    samples: &[Sample],
+    h: f64,
+    settings: &[(String, String)],
+) -> Result<(offline::Processed, f64), Error> {
+    let values = offline::settings(settings)?;
+    let (config, _) = offline::config(&values, None)?;
+    let learned = offline::learned(&values, &config)?
+        .ok_or_else(|| Error::input("the settings do not select the learned filter"))?;
+    let lag = learned.lag();
+    let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
+    Ok((out, lag))
+}
+
 /// The estimator FMU's learned filter (`estimator` 2) with `settings` over `samples`: the
 /// positions and values of `output`, as the FMU computes them (the built-in tap bank).
 pub fn estimate_learned(
@@ -193,12 +210,7 @@ pub fn estimate_learned(
     settings: &[(String, String)],
     output: Output,
 ) -> Result<(Vec<f64>, Vec<f64>), Error> {
-    let values = offline::settings(settings)?;
-    let (config, _) = offline::config(&values, None)?;
-    let learned = offline::learned(&values, &config)?
-        .ok_or_else(|| Error::input("the settings do not select the learned filter"))?;
-    let lag = learned.lag();
-    let out = offline::process_learned(&config, Some(learned), h, samples, false)?;
+    let (out, lag) = run_learned(samples, h, settings)?;
     let est = out
         .learned
         .ok_or_else(|| Error::input("no learned estimate"))?;
