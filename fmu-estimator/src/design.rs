@@ -36,15 +36,12 @@
 //! [`HOLD`] metres after.
 
 use crate::learned::grid::Grid;
+// A design input no line file may hold is a wrong input: the line's own limits.
+use design_line::{MAX_CANT, MAX_CURVATURE};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
-
-/// The tightest curvature a design input may have (the vehicle FMU's design line's) \[1/m\].
-pub const MAX_CURVATURE: f64 = 1.0 / 25.0;
-/// The largest cant a design input may have \[m\].
-pub const MAX_CANT: f64 = 0.2;
 
 /// The shipped model's name (`design_response_file`'s default), built into the library.
 pub const SHIPPED_NAME: &str = "design-response.toml";
@@ -305,7 +302,7 @@ impl Design {
     /// its advance: the estimator's `distance` output, where a master stepping the vehicle first
     /// has the vehicle): the line's at `start + distance` when `line_file` gave one, else
     /// `inputs`.
-    pub fn given(&self, distance: f64, inputs: [f64; 2]) -> [f64; 2] {
+    fn given(&self, distance: f64, inputs: [f64; 2]) -> [f64; 2] {
         match &self.line {
             Some((line, start)) => {
                 let p = line.at(start + distance);
@@ -339,12 +336,14 @@ impl Design {
 
     /// What the design adds to the four sensors at this sample: the leading wheelset at
     /// `distance` (after the sample's advance), moving at `speed` (0 standing: only the cant's
-    /// gravity), the design `[curvature, cant]` there.
+    /// gravity), the design `[curvature, cant]` there (the inputs; with `line_file`, the
+    /// line's instead).
     pub fn response(&mut self, distance: f64, speed: f64, design: [f64; 2]) -> [f64; 4] {
         let Some(model) = self.model.clone() else {
             return [0.0; 4];
         };
         self.at = distance;
+        let design = self.given(distance, design);
         // A design no line has (not finite, tighter than 25 m, cant beyond 0.2 m) is a wrong
         // input: the last valid one is held, and the estimate is flagged.
         let [k, c] = if design.iter().all(|x| x.is_finite())

@@ -91,8 +91,7 @@ pub fn step(
     if design.active() {
         let at = *distance + if speed.is_finite() { speed * h } else { 0.0 };
         let moving = if speed.is_finite() { speed } else { 0.0 };
-        let given = design.given(at, input.design);
-        let r = design.response(at, moving, given);
+        let r = design.response(at, moving, input.design);
         let used = if roll_rate { 4 } else { 3 };
         for i in 0..used {
             x[i] -= r[i];
