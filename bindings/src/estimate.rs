@@ -69,11 +69,6 @@ pub fn estimate<'py>(
     );
     let roll = ws_roll_rate.as_ref().map(|r| slice(r));
     let (curvature, cant) = match (&design_curvature, &design_cant) {
-        (Some(_), Some(_)) if gives_line(&overrides) => {
-            return Err(bad(
-                "design_curvature and design_cant, and the setting line_file, both give the design line: give one",
-            ));
-        }
         (Some(k), Some(c)) => (Some(slice(k)), Some(slice(c))),
         (None, None) => (None, None),
         _ => {
@@ -146,6 +141,7 @@ fn run(
 ) -> Result<(Processed, f64, Option<Resume>), fmu_estimator::error::Error> {
     let values = offline::settings(overrides)?;
     let (config, _notes) = offline::config(&values, calibration)?;
+    offline::one_design(&config, columns.design.is_some())?;
     let learned = offline::learned(&values, &config)?;
     let lag = learned.as_ref().map_or(0.0, |l| l.lag());
     if how.smooth {
@@ -269,11 +265,4 @@ pub fn parameters(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         d.set_item(v.name, (kind, default, v.description))?;
     }
     Ok(d)
-}
-
-/// Whether the settings name a `line_file` (the design line from a file, not from arrays).
-fn gives_line(overrides: &[(String, String)]) -> bool {
-    overrides
-        .iter()
-        .any(|(name, value)| name == "line_file" && !value.trim().is_empty())
 }

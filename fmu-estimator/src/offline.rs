@@ -294,6 +294,17 @@ pub fn learned(values: &Values, config: &Config) -> Result<Option<Learned>, Erro
     crate::fmu::learned_from_values(values, None, config, &fmi_abi::Logger::silent())
 }
 
+/// Refuses the design line given twice: by `line_file` (in `config`) and by the samples
+/// (`design_given`: arrays or recording columns), which the FMU would not read.
+pub fn one_design(config: &Config, design_given: bool) -> Result<(), Error> {
+    if config.line.is_some() && design_given {
+        return Err(Error::LineFile(
+            "design_curvature and design_cant, and the setting line_file, both give the design line: give one".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// Runs the Kalman filter (and the smoother, if `smooth`) over `samples` taken every `h`
 /// seconds; the learned filter is not run (see [`process_learned`]).
 pub fn process(

@@ -273,15 +273,6 @@ pub fn smooth_file(
     let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
     outfile::check(output, &inputs, replace).map_err(refused)?;
     let (time, h, samples) = read_samples(input)?;
-    let line_file = overrides
-        .iter()
-        .any(|(name, value)| name == "line_file" && !value.trim().is_empty());
-    if line_file && samples.iter().any(|s| s.design != [0.0; 2]) {
-        return Err(crate::Error::Input(format!(
-            "{}: its design_curvature and design_cant columns, and --set line_file, both give the design line: drop one",
-            input.display()
-        )));
-    }
     let provenance = serde_json::json!({
         "command": "alignment-studies smooth",
         "version": env!("CARGO_PKG_VERSION"),
@@ -292,6 +283,9 @@ pub fn smooth_file(
     });
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;
+    let design_given = samples.iter().any(|s| s.design != [0.0; 2]);
+    offline::one_design(&config, design_given)
+        .map_err(|e| crate::Error::Input(format!("{}: {e}", input.display())))?;
     for n in notes {
         if let fmu_estimator::config::Note::Warning(m) = n {
             eprintln!("warning: {m}");
