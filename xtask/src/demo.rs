@@ -80,22 +80,15 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
     )?;
     fleet(&vehicle, &out.join("fleet"))?;
     let json = study_dir.join("variants.json");
-    let text = std::fs::read_to_string(&json)
-        .with_context(|| format!("cannot read {}", json.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", json.display()))?;
     print!(
         "{}",
-        headline::headline(&v).with_context(|| format!("{}", json.display()))?
+        headline::headline(&read_json(&json)?).with_context(|| format!("{}", json.display()))?
     );
-    let curves_json = study_dir.join("curves.json");
-    let text = std::fs::read_to_string(&curves_json)
-        .with_context(|| format!("cannot read {}", curves_json.display()))?;
-    let curves: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("{} is not JSON", curves_json.display()))?;
+    let curves = study_dir.join("curves.json");
     print!(
         "{}",
-        headline_curves::curves(&curves).with_context(|| format!("{}", curves_json.display()))?
+        headline_curves::curves(&read_json(&curves)?)
+            .with_context(|| format!("{}", curves.display()))?
     );
     println!(
         "\nFull reports: {} (the paper's cases) and {} (the estimators and options); the standard run: {}; the fleet map: {} and segments.parquet",
@@ -105,6 +98,13 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
         out.join("fleet").join("map.png").display()
     );
     Ok(())
+}
+
+/// A study's JSON output, parsed.
+fn read_json(path: &Path) -> Result<serde_json::Value> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))
 }
 
 /// The fleet: the Python bindings, a synthetic fleet of vehicle passes, the Dask pipeline.

@@ -13,7 +13,7 @@ use serde_json::Value;
 const PAPER: [f64; 4] = [0.25, 0.48, 0.26, 0.15];
 
 /// The bands, in the table's order, as the JSON names them.
-const BANDS: [&str; 4] = ["whole", "D1", "D2", "D3"];
+pub(crate) const BANDS: [&str; 4] = ["whole", "D1", "D2", "D3"];
 
 /// One row of the estimator FMU's tables: its label here, its settings and whether it is
 /// judged on `alignment_lagged`.
@@ -66,8 +66,7 @@ pub fn headline(v: &Value) -> Result<String> {
          better), mean over the held-out track seeds {}:\n\n",
         seed_list(&seeds)
     );
-    text += "| estimator | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n";
-    text += "|---|---|---|---|---|\n";
+    text += TABLE_HEAD;
     for key in [&DEFAULT, &LAGGED, &PAPERS_FILTER] {
         let jrel = bands(find(standard, key)?)?;
         text += &row(key.label, &jrel.map(|j| format!("{j:.3}")));
@@ -81,7 +80,12 @@ pub fn headline(v: &Value) -> Result<String> {
     Ok(text)
 }
 
-fn row(label: &str, cells: &[String; 4]) -> String {
+/// The head of a table of Jrel per band.
+pub(crate) const TABLE_HEAD: &str =
+    "| estimator | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n|---|---|---|---|---|\n";
+
+/// A table row: `label`, then the four bands' cells.
+pub(crate) fn row(label: &str, cells: &[String; 4]) -> String {
     format!("| {label} | {} |\n", cells.join(" | "))
 }
 

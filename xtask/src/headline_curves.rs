@@ -3,11 +3,9 @@
 //! the default and the paper's filter told the design, the default on the same irregularities
 //! on straight track (the oracle of what it should reach) and told nothing.
 
+use crate::headline::{BANDS, TABLE_HEAD, row};
 use anyhow::{Context, Result};
 use serde_json::Value;
-
-/// The bands, in the table's order, as the JSON names them.
-const BANDS: [&str; 4] = ["whole", "D1", "D2", "D3"];
 
 /// The rows: label, the run's field, the index in its `[paper's filter, default]` pair (`None`:
 /// the field is one run's metrics).
@@ -42,8 +40,7 @@ pub fn curves(v: &Value) -> Result<String> {
          seeds {}:\n\n",
         crate::headline::seed_list(&seeds)
     );
-    text += "| estimator | whole 3-200 m | D1 3-25 m | D2 25-70 m | D3 70-200 m |\n";
-    text += "|---|---|---|---|---|\n";
+    text += TABLE_HEAD;
     for (label, field, index) in ROWS {
         let mut sum = [0.0; 4];
         for run in runs {
@@ -57,11 +54,8 @@ pub fn curves(v: &Value) -> Result<String> {
                     .with_context(|| format!("no {field} {band} Jrel for seed {}", run["seed"]))?;
             }
         }
-        let cells: Vec<String> = sum
-            .iter()
-            .map(|s| format!("{:.3}", s / runs.len() as f64))
-            .collect();
-        text += &format!("| {label} | {} |\n", cells.join(" | "));
+        let cells = sum.map(|s| format!("{:.3}", s / runs.len() as f64));
+        text += &row(label, &cells);
     }
     text += "\nTold nothing, the curves swamp the estimate; where the vehicle runs against its \
              flanges the estimate is not usable either, and outside_training says so \
