@@ -83,26 +83,44 @@ def test_told_the_design_the_estimate_is_nearly_the_straight_tracks(curved, stra
     assert nothing["whole"]["Jrel"] > 10 * flat["whole"]["Jrel"]
 
 
+# The FMU-against-bindings window: 20 s from 140 m on, the first curve's transition in it.
+WINDOW, K0 = 20000, int(140 / SPEED / 1e-3)
+SENSORS = ("speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y")
+DESIGN = ("design_curvature", "design_cant")
+
+
+def window(curved, name: str) -> np.ndarray:
+    src = "forward_speed" if name == "speed" else name
+    return np.ascontiguousarray(curved[src][K0:K0 + WINDOW])
+
+
+def fmu_on_window(curved, with_design: bool, **start_values):
+    """The estimator FMU in fmpy over the window, given the design inputs or not."""
+    names = SENSORS + (DESIGN if with_design else ())
+    signals = np.zeros(WINDOW, dtype=[("time", float)] + [(k, float) for k in names])
+    signals["time"] = np.arange(WINDOW) * 1e-3
+    for k in names:
+        signals[k] = window(curved, k)
+    return fmpy.simulate_fmu(packaged_fmus()["AlignmentEstimator"],
+                             stop_time=(WINDOW - 1) * 1e-3, step_size=1e-3,
+                             output_interval=1e-3, input=signals, start_values=start_values,
+                             output=["alignment", "outside_training"])
+
+
+def told_the_design_on_window(curved) -> dict[str, np.ndarray]:
+    """The bindings over the window, given the design inputs."""
+    return ta.estimate(*(window(curved, k) for k in SENSORS), step=1e-3,
+                       **{k: window(curved, k) for k in DESIGN})
+
+
 def test_the_fmu_and_the_bindings_remove_the_same_response(curved):
     """The estimator FMU in fmpy, given the design inputs, against the bindings. Equal to
     rounding: fmpy's step sizes come from differences of its clock, so its distance is the
     bindings' to 1e-16 m; the design history's cells are the learned filter's grid, whose
     boundaries are robust to that (learned/grid.rs, EDGE)."""
-    n = 20000
-    names = ("speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "design_curvature", "design_cant")
-    signals = np.zeros(n, dtype=[("time", float)] + [(k, float) for k in names])
-    signals["time"] = np.arange(n) * 1e-3
-    src = dict(curved, speed=curved["forward_speed"])
-    # From 140 m on: the first curve's transition is in the window.
-    k0 = int(140 / SPEED / 1e-3)
-    for k in names:
-        signals[k] = src[k][k0:k0 + n]
-    result = fmpy.simulate_fmu(packaged_fmus()["AlignmentEstimator"], stop_time=(n - 1) * 1e-3,
-                               step_size=1e-3, output_interval=1e-3, input=signals,
-                               output=["alignment", "outside_training"])
-    ours = ta.estimate(*(np.ascontiguousarray(signals[k]) for k in names[:4]), step=1e-3,
-                       design_curvature=np.ascontiguousarray(signals["design_curvature"]),
-                       design_cant=np.ascontiguousarray(signals["design_cant"]))
+    n = WINDOW
+    result = fmu_on_window(curved, with_design=True)
+    ours = told_the_design_on_window(curved)
     # fmpy's first row is the initial state; its row k + 1 is the sample k's step.
     got, want = result["alignment"][1:], ours["alignment"][:n - 1]
     assert np.array_equal(got[:70], want[:70])
@@ -163,24 +181,11 @@ def test_a_line_file_in_the_estimator_gives_what_the_design_inputs_give(curved):
     j = lambda out: ta.band_metrics(out["distance"], out["alignment"], *truth)["whole"]["Jrel"]
     assert j(shifted) > 2 * j(line)
 
-    n = 20000
-    k0 = int(140 / SPEED / 1e-3)
-    signals = np.zeros(n, dtype=[("time", float)] + [(k, float) for k in
-                                                     ("speed",) + names[1:]])
-    signals["time"] = np.arange(n) * 1e-3
-    for name, src in zip(("speed",) + names[1:], names):
-        signals[name] = curved[src][k0:k0 + n]
-    common = dict(stop_time=(n - 1) * 1e-3, step_size=1e-3, output_interval=1e-3, input=signals,
-                  output=["alignment", "outside_training"])
-    fmu = packaged_fmus()["AlignmentEstimator"]
-    # The window's first sample is at the vehicle's distance k0, one step past k0 - 1.
-    from_line = fmpy.simulate_fmu(fmu, start_values={"line_file": str(LINE),
-                                                      "line_start": float(curved["distance"][k0 - 1])},
-                                  **common)
-    ours = ta.estimate(*(np.ascontiguousarray(signals[k]) for k in signals.dtype.names[1:]),
-                       step=1e-3,
-                       design_curvature=np.ascontiguousarray(curved["design_curvature"][k0:k0 + n]),
-                       design_cant=np.ascontiguousarray(curved["design_cant"][k0:k0 + n]))
+    n = WINDOW
+    # The window's first sample is at the vehicle's distance K0, one step past K0 - 1.
+    from_line = fmu_on_window(curved, with_design=False, line_file=str(LINE),
+                              line_start=float(curved["distance"][K0 - 1]))
+    ours = told_the_design_on_window(curved)
     got, want = from_line["alignment"][1:], ours["alignment"][:n - 1]
     assert np.max(np.abs(want)) > 5e-3
     assert np.max(np.abs(got - want)) < 1e-9
