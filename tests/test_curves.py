@@ -21,7 +21,7 @@ ta = pytest.importorskip(
 LINE = REPO / "fmu-vehicle" / "resources" / "metro-line.csv"
 SPEED, STOP = 18.0, 114.0
 VARIABLES = ["forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "distance", "alignment",
-             "design_curvature", "design_cant"]
+             "design_curvature", "design_cant", "ws_roll_rate"]
 
 
 def run(curved: bool, **extra) -> dict[str, np.ndarray]:
@@ -81,6 +81,44 @@ def test_told_the_design_the_estimate_is_nearly_the_straight_tracks(curved, stra
     for band in ("whole", "D1", "D2"):
         assert line[band]["Jrel"] < paper[band]["Jrel"], band
     assert nothing["whole"]["Jrel"] > 10 * flat["whole"]["Jrel"]
+
+
+def test_the_design_fitted_from_the_sensors(curved):
+    """Design unknown: `fit_design` finds the line's eight transitions from the wheelset's roll
+    and yaw gyroscopes and accelerometer (the file's rows as the oracle: ends within 4 m,
+    curvature and cant changes within 5 % and 8 mm), and told that design the default's D1 is
+    within the paper's 0.48 and D2 near its 0.26 (0.16 / 0.27 measured), where told nothing
+    they are 1.0 and 1.6."""
+    got = ta.fit_design(curved["forward_speed"], curved["ws_yaw_rate"], curved["ws_roll_rate"],
+                        curved["ws_acc_y"], step=1e-3)
+    rows = line_rows()
+    ends = [(rows[i, 0], rows[i + 1, 0], rows[i + 1, 1] - rows[i, 1], rows[i + 1, 2] - rows[i, 2])
+            for i in range(len(rows) - 1) if rows[i + 1, 1] != rows[i, 1]]
+    assert len(got["transitions"]) == len(ends) == 8
+    for t, (a, b, dk, dc) in zip(got["transitions"], ends):
+        assert abs(t["start"] - a) < 4 and abs(t["end"] - b) < 4, (t, a, b)
+        assert t["curvature"] == pytest.approx(dk, rel=0.05), (t, dk)
+        assert abs(t["cant"] - dc) < 0.008, (t, dc)
+    # The per-sample design is the rows' line at the estimator's distance.
+    assert np.max(np.abs(got["distance"] - curved["distance"])) < 1e-6
+    out = ta.estimate(curved["forward_speed"], curved["ws_acc_y"], curved["ws_yaw_rate"],
+                      curved["frame_acc_y"], step=1e-3, design_curvature=got["design_curvature"],
+                      design_cant=got["design_cant"])
+    m = ta.band_metrics(out["distance"], out["alignment"], curved["distance"], curved["alignment"])
+    _, nothing = estimate(curved, design=False)
+    assert m["D1"]["Jrel"] < 0.48
+    assert m["D2"]["Jrel"] < 0.35
+    assert m["whole"]["Jrel"] < nothing["whole"]["Jrel"] / 20
+
+
+def test_fit_design_names_what_is_wrong(curved):
+    v = curved["forward_speed"]
+    with pytest.raises(ValueError, match="at least 200 m"):
+        ta.fit_design(v[:5000], v[:5000], v[:5000], v[:5000], step=1e-3)
+    with pytest.raises(ValueError, match="acc_y has 10 samples"):
+        ta.fit_design(v, v, v, v[:10], step=1e-3)
+    with pytest.raises(ValueError, match="rounding"):
+        ta.fit_design(v, v, v, v, step=1e-3, rounding=-1.0)
 
 
 # The FMU-against-bindings window: 20 s from 140 m on, the first curve's transition in it.

@@ -8,6 +8,7 @@
 //! | `BANDS` | the studies' `metrics::BANDS` | the band edges every report uses |
 //! | `simulate` | the co-simulation master, one FMU | `orchestrator simulate` of that FMU |
 //! | `fit` | `alignment_studies::cli::fit` with the command's own parser | `alignment-studies fit` |
+//! | `fit_design` | `design_line::fit` | the design line of a record whose design is not known |
 //!
 //! Why a thin layer: every number comes from the same code the FMU and the CLI run, so the
 //! bindings add conversions and nothing else. Input arrays are read where numpy holds them (no
@@ -16,6 +17,7 @@
 //! failed.
 
 mod convert;
+mod design;
 mod estimate;
 mod fit;
 mod metrics;
@@ -32,6 +34,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(metrics::bandpass, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(design::fit_design, m)?)?;
     m.add("BANDS", metrics::bands())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -44,6 +44,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod csv;
+pub mod fit;
 
 use std::path::Path;
 

@@ -10,7 +10,9 @@ co-simulation master), called over numpy arrays without copying them:
   :data:`BANDS`, their wavelength edges;
 - :func:`simulate`: one FMU (the RailVehicle FMU) run by the master, returned as arrays;
 - :func:`fit`: ``alignment-studies fit``, the estimator fitted to a vehicle FMU or to
-  recordings against a reference, into a new directory.
+  recordings against a reference, into a new directory;
+- :func:`fit_design`: the design line (curves, transitions, cant) of a record whose design is
+  not known, fitted from its wheelset gyroscopes and accelerometer, to give :func:`estimate`.
 
 Bad input raises ``ValueError`` with the library's message; a failed run ``RuntimeError``.
 The fleet pipeline on Dask is :mod:`track_alignment.fleet`.
@@ -24,11 +26,12 @@ from ._native import (
     bandpass,
     estimate,
     fit,
+    fit_design,
     parameters,
     simulate,
 )
 
 __all__ = [
-    "BANDS", "EstimatorState", "__version__", "band_metrics", "bandpass", "estimate", "fit", "parameters",
+    "BANDS", "EstimatorState", "__version__", "band_metrics", "bandpass", "estimate", "fit", "fit_design", "parameters",
     "simulate",
 ]

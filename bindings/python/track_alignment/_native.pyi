@@ -110,3 +110,23 @@ def fit(
     and ``model_adjustment.svg``). The options are the command's, checked by its parser; bad
     input raises ``ValueError`` naming the file or option, and leaves nothing at ``out``.
     Returns the report (Markdown)."""
+
+def fit_design(
+    speed: ArrayLike,
+    ws_yaw_rate: ArrayLike,
+    ws_roll_rate: ArrayLike,
+    ws_acc_y: ArrayLike,
+    *,
+    step: float,
+    rounding: float = 10.0,
+    half_gauge: float | None = None,
+    gravity: float | None = None,
+) -> dict[str, Any]:
+    """The design line of a record whose design is not known, fitted from its wheelset roll and
+    yaw gyroscopes and axle-box accelerometer (the whole record, offline; docs/accuracy.md,
+    "Curves"): ``design_curvature``, ``design_cant`` and ``distance`` per sample, at the
+    estimator's distance, to give :func:`estimate`; ``rows`` (distance, curvature, cant: a line
+    file's rows) and ``transitions`` (dicts ``start``, ``end``, ``curvature``, ``cant``).
+    ``half_gauge`` and ``gravity`` default to the shipped design-response model's. The record
+    must start on a straight and be at least 200 m long; curves with less than about 6 mm of cant
+    are not found."""

@@ -5,7 +5,9 @@
 //! Each seed's vehicle run is recorded once on the line and once straight (the same track seed
 //! lays the same irregularities at the same distances), and both estimators process them
 //! offline as the FMU steps: on the line told the design (`design_curvature`, `design_cant`,
-//! the mode an infrastructure manager runs), and the default once more told nothing. The
+//! the mode an infrastructure manager runs), told the design fitted from the sensors
+//! (`design_line::fit`, for a line whose design is not known), and the default once more told
+//! nothing. The
 //! curves of radius 500 m and more are also judged on their own stretches, against the same
 //! stretches of the straight run.
 
@@ -14,6 +16,8 @@ use super::records::{Output, Record, estimate, estimate_learned, record_table, r
 use super::runs::{Fmus, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
+use fmu_estimator::offline::Sample;
+use fmu_vehicle::line::fit;
 use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -51,6 +55,9 @@ pub struct CurveRun {
     pub known: [BandMetrics; 2],
     /// The line, the default told nothing.
     pub untold: BandMetrics,
+    /// The line, the default told the design fitted from the sensors (`design_line::fit`,
+    /// the mode for a line whose design is not known): the paper's filter, the default.
+    pub fitted: [BandMetrics; 2],
     /// The wide curves' stretches, the default: straight, then design known (each the mean of
     /// the two stretches' Jrel, whole band).
     pub wide: [f64; 2],
@@ -89,12 +96,14 @@ fn record(fmus: &Fmus, seed: u32, lay: Lay) -> Result<Record, Error> {
         }
     }
     let stop = if lay == Lay::Tight { TIGHT_RUN } else { RUN };
+    // The roll gyroscope (its own noise stream: no other signal changes) for the design fit.
+    let roll = (lay == Lay::Line).then_some("ws_roll_rate");
     let (mut rec, table) = record_table(
         fmus,
         settings,
         stop,
         Some(&|_| SPEED),
-        None,
+        roll,
         &["design_curvature", "design_cant"],
     )?;
     let col = |n: &str| {
@@ -108,6 +117,37 @@ fn record(fmus: &Fmus, seed: u32, lay: Lay) -> Result<Record, Error> {
         s.design = [k[i], c[i]];
     }
     Ok(rec)
+}
+
+/// `rec` with the design fitted from its sensors in place of the line's (the vehicle model's
+/// gauge and gravity of the shipped design response, the line's default rounding).
+fn with_fitted_design(rec: &Record) -> Result<Record, Error> {
+    let model = fmu_estimator::design::DesignModel::shipped().map_err(Error::Input)?;
+    let column = |f: fn(&Sample) -> f64| -> Vec<f64> { rec.samples.iter().map(f).collect() };
+    let (speed, yaw, roll, acc) = (
+        column(|s| s.speed),
+        column(|s| s.ws_yaw_rate),
+        column(|s| s.ws_roll_rate),
+        column(|s| s.ws_acc_y),
+    );
+    let sensors = fit::Record {
+        step: 1e-3,
+        speed: &speed,
+        yaw_rate: &yaw,
+        roll_rate: &roll,
+        acc_y: &acc,
+    };
+    let rounding = fmu_vehicle::line::DEFAULT_ROUNDING;
+    let fitted =
+        fit::fit(&sensors, model.half_gauge, model.gravity, rounding).map_err(Error::Input)?;
+    let (_, design) = fitted
+        .at_samples(&sensors, rounding)
+        .map_err(Error::Input)?;
+    let mut out = rec.clone();
+    for (s, d) in out.samples.iter_mut().zip(design) {
+        s.design = d;
+    }
+    Ok(out)
 }
 
 /// The estimate of `settings` (`paper`: the paper's filter) over `rec`, the design removed
@@ -222,6 +262,13 @@ fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
             judged(&line, false, true, None)?,
         ],
         untold: judged(&line, false, false, None)?,
+        fitted: {
+            let fitted = with_fitted_design(&line)?;
+            [
+                judged(&fitted, true, true, None)?,
+                judged(&fitted, false, true, None)?,
+            ]
+        },
         wide: [wide(&straight, false)?, wide(&line, true)?],
         tight: tight(fmus, seed)?,
         flange: with_flanges(fmus, seed)?,
@@ -265,6 +312,11 @@ pub fn markdown(seeds: &[u32], runs: &[CurveRun]) -> String {
         "| the line, design known | {} | {} |\n",
         bands(runs, |r| &r.known[0]),
         bands(runs, |r| &r.known[1])
+    ));
+    s.push_str(&format!(
+        "| the line, design fitted from the sensors | {} | {} |\n",
+        bands(runs, |r| &r.fitted[0]),
+        bands(runs, |r| &r.fitted[1])
     ));
     s.push_str(&format!(
         "| the line, told nothing | | {} |\n",
