@@ -287,3 +287,40 @@ def test_the_smooth_command_reads_the_design_columns(curved, tmp_path):
     failed = cli.studies("smooth", path, "--out", out, "--set", f"line_file={LINE}", check=2)
     assert "both give the design line" in failed.stderr
     assert not out.exists()
+
+
+def test_the_smooth_command_fits_the_design_when_asked(curved, tmp_path):
+    """`smooth --fit-design` on a curved recording without design columns gives the bindings'
+    smoothed estimate told the design `fit_design` finds; it is refused, before writing, with
+    the design columns, with line_file, or without the roll gyroscope."""
+    import orchestrator_cli as cli
+
+    names = ["forward_speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate"]
+    t = np.arange(len(curved["distance"])) * 1e-3
+
+    def write(path, cols):
+        np.savetxt(path, np.column_stack([t] + [curved[k] for k in cols]), delimiter=",",
+                   header=",".join(["time"] + cols), comments="", fmt="%.17g")
+        return path
+
+    path = write(tmp_path / "recording.csv", names)
+    out = tmp_path / "smoothed.csv"
+    cli.studies("smooth", path, "--out", out, "--fit-design")
+    got = cli.read_results(out)["alignment_smoothed"]
+    d = ta.fit_design(curved["forward_speed"], curved["ws_yaw_rate"], curved["ws_roll_rate"],
+                      curved["ws_acc_y"], step=1e-3)
+    want = ta.estimate(*(curved[k] for k in names[:4]), step=1e-3, smooth=True,
+                       design_curvature=d["design_curvature"],
+                       design_cant=d["design_cant"])["alignment_smoothed"]
+    assert np.max(np.abs(got - want)) < 1e-6 * np.max(np.abs(want))
+    refused = [
+        (write(tmp_path / "with-design.csv", names + ["design_curvature", "design_cant"]), [],
+         "give one"),
+        (path, ["--set", f"line_file={LINE}"], "line_file gives the design"),
+        (write(tmp_path / "no-roll.csv", names[:4]), [], "needs the column ws_roll_rate"),
+    ]
+    for i, (rec, extra, message) in enumerate(refused):
+        out = tmp_path / f"refused-{i}.csv"
+        failed = cli.studies("smooth", rec, "--out", out, "--fit-design", *extra, check=2)
+        assert message in failed.stderr and rec.name in failed.stderr, failed.stderr
+        assert not out.exists()

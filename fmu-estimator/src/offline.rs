@@ -18,6 +18,8 @@ use fmi_abi::Values;
 use fmi_abi::variables::Start;
 use std::path::Path;
 
+pub mod fitted;
+
 /// One recorded step: the speed and the sensor samples at its end.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {

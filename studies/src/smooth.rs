@@ -82,8 +82,28 @@ pub enum RecordingError {
     },
 }
 
+/// A recording read: its times, step and samples, and which optional columns it had.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    /// The time column \[s\].
+    pub time: Vec<f64>,
+    /// Its constant step \[s\].
+    pub step: f64,
+    /// A sample per row.
+    pub samples: Vec<Sample>,
+    /// Whether it had `ws_roll_rate`.
+    pub roll_rate: bool,
+    /// Whether it had `design_curvature` and `design_cant`.
+    pub design: bool,
+}
+
 /// Reads the samples and the step from a CSV file.
 pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), RecordingError> {
+    read_recording(path).map(|r| (r.time, r.step, r.samples))
+}
+
+/// Reads a recording (CSV, or Parquet by the extension).
+pub fn read_recording(path: &Path) -> Result<Recorded, RecordingError> {
     let cols = orchestrator::csv::Csv::read_any(path).map_err(RecordingError::Read)?;
     let file = || path.to_path_buf();
     let find = |names: &[&str]| {
@@ -138,15 +158,17 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
             }),
         }
     };
-    if let Some(roll) = optional("ws_roll_rate")? {
+    let roll_rate = optional("ws_roll_rate")?;
+    if let Some(roll) = roll_rate {
         samples = Sample::with_roll_rate(samples, roll);
     }
-    match (optional("design_curvature")?, optional("design_cant")?) {
-        (None, None) => {}
+    let design = match (optional("design_curvature")?, optional("design_cant")?) {
+        (None, None) => false,
         (Some(k), Some(c)) => {
             for (s, (k, c)) in samples.iter_mut().zip(k.iter().zip(c)) {
                 s.design = [*k, *c];
             }
+            true
         }
         (k, _) => {
             return Err(RecordingError::Column {
@@ -161,8 +183,14 @@ pub fn read_samples(path: &Path) -> Result<(Vec<f64>, f64, Vec<Sample>), Recordi
                 ),
             });
         }
-    }
-    Ok((time.to_vec(), h, samples))
+    };
+    Ok(Recorded {
+        time: time.to_vec(),
+        step: h,
+        samples,
+        roll_rate: roll_rate.is_some(),
+        design,
+    })
 }
 
 /// The output CSV text, numbers written as in `results.csv` ([`orchestrator::record`]); `learned`, if
@@ -256,14 +284,16 @@ fn learned_columns(
 
 /// Filters and smooths `input`, writing `output` by the output policy ([`outfile`]: checked
 /// before the recording is read, written through a temporary file renamed into place); with
-/// `learned`, also the learned smoother saved in that file. A refused or failed write is
-/// [`crate::Error::Io`] (exit 1), bad input [`crate::Error::Input`] (exit 2).
+/// `learned`, also the learned smoother saved in that file; with `fit_design`, the design line
+/// fitted from the recording's sensors ([`offline::fitted`]) removed. A refused or failed
+/// write is [`crate::Error::Io`] (exit 1), bad input [`crate::Error::Input`] (exit 2).
 pub fn smooth_file(
     input: &Path,
     output: &Path,
     overrides: &[(String, String)],
     calibration: Option<&Path>,
     learned: Option<&Path>,
+    fit_design: bool,
     replace: Replace,
 ) -> Result<Processed, crate::Error> {
     let mut inputs = vec![input];
@@ -272,7 +302,13 @@ pub fn smooth_file(
     // Refused before any work: an input, a symlink, FIFO or device, someone else's file.
     let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
     outfile::check(output, &inputs, replace).map_err(refused)?;
-    let (time, h, samples) = read_samples(input)?;
+    let Recorded {
+        time,
+        step: h,
+        samples,
+        roll_rate,
+        design: design_given,
+    } = read_recording(input)?;
     let provenance = serde_json::json!({
         "command": "alignment-studies smooth",
         "version": env!("CARGO_PKG_VERSION"),
@@ -280,12 +316,34 @@ pub fn smooth_file(
         "settings": overrides,
         "calibration": calibration.map(|p| p.display().to_string()),
         "learned": learned.map(|p| p.display().to_string()),
+        "fit_design": fit_design,
     });
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;
-    let design_given = samples.iter().any(|s| s.design != [0.0; 2]);
-    offline::one_design(&config, design_given)
-        .map_err(|e| crate::Error::Input(format!("{}: {e}", input.display())))?;
+    let bad = |e: String| crate::Error::Input(format!("{}: {e}", input.display()));
+    offline::one_design(&config, design_given).map_err(|e| bad(e.to_string()))?;
+    let samples = if fit_design {
+        if config.line.is_some() {
+            return Err(bad(
+                "the setting line_file gives the design and --fit-design asks to fit it: give one"
+                    .into(),
+            ));
+        }
+        if design_given {
+            return Err(bad("it has the design (design_curvature, design_cant) and --fit-design asks to fit it: give one".into()));
+        }
+        if !roll_rate {
+            return Err(bad("--fit-design needs the column ws_roll_rate: the cant ramps the roll gyroscope sees place the transitions".into()));
+        }
+        let model = config.design.as_deref().ok_or_else(|| {
+            bad("--fit-design needs design_response_file (the vehicle's gauge and response), which is set empty".into())
+        })?;
+        offline::fitted::with_fitted_design(&samples, h, model)
+            .map_err(bad)?
+            .0
+    } else {
+        samples
+    };
     for n in notes {
         if let fmu_estimator::config::Note::Warning(m) = n {
             eprintln!("warning: {m}");

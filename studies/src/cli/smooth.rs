@@ -26,6 +26,11 @@ pub struct SmoothArgs {
     /// alignment_hybrid.
     #[arg(long)]
     pub learned: Option<PathBuf>,
+    /// The line's design is not known: fit it from the recording's sensors (needs
+    /// ws_roll_rate; not with design columns or line_file) and remove its response, as
+    /// track_alignment.fit_design does (docs/accuracy.md, "Curves").
+    #[arg(long)]
+    pub fit_design: bool,
     /// Replace an existing file at --out that this command did not write (never the input, a
     /// symlink, a FIFO or a directory).
     #[arg(long)]
@@ -55,6 +60,7 @@ pub fn execute(a: &SmoothArgs) -> Result<Report, Error> {
         &overrides,
         a.calibration.as_deref(),
         a.learned.as_deref(),
+        a.fit_design,
         guard.replace,
     )?;
 

@@ -16,8 +16,7 @@ use super::records::{Output, Record, estimate, estimate_learned, record_table, r
 use super::runs::{Fmus, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
-use fmu_estimator::offline::Sample;
-use fmu_vehicle::line::fit;
+use fmu_estimator::offline::fitted;
 use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -119,35 +118,15 @@ fn record(fmus: &Fmus, seed: u32, lay: Lay) -> Result<Record, Error> {
     Ok(rec)
 }
 
-/// `rec` with the design fitted from its sensors in place of the line's (the vehicle model's
-/// gauge and gravity of the shipped design response, the line's default rounding).
+/// `rec` with the design fitted from its sensors in place of the line's.
 fn with_fitted_design(rec: &Record) -> Result<Record, Error> {
     let model = fmu_estimator::design::DesignModel::shipped().map_err(Error::Input)?;
-    let column = |f: fn(&Sample) -> f64| -> Vec<f64> { rec.samples.iter().map(f).collect() };
-    let (speed, yaw, roll, acc) = (
-        column(|s| s.speed),
-        column(|s| s.ws_yaw_rate),
-        column(|s| s.ws_roll_rate),
-        column(|s| s.ws_acc_y),
-    );
-    let sensors = fit::Record {
-        step: 1e-3,
-        speed: &speed,
-        yaw_rate: &yaw,
-        roll_rate: &roll,
-        acc_y: &acc,
-    };
-    let rounding = fmu_vehicle::line::DEFAULT_ROUNDING;
-    let fitted =
-        fit::fit(&sensors, model.half_gauge, model.gravity, rounding).map_err(Error::Input)?;
-    let (_, design) = fitted
-        .at_samples(&sensors, rounding)
-        .map_err(Error::Input)?;
-    let mut out = rec.clone();
-    for (s, d) in out.samples.iter_mut().zip(design) {
-        s.design = d;
-    }
-    Ok(out)
+    let (samples, _) =
+        fitted::with_fitted_design(&rec.samples, 1e-3, &model).map_err(Error::Input)?;
+    Ok(Record {
+        samples,
+        ..rec.clone()
+    })
 }
 
 /// The estimate of `settings` (`paper`: the paper's filter) over `rec`, the design removed
