@@ -752,7 +752,10 @@ mod tests {
         let got = f.rows();
         assert_eq!(got.len(), rows.len(), "{got:?}");
         for (i, (g, r)) in got.iter().zip(&rows).enumerate() {
-            assert!((g.0 - expected(&rows, i)).abs() <= 0.5, "{g:?} against {r:?}");
+            assert!(
+                (g.0 - expected(&rows, i)).abs() <= 0.5,
+                "{g:?} against {r:?}"
+            );
             assert!((g.1 - r.1).abs() <= 0.01 / 400.0, "{g:?} against {r:?}");
             assert!((g.2 - r.2).abs() <= 0.002, "{g:?} against {r:?}");
         }
@@ -773,7 +776,10 @@ mod tests {
         let got = f.rows();
         assert_eq!(got.len(), rows.len(), "{got:?}");
         for (i, (g, r)) in got.iter().zip(&rows).enumerate() {
-            assert!((g.0 - expected(&rows, i)).abs() <= 2.0, "{g:?} against {r:?}");
+            assert!(
+                (g.0 - expected(&rows, i)).abs() <= 2.0,
+                "{g:?} against {r:?}"
+            );
             assert!((g.1 - r.1).abs() <= 0.03 / 400.0, "{g:?} against {r:?}");
             assert!((g.2 - r.2).abs() <= 0.005, "{g:?} against {r:?}");
         }
