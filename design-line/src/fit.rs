@@ -717,6 +717,19 @@ mod tests {
         }
     }
 
+    /// `f`'s rows against the line's `rows`, within `tol` (m, 1/m, m).
+    fn assert_rows(f: &Fitted, rows: &[(f64, f64, f64)], tol: [f64; 3]) {
+        let got = f.rows();
+        assert_eq!(got.len(), rows.len(), "{got:?}");
+        for (i, (g, r)) in got.iter().zip(rows).enumerate() {
+            let off = [g.0 - expected(rows, i), g.1 - r.1, g.2 - r.2];
+            assert!(
+                off.iter().zip(tol).all(|(o, t)| o.abs() <= t),
+                "{g:?} against {r:?}"
+            );
+        }
+    }
+
     fn fitted(r: &[Vec<f64>; 4]) -> Fitted {
         let rec = Record {
             step: H,
@@ -749,16 +762,7 @@ mod tests {
     fn an_exact_record_gives_back_its_line() {
         let (rows, line) = line();
         let f = fitted(&record(&line, 1100.0, |_| 0.0));
-        let got = f.rows();
-        assert_eq!(got.len(), rows.len(), "{got:?}");
-        for (i, (g, r)) in got.iter().zip(&rows).enumerate() {
-            assert!(
-                (g.0 - expected(&rows, i)).abs() <= 0.5,
-                "{g:?} against {r:?}"
-            );
-            assert!((g.1 - r.1).abs() <= 0.01 / 400.0, "{g:?} against {r:?}");
-            assert!((g.2 - r.2).abs() <= 0.002, "{g:?} against {r:?}");
-        }
+        assert_rows(&f, &rows, [0.5, 0.01 / 400.0, 0.002]);
         f.line(10.0).expect("the fit is a valid line");
     }
 
@@ -773,16 +777,7 @@ mod tests {
             ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         let f = fitted(&record(&line, 1100.0, noise));
-        let got = f.rows();
-        assert_eq!(got.len(), rows.len(), "{got:?}");
-        for (i, (g, r)) in got.iter().zip(&rows).enumerate() {
-            assert!(
-                (g.0 - expected(&rows, i)).abs() <= 2.0,
-                "{g:?} against {r:?}"
-            );
-            assert!((g.1 - r.1).abs() <= 0.03 / 400.0, "{g:?} against {r:?}");
-            assert!((g.2 - r.2).abs() <= 0.005, "{g:?} against {r:?}");
-        }
+        assert_rows(&f, &rows, [2.0, 0.03 / 400.0, 0.005]);
     }
 
     #[test]
