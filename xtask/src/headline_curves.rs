@@ -64,7 +64,7 @@ pub fn curves(v: &Value) -> Result<String> {
         text += &row(label, &cells);
     }
     text += "\nDesign not known: fitted from the whole record (track_alignment.fit_design, \
-             offline); D3 is lost to the curves' fitted levels. Told nothing, the curves swamp \
+             offline); D3 is lost to its transitions' ends. Told nothing, the curves swamp \
              the estimate; where the vehicle runs against its \
              flanges the estimate is not usable either, and outside_training says so \
              (docs/accuracy.md, \"Curves\").\n";
