@@ -324,3 +324,39 @@ def test_the_smooth_command_fits_the_design_when_asked(curved, tmp_path):
         failed = cli.studies("smooth", rec, "--out", out, "--fit-design", *extra, check=2)
         assert message in failed.stderr and rec.name in failed.stderr, failed.stderr
         assert not out.exists()
+
+
+def test_the_fleet_fits_the_design_of_each_pass_when_asked(curved, tmp_path):
+    """The fleet pipeline's `fit_design` option: a pass without design columns is estimated told
+    the design `fit_design` finds (bit for bit the bindings'); refused with the design columns,
+    without the roll gyroscope, and with `--set line_file` (exit 2 before any work)."""
+    import pandas as pd
+    from track_alignment import fleet
+
+    names = ["speed", "ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate", "distance"]
+    cols = {k: curved["forward_speed" if k == "speed" else k] for k in names}
+    t = np.arange(len(cols["speed"])) * 1e-3
+
+    def write(name, columns):
+        path = tmp_path / name
+        pd.DataFrame({"time": t, **columns}).to_parquet(path)
+        return str(path)
+
+    path = write("pass.parquet", cols)
+    _, got = fleet.estimate_recording(path, fit_design=True)
+    d = ta.fit_design(cols["speed"], cols["ws_yaw_rate"], cols["ws_roll_rate"], cols["ws_acc_y"],
+                      step=1e-3)
+    want = ta.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
+                       step=1e-3, ws_roll_rate=cols["ws_roll_rate"],
+                       design_curvature=d["design_curvature"], design_cant=d["design_cant"])
+    np.testing.assert_array_equal(got["alignment"], want["alignment"])
+    with_design = write("designed.parquet", {**cols, "design_curvature": curved["design_curvature"],
+                                             "design_cant": curved["design_cant"]})
+    no_roll = write("no-roll.parquet", {k: v for k, v in cols.items() if k != "ws_roll_rate"})
+    for bad, message in [(with_design, "give one"), (no_roll, "needs the column ws_roll_rate")]:
+        with pytest.raises(fleet.RecordingError, match=message):
+            fleet.estimate_recording(bad, fit_design=True)
+    out = tmp_path / "map"
+    assert fleet.main([path, "--out", str(out), "--fit-design", "--set", f"line_file={LINE}",
+                       "--no-plot"]) == 2
+    assert not out.exists()

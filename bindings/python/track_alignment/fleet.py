@@ -87,6 +87,8 @@ class Options:
     ds: float = 0.25
     trim: float = 10.0
     settings: Mapping[str, Any] | None = None
+    #: The line's design is not known: fit it from each pass (:func:`track_alignment.fit_design`).
+    fit_design: bool = False
 
 
 @dataclass
@@ -101,7 +103,7 @@ class Coverage:
 
 def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.ndarray]]:
     """One recording: its band-passed estimate on the line grid and its per-segment SDs [mm]."""
-    cols, out = estimate_recording(path, options.settings)
+    cols, out = estimate_recording(path, options.settings, fit_design=options.fit_design)
     position = cols["distance"] if "distance" in cols else out["distance"]
     if np.any(np.diff(position) < 0):
         raise RecordingError(f"{path}: the position (distance) goes backwards; one pass per recording, one direction")
@@ -115,13 +117,27 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
     return Coverage(first, bands, count), corrected(segment_sds(first, bands, options), 1)
 
 
-def estimate_recording(path: str, settings: Mapping[str, Any] | None = None) -> tuple[dict[str, np.ndarray], dict]:
+def estimate_recording(path: str, settings: Mapping[str, Any] | None = None, *,
+                       fit_design: bool = False) -> tuple[dict[str, np.ndarray], dict]:
     """The recording's columns and the estimator's outputs over them, at the recording's
-    nominal step (:func:`track_alignment.recordings.nominal_step`): the FMU's, bit for bit."""
+    nominal step (:func:`track_alignment.recordings.nominal_step`): the FMU's, bit for bit.
+    With ``fit_design``, told the design :func:`track_alignment.fit_design` fits from the
+    recording (it needs ``ws_roll_rate``, and no design columns of its own)."""
     cols, step = read_recording(path)
+    design = {"design_curvature": cols.get("design_curvature"), "design_cant": cols.get("design_cant")}
+    if fit_design:
+        if design["design_curvature"] is not None:
+            raise RecordingError(f"{path}: has design_curvature and design_cant, and fit_design asks to fit them: give one")
+        if cols.get("ws_roll_rate") is None:
+            raise RecordingError(f"{path}: fit_design needs the column ws_roll_rate (the cant ramps place the transitions)")
+        try:
+            fitted = _native.fit_design(cols["speed"], cols["ws_yaw_rate"], cols["ws_roll_rate"], cols["ws_acc_y"],
+                                        step=step)
+        except ValueError as e:
+            raise RecordingError(f"{path}: {e}") from None
+        design = {k: fitted[k] for k in design}
     out = _native.estimate(cols["speed"], cols["ws_acc_y"], cols["ws_yaw_rate"], cols["frame_acc_y"],
-                           step=step, ws_roll_rate=cols.get("ws_roll_rate"),
-                           design_curvature=cols.get("design_curvature"), design_cant=cols.get("design_cant"),
+                           step=step, ws_roll_rate=cols.get("ws_roll_rate"), **design,
                            settings=dict(settings or {}))
     return cols, out
 
@@ -241,7 +257,7 @@ def run(
 
     options = options or Options()
     files = expand(recordings)
-    check_settings(options.settings or {})
+    check_settings(options.settings or {}, options.fit_design)
     out = OutputDir(out_dir, COMMAND)
     out.check(OUTPUTS if plot else OUTPUTS[:2], inputs=[*files, *([truth] if truth is not None else [])])
     truth_sd = truth_sds(truth, options) if truth is not None else None
@@ -263,9 +279,11 @@ def run(
     return write(files, total, sds, options, out, truth_sd, plot)
 
 
-def check_settings(settings: Mapping[str, Any]) -> None:
+def check_settings(settings: Mapping[str, Any], fit_design: bool = False) -> None:
     """The estimator's own check of ``settings`` (names and values), on two samples in this
     process, so that a bad ``--set`` is one line here and not a traceback from every worker."""
+    if fit_design and "line_file" in settings:
+        raise ValueError("--set line_file gives the design and --fit-design asks to fit it: give one")
     if not settings:
         return
     z = np.zeros(2)
@@ -369,6 +387,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--workers", type=whole(1), help="LocalCluster workers, 1 or more (default: the machine's cores)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="estimator parameter")
     p.add_argument("--truth", help="a truth file (distance, alignment) to add the true SDs")
+    p.add_argument("--fit-design", action="store_true",
+                   help="the line's design is not known: fit it from each pass (needs ws_roll_rate)")
     p.add_argument("--no-plot", action="store_true", help="no map.png")
     a = p.parse_args(argv)
     client = None
@@ -378,9 +398,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise ValueError(f"--segment {a.segment} must be positive and --ds {a.ds} within 0-1.5 m (D1 starts at 3 m)")
         if a.scheduler and a.workers:
             raise ValueError("--workers sets up a LocalCluster; a --scheduler has its own workers")
-        options = Options(segment=a.segment, ds=a.ds, settings=settings)
+        options = Options(segment=a.segment, ds=a.ds, settings=settings, fit_design=a.fit_design)
         files = expand(a.recordings)
-        check_settings(settings)
+        check_settings(settings, a.fit_design)
         plot = not a.no_plot
         OutputDir(a.out, COMMAND).check(OUTPUTS if plot else OUTPUTS[:2],
                                        inputs=[*files, *([a.truth] if a.truth else [])])
