@@ -62,12 +62,11 @@
 //!   bias (at constant speed the two are the same column).
 //! - A curve with less than [`MIN_ROLL`] of cant (about 6 mm) is not found: its response stays
 //!   in the estimate.
-//! - Each end's move refits every amplitude: the cost grows as the record's length times the
-//!   number of transitions squared (measured on 2 cores: 2.1 km with 3-4 curves 0.1-0.25 s,
-//!   10 km with 18-20 curves 30-40 s); split a long record at straights. At most
-//!   [`MAX_RECORD`]. Fitting windows around groups of curves alone (400 m apart, 150 m
-//!   either side) was tried: on lines whose curves are closer it did not split, and the
-//!   windows' shorter straights cost the validation lines D2 0.165 -> 0.170, D3 1.18 -> 1.25.
+//! - Each end's move refits every amplitude, its products updated only over the moved ramp
+//!   (the Gram matrix's suffix sums, [`Ls`]), so the cost still grows faster than the length
+//!   (the number of transitions times the candidates' solves): on the vehicle's records at
+//!   18 m/s, 2.1 km 0.1 s and 10 km 7-8 s on 2 cores; `cargo bench -p design-line --bench fit`
+//!   prints it for synthetic records. At most [`MAX_RECORD`].
 //! - A sensor sample that is not a finite number holds the last good one; a spike is not
 //!   screened (the estimator's plausibility checks are not applied here).
 
@@ -430,16 +429,31 @@ fn ramp_integral(r: [f64; 2], s: f64, order: u8) -> f64 {
 }
 
 /// Least squares of one target on columns, of which one (a ramp's) is replaced at a time: the
-/// Gram matrix is updated by that column's products alone.
+/// Gram matrix is updated by that column's products alone, and those only over the stretch
+/// where the column changed (a ramp's new column differs from its old one over the ramp, and by
+/// a constant beyond it: the rest comes from each column's suffix sums), so a move costs the
+/// ramp's length, not the record's.
 #[derive(Clone)]
 struct Ls {
     y: Vec<f64>,
     yy: f64,
     cols: Vec<Vec<f64>>,
+    /// `suffix[i][s]`: the sum of column `i` from `s` on (one more entry, 0, at the end).
+    suffix: Vec<Vec<f64>>,
+    y_suffix: Vec<f64>,
     gram: Vec<Vec<f64>>,
     rhs: Vec<f64>,
     /// Columns before the ramps' (constant, trend).
     fixed: usize,
+}
+
+/// Sums from each index to the end, with a 0 after the last.
+fn suffix_sums(c: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; c.len() + 1];
+    for s in (0..c.len()).rev() {
+        out[s] = out[s + 1] + c[s];
+    }
+    out
 }
 
 impl Ls {
@@ -448,6 +462,8 @@ impl Ls {
             y: y.to_vec(),
             yy: dot(y, y),
             cols: Vec::new(),
+            suffix: Vec::new(),
+            y_suffix: suffix_sums(y),
             gram: Vec::new(),
             rhs: Vec::new(),
             fixed: fixed.len(),
@@ -467,10 +483,12 @@ impl Ls {
         row.push(dot(&col, &col));
         self.gram.push(row);
         self.rhs.push(dot(&col, &self.y));
+        self.suffix.push(suffix_sums(&col));
         self.cols.push(col);
     }
 
-    /// Replaces column `j`.
+    /// Replaces column `j`, every product computed anew (after a series of [`Ls::try_col`]s,
+    /// so that their rounding does not add up).
     fn set(&mut self, j: usize, col: Vec<f64>) {
         for i in 0..self.cols.len() {
             let x = if i == j {
@@ -482,6 +500,43 @@ impl Ls {
             self.gram[j][i] = x;
         }
         self.rhs[j] = dot(&col, &self.y);
+        self.suffix[j] = suffix_sums(&col);
+        self.cols[j] = col;
+    }
+
+    /// Replaces column `j` by updating the products over the stretch where it changed.
+    fn try_col(&mut self, j: usize, col: Vec<f64>) {
+        let old = &self.cols[j];
+        let n = col.len();
+        let Some(f) = (0..n).find(|&s| col[s] != old[s]) else {
+            return;
+        };
+        // From `g` on the change is the constant `tail` (to rounding: 1e-12 of the values).
+        let tail = col[n - 1] - old[n - 1];
+        let tolerance = 1e-12 * (1.0 + col[n - 1].abs());
+        let mut g = n;
+        while g > f && (col[g - 1] - old[g - 1] - tail).abs() <= tolerance {
+            g -= 1;
+        }
+        let diff = |s: usize| col[s] - old[s];
+        for i in 0..self.cols.len() {
+            if i == j {
+                continue;
+            }
+            let c = &self.cols[i];
+            let local: f64 = (f..g).map(|s| diff(s) * c[s]).sum();
+            let x = self.gram[i][j] + local + tail * self.suffix[i][g];
+            self.gram[i][j] = x;
+            self.gram[j][i] = x;
+        }
+        let with_old: f64 =
+            (f..g).map(|s| diff(s) * old[s]).sum::<f64>() + tail * self.suffix[j][g];
+        let with_self: f64 =
+            (f..g).map(|s| diff(s) * diff(s)).sum::<f64>() + tail * tail * (n - g) as f64;
+        self.gram[j][j] += 2.0 * with_old + with_self;
+        let with_y: f64 = (f..g).map(|s| diff(s) * self.y[s]).sum();
+        self.rhs[j] += with_y + tail * self.y_suffix[g];
+        self.suffix[j] = suffix_sums(&col);
         self.cols[j] = col;
     }
 
@@ -584,7 +639,7 @@ fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
                             r[e] = c;
                             for (ls, integral, _) in lss.iter_mut() {
                                 let col = if *integral { int_col(r) } else { ramp_col(r) };
-                                ls.set(ls.fixed + i, col);
+                                ls.try_col(ls.fixed + i, col);
                             }
                             let v = cost(lss);
                             if v < best.0 {
@@ -928,6 +983,44 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.contains("more than the fit's"), "{e}");
+    }
+
+    #[test]
+    fn a_moved_ramp_updates_the_products_as_computing_them_anew_does() {
+        let shape = Shape { rounding: 10.0 };
+        let n = 3000;
+        let s: Vec<f64> = (1..=n).map(|i| i as f64).collect();
+        let y: Vec<f64> = s.iter().map(|x| (x / 37.0).sin() + 1e-3 * x).collect();
+        let cols = |rs: &[[f64; 2]]| -> Vec<Vec<f64>> {
+            rs.iter()
+                .map(|r| s.iter().map(|&x| shape.integral(*r, x)).collect())
+                .collect()
+        };
+        let start = [[400.0, 460.0], [900.0, 1000.0], [2000.0, 2050.0]];
+        let mut moved = Ls::new(&y, vec![vec![1.0; n], s.clone()]);
+        for c in cols(&start) {
+            moved.push(c);
+        }
+        // Each end of the middle ramp, back and forth, as the refinement moves them.
+        for r in [
+            [890.0, 1000.0],
+            [890.0, 1012.0],
+            [903.0, 1012.0],
+            [903.0, 995.0],
+        ] {
+            moved.try_col(3, cols(&[r]).remove(0));
+            let mut anew = Ls::new(&y, vec![vec![1.0; n], s.clone()]);
+            for c in cols(&[start[0], r, start[2]]) {
+                anew.push(c);
+            }
+            for (a, b) in moved.gram.iter().flatten().zip(anew.gram.iter().flatten()) {
+                assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{a} against {b}");
+            }
+            for (a, b) in moved.rhs.iter().zip(&anew.rhs) {
+                assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{a} against {b}");
+            }
+            assert!((moved.rss() - anew.rss()).abs() <= 1e-6 * anew.rss());
+        }
     }
 
     #[test]
