@@ -63,7 +63,7 @@
 //! - A curve with less than [`MIN_ROLL`] of cant (about 6 mm) is not found: its response stays
 //!   in the estimate.
 //! - Each end's move refits every amplitude, its products updated only over the moved ramp
-//!   (the Gram matrix's suffix sums, [`Ls`]), so the cost still grows faster than the length
+//!   (suffix sums of the least squares' columns), so the cost still grows faster than the length
 //!   (the number of transitions times the candidates' solves): on the vehicle's records at
 //!   18 m/s, 2.1 km 0.1 s and 10 km 7-8 s on 2 cores; `cargo bench -p design-line --bench fit`
 //!   prints it for synthetic records. At most [`MAX_RECORD`].
