@@ -119,6 +119,10 @@ def test_fit_design_names_what_is_wrong(curved):
         ta.fit_design(v, v, v, v[:10], step=1e-3)
     with pytest.raises(ValueError, match="rounding"):
         ta.fit_design(v, v, v, v, step=1e-3, rounding=-1.0)
+    with pytest.raises(ValueError, match="design_response_file is empty"):
+        ta.fit_design(v, v, v, v, step=1e-3, design_response_file="")
+    with pytest.raises(ValueError, match="no-such-model.toml"):
+        ta.fit_design(v, v, v, v, step=1e-3, design_response_file="no-such-model.toml")
 
 
 # The FMU-against-bindings window: 20 s from 140 m on, the first curve's transition in it.
@@ -357,6 +361,9 @@ def test_the_fleet_fits_the_design_of_each_pass_when_asked(curved, tmp_path):
         with pytest.raises(fleet.RecordingError, match=message):
             fleet.estimate_recording(bad, fit_design=True)
     out = tmp_path / "map"
-    assert fleet.main([path, "--out", str(out), "--fit-design", "--set", f"line_file={LINE}",
-                       "--no-plot"]) == 2
-    assert not out.exists()
+    for setting in (f"line_file={LINE}", "design_response_file="):
+        assert fleet.main([path, "--out", str(out), "--fit-design", "--set", setting,
+                           "--no-plot"]) == 2
+        assert not out.exists()
+    # An empty line_file is the default (no line): not a second design.
+    fleet.check_settings({"line_file": ""}, fit_design=True)

@@ -3,7 +3,7 @@
 
 use crate::convert::{bad, slice};
 use design_line::fit::{self, Record};
-use fmu_estimator::design::DesignModel;
+use fmu_estimator::design::{DesignModel, SHIPPED_NAME};
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLike1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -12,9 +12,10 @@ use pyo3::types::{PyDict, PyList};
 /// accelerometer: `{"design_curvature", "design_cant", "distance"}` per sample (at the
 /// estimator's distance, `speed * step` per sample), `"rows"` (distance, curvature, cant: a line
 /// file's rows) and `"transitions"` (start, end, curvature and cant change). `half_gauge` and
-/// `gravity` default to the shipped design-response model's (the ML95).
+/// `gravity` default to those of the design-response model `design_response_file` names (the
+/// estimator's parameter: the shipped model's name or a file), the ML95's when not given.
 #[pyfunction]
-#[pyo3(signature = (speed, ws_yaw_rate, ws_roll_rate, ws_acc_y, *, step, rounding=design_line::DEFAULT_ROUNDING, half_gauge=None, gravity=None))]
+#[pyo3(signature = (speed, ws_yaw_rate, ws_roll_rate, ws_acc_y, *, step, rounding=design_line::DEFAULT_ROUNDING, half_gauge=None, gravity=None, design_response_file=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit_design<'py>(
     py: Python<'py>,
@@ -26,11 +27,17 @@ pub fn fit_design<'py>(
     rounding: f64,
     half_gauge: Option<f64>,
     gravity: Option<f64>,
+    design_response_file: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let (half_gauge, gravity) = match (half_gauge, gravity) {
         (Some(l), Some(g)) => (l, g),
         _ => {
-            let m = DesignModel::shipped().map_err(bad)?;
+            let m = match design_response_file.as_deref().map(str::trim) {
+                None | Some(SHIPPED_NAME) => DesignModel::shipped(),
+                Some("") => Err("design_response_file is empty: the fit needs the vehicle's gauge and gravity from a design-response model (or half_gauge and gravity)".to_string()),
+                Some(path) => DesignModel::read(std::path::Path::new(path)),
+            }
+            .map_err(bad)?;
             (
                 half_gauge.unwrap_or(m.half_gauge),
                 gravity.unwrap_or(m.gravity),

@@ -67,6 +67,11 @@
 //!   (the number of transitions times the candidates' solves): on the vehicle's records at
 //!   18 m/s, 2.1 km 0.1 s and 10 km 7-8 s on 2 cores; `cargo bench -p design-line --bench fit`
 //!   prints it for synthetic records. At most [`MAX_RECORD`].
+//! - A transition whose roll slope is below [`SLOPE`] (60 mm of cant over more than 267 m,
+//!   100 mm over more than 444 m) is not found.
+//! - The roll gyroscope's bias is taken as the median of the metres' roll rates: a record
+//!   of which transitions of one sign make up half or more (a short record of one long
+//!   transition) is mis-fitted.
 //! - A sensor sample that is not a finite number holds the last good one; a spike is not
 //!   screened (the estimator's plausibility checks are not applied here).
 
@@ -431,8 +436,9 @@ fn ramp_integral(r: [f64; 2], s: f64, order: u8) -> f64 {
 /// Least squares of one target on columns, of which one (a ramp's) is replaced at a time: the
 /// Gram matrix is updated by that column's products alone, and those only over the stretch
 /// where the column changed (a ramp's new column differs from its old one over the ramp, and by
-/// a constant beyond it: the rest comes from each column's suffix sums), so a move costs the
-/// ramp's length, not the record's.
+/// a constant beyond it: the rest comes from each column's suffix sums), so a move's products
+/// cost the ramp's length times the columns; building the column and its suffix sums still
+/// costs the record's length once.
 #[derive(Clone)]
 struct Ls {
     y: Vec<f64>,

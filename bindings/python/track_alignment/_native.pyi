@@ -121,12 +121,14 @@ def fit_design(
     rounding: float = 10.0,
     half_gauge: float | None = None,
     gravity: float | None = None,
+    design_response_file: str | None = None,
 ) -> dict[str, Any]:
     """The design line of a record whose design is not known, fitted from its wheelset roll and
     yaw gyroscopes and axle-box accelerometer (the whole record, offline; docs/accuracy.md,
     "Curves"): ``design_curvature``, ``design_cant`` and ``distance`` per sample, at the
     estimator's distance, to give :func:`estimate`; ``rows`` (distance, curvature, cant: a line
     file's rows) and ``transitions`` (dicts ``start``, ``end``, ``curvature``, ``cant``).
-    ``half_gauge`` and ``gravity`` default to the shipped design-response model's. The record
+    ``half_gauge`` and ``gravity`` default to those of the design-response model
+    ``design_response_file`` names (the shipped one when None; a file path). The record
     must start on a straight and be at least 200 m long; curves with less than about 6 mm of cant
     are not found."""

@@ -132,7 +132,8 @@ def estimate_recording(path: str, settings: Mapping[str, Any] | None = None, *,
             raise RecordingError(f"{path}: fit_design needs the column ws_roll_rate (the cant ramps place the transitions)")
         try:
             fitted = _native.fit_design(cols["speed"], cols["ws_yaw_rate"], cols["ws_roll_rate"], cols["ws_acc_y"],
-                                        step=step)
+                                        step=step,
+                                        design_response_file=(settings or {}).get("design_response_file"))
         except ValueError as e:
             raise RecordingError(f"{path}: {e}") from None
         design = {k: fitted[k] for k in design}
@@ -282,8 +283,11 @@ def run(
 def check_settings(settings: Mapping[str, Any], fit_design: bool = False) -> None:
     """The estimator's own check of ``settings`` (names and values), on two samples in this
     process, so that a bad ``--set`` is one line here and not a traceback from every worker."""
-    if fit_design and "line_file" in settings:
+    if fit_design and str(settings.get("line_file", "")).strip():
         raise ValueError("--set line_file gives the design and --fit-design asks to fit it: give one")
+    if fit_design and "design_response_file" in settings and not str(settings["design_response_file"]).strip():
+        raise ValueError("--fit-design needs design_response_file (the vehicle's response to the design), "
+                         "which --set makes empty")
     if not settings:
         return
     z = np.zeros(2)
@@ -331,7 +335,8 @@ def write(files, total: Coverage, sds, options: Options, out: OutputDir, truth_s
     if plot:
         out.stage("map.png", lambda tmp: plot_map(segments, tmp))
     out.commit({"recordings": [str(f) for f in files], "segment_m": options.segment, "ds_m": options.ds,
-                "trim_m": options.trim, "settings": {k: str(v) for k, v in (options.settings or {}).items()}})
+                "trim_m": options.trim, "settings": {k: str(v) for k, v in (options.settings or {}).items()},
+                "fit_design": options.fit_design})
     return segments
 
 
