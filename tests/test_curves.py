@@ -308,8 +308,8 @@ def test_the_smooth_command_fits_the_design_when_asked(curved, tmp_path):
         return path
 
     path = write(tmp_path / "recording.csv", names)
-    out = tmp_path / "smoothed.csv"
-    cli.studies("smooth", path, "--out", out, "--fit-design")
+    out, line = tmp_path / "smoothed.csv", tmp_path / "fitted-line.csv"
+    cli.studies("smooth", path, "--out", out, "--fit-design", "--design-out", line)
     got = cli.read_results(out)["alignment_smoothed"]
     d = ta.fit_design(curved["forward_speed"], curved["ws_yaw_rate"], curved["ws_roll_rate"],
                       curved["ws_acc_y"], step=1e-3)
@@ -317,6 +317,24 @@ def test_the_smooth_command_fits_the_design_when_asked(curved, tmp_path):
                        design_curvature=d["design_curvature"],
                        design_cant=d["design_cant"])["alignment_smoothed"]
     assert np.max(np.abs(got - want)) < 1e-6 * np.max(np.abs(want))
+    # The fitted line as a line file: its rows are fit_design's, and the estimator given it as
+    # line_file (as the FMU would be on a later run) gives what the fitted arrays give.
+    rows = np.loadtxt(line, delimiter=",", comments="#", skiprows=2)
+    np.testing.assert_array_equal(rows, np.array(d["rows"]))
+    from_file = ta.estimate(*(curved[k] for k in names[:4]), step=1e-3,
+                            settings={"line_file": str(line)})["alignment"]
+    from_arrays = ta.estimate(*(curved[k] for k in names[:4]), step=1e-3,
+                              design_curvature=d["design_curvature"],
+                              design_cant=d["design_cant"])["alignment"]
+    assert np.max(np.abs(from_file - from_arrays)) < 1e-9
+    # Rerun: the command replaces its own line file; never someone else's, nor without --fit-design.
+    cli.studies("smooth", path, "--out", out, "--fit-design", "--design-out", line)
+    foreign = tmp_path / "foreign.csv"
+    foreign.write_text("distance,curvature,cant\n0,0,0\n")
+    failed = cli.studies("smooth", path, "--out", out, "--fit-design", "--design-out", foreign,
+                         check=1)
+    assert "foreign.csv" in failed.stderr and foreign.read_text().startswith("distance")
+    cli.studies("smooth", path, "--out", out, "--design-out", line, check=2)
     refused = [
         (write(tmp_path / "with-design.csv", names + ["design_curvature", "design_cant"]), [],
          "give one"),

@@ -282,18 +282,45 @@ fn learned_columns(
     ))
 }
 
+/// The fitted design as a line file (docs/vehicle-fmu.md: `distance,curvature,cant`), numbers
+/// written so that they read back exactly; its first line is [`LINE_MARK`].
+pub fn line_csv(input: &Path, rows: &[(f64, f64, f64)]) -> String {
+    let mut text = format!(
+        "{} from {} (design_line::fit; rows linear between, rounded 10 m as the line's default)\ndistance,curvature,cant\n",
+        String::from_utf8_lossy(LINE_MARK),
+        input.display()
+    );
+    for (d, k, c) in rows {
+        text += &format!("{d:?},{k:?},{c:?}\n");
+    }
+    text
+}
+
+/// How every line file `--design-out` writes begins: an existing file that starts so was
+/// written by it, and is replaced without `--force`.
+pub const LINE_MARK: &[u8] = b"# The design line alignment-studies smooth --fit-design fitted";
+
+/// `--fit-design`, and where `--design-out` writes the fitted line (a line file) with its output
+/// policy.
+#[derive(Debug, Clone, Copy)]
+pub struct FitDesign<'a> {
+    /// The line file to write, if any, and how an existing one may be replaced.
+    pub line_out: Option<(&'a Path, Replace<'a>)>,
+}
+
 /// Filters and smooths `input`, writing `output` by the output policy ([`outfile`]: checked
 /// before the recording is read, written through a temporary file renamed into place); with
 /// `learned`, also the learned smoother saved in that file; with `fit_design`, the design line
-/// fitted from the recording's sensors ([`offline::fitted`]) removed. A refused or failed
-/// write is [`crate::Error::Io`] (exit 1), bad input [`crate::Error::Input`] (exit 2).
+/// fitted from the recording's sensors ([`offline::fitted`]) removed, and written as a line
+/// file where it says. A refused or failed write is [`crate::Error::Io`] (exit 1), bad input
+/// [`crate::Error::Input`] (exit 2).
 pub fn smooth_file(
     input: &Path,
     output: &Path,
     overrides: &[(String, String)],
     calibration: Option<&Path>,
     learned: Option<&Path>,
-    fit_design: bool,
+    fit_design: Option<FitDesign>,
     replace: Replace,
 ) -> Result<Processed, crate::Error> {
     let mut inputs = vec![input];
@@ -302,6 +329,12 @@ pub fn smooth_file(
     // Refused before any work: an input, a symlink, FIFO or device, someone else's file.
     let refused = |e: std::io::Error| crate::Error::Io(e.to_string());
     outfile::check(output, &inputs, replace).map_err(refused)?;
+    let line_out = fit_design.and_then(|f| f.line_out);
+    let mut line_inputs = inputs.clone();
+    line_inputs.push(output);
+    if let Some((path, policy)) = line_out {
+        outfile::check(path, &line_inputs, policy).map_err(refused)?;
+    }
     let Recorded {
         time,
         step: h,
@@ -316,13 +349,13 @@ pub fn smooth_file(
         "settings": overrides,
         "calibration": calibration.map(|p| p.display().to_string()),
         "learned": learned.map(|p| p.display().to_string()),
-        "fit_design": fit_design,
+        "fit_design": fit_design.is_some(),
     });
     let values = offline::settings(overrides)?;
     let (config, notes) = offline::config(&values, calibration)?;
     let bad = |e: String| crate::Error::Input(format!("{}: {e}", input.display()));
     offline::one_design(&config, design_given).map_err(|e| bad(e.to_string()))?;
-    let samples = if fit_design {
+    let samples = if fit_design.is_some() {
         if config.line.is_some() {
             return Err(bad(
                 "the setting line_file gives the design and --fit-design asks to fit it: give one"
@@ -338,9 +371,13 @@ pub fn smooth_file(
         let model = config.design.as_deref().ok_or_else(|| {
             bad("--fit-design needs design_response_file (the vehicle's gauge and response), which is set empty".into())
         })?;
-        offline::fitted::with_fitted_design(&samples, h, model)
-            .map_err(bad)?
-            .0
+        let (samples, fitted) =
+            offline::fitted::with_fitted_design(&samples, h, model).map_err(bad)?;
+        if let Some((path, policy)) = line_out {
+            let text = line_csv(input, &fitted.rows());
+            outfile::write_bytes(path, &line_inputs, policy, text.as_bytes()).map_err(refused)?;
+        }
+        samples
     } else {
         samples
     };

@@ -31,6 +31,11 @@ pub struct SmoothArgs {
     /// track_alignment.fit_design does (docs/accuracy.md, "Curves").
     #[arg(long)]
     pub fit_design: bool,
+    /// With --fit-design, also write the fitted design as a line file (distance,curvature,cant),
+    /// which the estimator FMU takes as line_file on later runs over the same line. An
+    /// existing file is replaced only if this command wrote it, or with --force.
+    #[arg(long, value_name = "LINE.csv", requires = "fit_design")]
+    pub design_out: Option<PathBuf>,
     /// Replace an existing file at --out that this command did not write (never the input, a
     /// symlink, a FIFO or a directory).
     #[arg(long)]
@@ -54,13 +59,29 @@ pub fn execute(a: &SmoothArgs) -> Result<Report, Error> {
     // Checked before the recording is read, and again at the rename.
     let mark = (!orchestrator::parquet::is_parquet(&a.out)).then_some(crate::smooth::CSV_MARK);
     let guard = super::guard(&a.out, &inputs, a.force, mark)?;
+    let line_guard = match &a.design_out {
+        Some(path) => {
+            let mut with_out = inputs.clone();
+            with_out.push(a.out.as_path());
+            Some(super::guard(
+                path,
+                &with_out,
+                a.force,
+                Some(crate::smooth::LINE_MARK),
+            )?)
+        }
+        None => None,
+    };
+    let fit_design = a.fit_design.then(|| crate::smooth::FitDesign {
+        line_out: line_guard.as_ref().map(|g| (g.path.as_path(), g.replace)),
+    });
     let processed = crate::smooth::smooth_file(
         &a.input,
         &a.out,
         &overrides,
         a.calibration.as_deref(),
         a.learned.as_deref(),
-        a.fit_design,
+        fit_design,
         guard.replace,
     )?;
 
