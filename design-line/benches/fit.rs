@@ -5,7 +5,7 @@
 //! the ratio to the 2 km record's per km (1: linear in the length).
 
 use design_line::DesignLine;
-use design_line::fit::{Record, fit};
+use design_line::fit::{Record, fit, synthetic};
 use std::time::Instant;
 
 const V: f64 = 18.0;
@@ -32,22 +32,7 @@ fn line(length: f64) -> DesignLine {
 }
 
 fn record(length: f64) -> [Vec<f64>; 4] {
-    let line = line(length);
-    let noise = |i: usize| {
-        let x = (i as u64)
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
-    let mut out: [Vec<f64>; 4] = Default::default();
-    for i in 0..(length / (V * H)) as usize {
-        let d = line.at((i + 1) as f64 * V * H);
-        out[0].push(V);
-        out[1].push(V * d.curvature + 1e-3 * noise(i));
-        out[2].push(-V * d.cant_ds / 1.5 + 1e-3 * noise(i + 7));
-        out[3].push(V * V * d.curvature - 9.81 * d.cant / 1.5 + 0.05 * noise(i + 13));
-    }
-    out
+    synthetic::record(&line(length), V, H, length, 0.75, synthetic::noise)
 }
 
 fn main() {

@@ -798,6 +798,44 @@ fn initial(roll: &[f64]) -> Vec<[f64; 2]> {
     out
 }
 
+/// Records of a rigid body following a line exactly: the unit tests' and the bench's oracle.
+pub mod synthetic {
+    use crate::DesignLine;
+
+    /// The sensors (speed, yaw rate, roll rate, lateral acceleration) of a body following
+    /// `line` exactly at speed `v`, every `step` seconds for `length` metres, with `half_gauge`
+    /// and standard gravity, plus `noise(i)` times 1e-3 rad/s on the gyroscopes and 0.05 m/s2
+    /// on the accelerometer.
+    pub fn record(
+        line: &DesignLine,
+        v: f64,
+        step: f64,
+        length: f64,
+        half_gauge: f64,
+        noise: impl Fn(usize) -> f64,
+    ) -> [Vec<f64>; 4] {
+        let g = 9.81;
+        let mut out: [Vec<f64>; 4] = Default::default();
+        for i in 0..(length / (v * step)) as usize {
+            let d = line.at((i + 1) as f64 * v * step);
+            out[0].push(v);
+            out[1].push(v * d.curvature + 1e-3 * noise(i));
+            out[2].push(-v * d.cant_ds / (2.0 * half_gauge) + 1e-3 * noise(i + 7));
+            out[3]
+                .push(v * v * d.curvature - g * d.cant / (2.0 * half_gauge) + 0.05 * noise(i + 13));
+        }
+        out
+    }
+
+    /// A deterministic pseudo-random sequence in \[-1, 1\] (no dependency for a test).
+    pub fn noise(i: usize) -> f64 {
+        let x = (i as u64)
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -807,30 +845,17 @@ mod tests {
     const L: f64 = 0.75;
     const G: f64 = 9.81;
 
-    /// The sensors a rigid body following `line` exactly at `V` carries, plus `noise(i)` on
-    /// each (rad/s, m/s2 scaled).
     fn record(line: &DesignLine, length: f64, noise: impl Fn(usize) -> f64) -> [Vec<f64>; 4] {
         record_at(V, line, length, noise)
     }
 
-    /// The same at speed `v`.
     fn record_at(
         v: f64,
         line: &DesignLine,
         length: f64,
         noise: impl Fn(usize) -> f64,
     ) -> [Vec<f64>; 4] {
-        let samples = (length / (v * H)) as usize;
-        let mut out: [Vec<f64>; 4] = Default::default();
-        for i in 0..samples {
-            let s = (i + 1) as f64 * v * H;
-            let d = line.at(s);
-            out[0].push(v);
-            out[1].push(v * d.curvature + 1e-3 * noise(i));
-            out[2].push(-v * d.cant_ds / (2.0 * L) + 1e-3 * noise(i + 7));
-            out[3].push(v * v * d.curvature - G * d.cant / (2.0 * L) + 0.05 * noise(i + 13));
-        }
-        out
+        synthetic::record(line, v, H, length, L, noise)
     }
 
     /// Where the fit puts row `i` of a line whose vehicle follows it without lag (the rigid
@@ -895,14 +920,7 @@ mod tests {
     #[test]
     fn noise_moves_the_ends_by_metres_at_most() {
         let (rows, line) = line();
-        // A deterministic pseudo-random sequence in [-1, 1] (no dependency for a test).
-        let noise = |i: usize| {
-            let x = (i as u64)
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((x >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
-        let f = fitted(&record(&line, 1100.0, noise));
+        let f = fitted(&record(&line, 1100.0, synthetic::noise));
         assert_rows(&f, &rows, [2.0, 0.03 / 400.0, 0.005]);
     }
 
