@@ -5,7 +5,7 @@
 //! the ratio to the 2 km record's per km (1: linear in the length).
 
 use design_line::DesignLine;
-use design_line::fit::{Record, fit, synthetic};
+use design_line::fit::{fit, synthetic};
 use std::time::Instant;
 
 const V: f64 = 18.0;
@@ -41,13 +41,7 @@ fn main() {
     println!("|---|---|---|---|---|");
     for km in [2.0, 5.0, 10.0] {
         let r = record(km * 1000.0);
-        let rec = Record {
-            step: H,
-            speed: &r[0],
-            yaw_rate: &r[1],
-            roll_rate: &r[2],
-            acc_y: &r[3],
-        };
+        let rec = synthetic::view(&r, H);
         let mut times = Vec::new();
         let mut found = 0;
         for _ in 0..3 {

@@ -230,14 +230,12 @@ pub fn fit(
         ));
     }
     let m = Metres::new(record)?;
-    let ramps = find(&m, rounding);
+    let Some((ramps, heading)) = find(&m, rounding) else {
+        return Ok(Fitted {
+            transitions: Vec::new(),
+        });
+    };
     let shape = Shape { rounding };
-    let s = m.positions();
-    let heading = Ls::new(&m.heading, vec![vec![1.0; m.len()], m.time.clone()]);
-    let mut heading = heading;
-    for r in &ramps {
-        heading.push(s.iter().map(|&x| shape.integral(*r, x)).collect());
-    }
     let dk = heading.amplitudes();
     // q = V^2 k - a per metre (k at the metre's middle), integrated like the gyroscopes.
     let mut q_integral = Vec::with_capacity(m.len());
@@ -252,12 +250,13 @@ pub fn fit(
         sum += m.speed2[i] * k - m.acc[i];
         q_integral.push(sum);
     }
-    let mut q = Ls::new(&q_integral, vec![vec![1.0; m.len()], s.clone()]);
-    for r in &ramps {
-        q.push(s.iter().map(|&x| shape.integral(*r, x)).collect());
+    // Fitted on the heading fit's own ramp columns (the ramps' integrals).
+    let mut q = Ls::new(&q_integral, vec![vec![1.0; m.len()], m.positions()]);
+    for col in &heading.cols[heading.fixed..] {
+        q.push(col.clone());
     }
     let dq = q.amplitudes();
-    let transitions = ramps
+    let mut transitions: Vec<Transition> = ramps
         .iter()
         .zip(dk.iter().zip(&dq))
         .map(|(r, (k, q))| Transition {
@@ -266,8 +265,7 @@ pub fn fit(
             curvature: *k,
             cant: q * 2.0 * half_gauge / gravity,
         })
-        .collect::<Vec<Transition>>();
-    let mut transitions = transitions;
+        .collect();
     for i in 1..transitions.len() {
         transitions[i].start = transitions[i].start.max(transitions[i - 1].end);
     }
@@ -600,8 +598,9 @@ fn cholesky_solve(g: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
     x
 }
 
-/// Steps 1-4: the transitions' ends.
-fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
+/// Steps 1-4: the transitions' ends, and the heading's fit on them (its ramp columns final), or
+/// `None` when there is no transition.
+fn find(m: &Metres, rounding: f64) -> Option<(Vec<[f64; 2]>, Ls)> {
     let shape = Shape { rounding };
     let s = m.positions();
     let n = m.len();
@@ -618,6 +617,8 @@ fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
     let last = n as f64 - 2.0;
     // Moves each end within `reach`, one metre at a time, to minimise `cost`; the ends stay
     // in order: neither past its neighbours' nor making a transition shorter than MIN_LENGTH.
+    let cost =
+        |lss: &Vec<(Ls, bool, f64)>| -> f64 { lss.iter().map(|(ls, _, w)| w * ls.rss()).sum() };
     let refine = |ramps: &mut Vec<[f64; 2]>, reach: f64, lss: &mut Vec<(Ls, bool, f64)>| {
         for _ in 0..PASSES {
             for i in 0..ramps.len() {
@@ -633,9 +634,6 @@ fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
                             last
                         };
                         (ramps[i][0] + MIN_LENGTH, next.min(last))
-                    };
-                    let cost = |lss: &Vec<(Ls, bool, f64)>| -> f64 {
-                        lss.iter().map(|(ls, _, w)| w * ls.rss()).sum()
                     };
                     let mut best = (cost(lss), cur);
                     let mut c = cur - reach;
@@ -707,7 +705,7 @@ fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
         refine_roll(&mut ramps);
     }
     if ramps.is_empty() {
-        return ramps;
+        return None;
     }
     let roll = roll_ls(&ramps);
     let mut heading = Ls::new(&m.heading, vec![vec![1.0; n], m.time.clone()]);
@@ -721,7 +719,9 @@ fn find(m: &Metres, rounding: f64) -> Vec<[f64; 2]> {
         (heading, true, HEADING_WEIGHT * weight(h0)),
     ];
     refine(&mut ramps, JOINT_REFINE, &mut lss);
-    ramps
+    // `refine` leaves every column computed anew for the ramps' final ends.
+    let (heading, _, _) = lss.pop().expect("the heading's fit is the last");
+    Some((ramps, heading))
 }
 
 /// The roll angle less a constant gyroscope bias times the time, the bias the median of the
@@ -827,6 +827,17 @@ pub mod synthetic {
         out
     }
 
+    /// The fit's view of such a record's columns.
+    pub fn view(columns: &[Vec<f64>; 4], step: f64) -> super::Record<'_> {
+        super::Record {
+            step,
+            speed: &columns[0],
+            yaw_rate: &columns[1],
+            roll_rate: &columns[2],
+            acc_y: &columns[3],
+        }
+    }
+
     /// A deterministic pseudo-random sequence in \[-1, 1\] (no dependency for a test).
     pub fn noise(i: usize) -> f64 {
         let x = (i as u64)
@@ -845,11 +856,7 @@ mod tests {
     const L: f64 = 0.75;
     const G: f64 = 9.81;
 
-    fn record(line: &DesignLine, length: f64, noise: impl Fn(usize) -> f64) -> [Vec<f64>; 4] {
-        record_at(V, line, length, noise)
-    }
-
-    fn record_at(
+    fn record(
         v: f64,
         line: &DesignLine,
         length: f64,
@@ -882,14 +889,7 @@ mod tests {
     }
 
     fn fitted(r: &[Vec<f64>; 4]) -> Fitted {
-        let rec = Record {
-            step: H,
-            speed: &r[0],
-            yaw_rate: &r[1],
-            roll_rate: &r[2],
-            acc_y: &r[3],
-        };
-        fit(&rec, L, G, 10.0).expect("fits")
+        fit(&synthetic::view(r, H), L, G, 10.0).expect("fits")
     }
 
     /// Two curves, left and right, of the shapes the line module defines.
@@ -912,7 +912,7 @@ mod tests {
     #[test]
     fn an_exact_record_gives_back_its_line() {
         let (rows, line) = line();
-        let f = fitted(&record(&line, 1100.0, |_| 0.0));
+        let f = fitted(&record(V, &line, 1100.0, |_| 0.0));
         assert_rows(&f, &rows, [0.5, 0.01 / 400.0, 0.002]);
         f.line(10.0).expect("the fit is a valid line");
     }
@@ -920,7 +920,7 @@ mod tests {
     #[test]
     fn noise_moves_the_ends_by_metres_at_most() {
         let (rows, line) = line();
-        let f = fitted(&record(&line, 1100.0, synthetic::noise));
+        let f = fitted(&record(V, &line, 1100.0, synthetic::noise));
         assert_rows(&f, &rows, [2.0, 0.03 / 400.0, 0.005]);
     }
 
@@ -929,7 +929,7 @@ mod tests {
         let (rows, line) = line();
         // At 10 m/s a MEMS roll gyroscope's turn-on bias (1.75e-3 rad/s) is a roll slope of
         // 1.75e-4 rad/m, above SLOPE everywhere; with a yaw bias and an accelerometer bias.
-        let mut r = record_at(10.0, &line, 1100.0, |_| 0.0);
+        let mut r = record(10.0, &line, 1100.0, |_| 0.0);
         r[1].iter_mut().for_each(|x| *x += 2e-3);
         r[2].iter_mut().for_each(|x| *x += 1.75e-3);
         r[3].iter_mut().for_each(|x| *x += 0.05);
@@ -944,7 +944,7 @@ mod tests {
     #[test]
     fn a_straight_record_has_no_transitions() {
         let line = DesignLine::straight();
-        let f = fitted(&record(&line, 500.0, |i| (i % 97) as f64 / 48.0 - 1.0));
+        let f = fitted(&record(V, &line, 500.0, |i| (i % 97) as f64 / 48.0 - 1.0));
         assert!(f.transitions.is_empty(), "{:?}", f.transitions);
         assert_eq!(f.rows(), vec![(0.0, 0.0, 0.0)]);
     }
