@@ -3,7 +3,7 @@
 
 use crate::convert::{bad, slice};
 use design_line::fit::{self, Record};
-use fmu_estimator::design::{DesignModel, SHIPPED_NAME};
+use fmu_estimator::offline;
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLike1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -32,12 +32,16 @@ pub fn fit_design<'py>(
     let (half_gauge, gravity) = match (half_gauge, gravity) {
         (Some(l), Some(g)) => (l, g),
         _ => {
-            let m = match design_response_file.as_deref().map(str::trim) {
-                None | Some(SHIPPED_NAME) => DesignModel::shipped(),
-                Some("") => Err("design_response_file is empty: the fit needs the vehicle's gauge and gravity from a design-response model (or half_gauge and gravity)".to_string()),
-                Some(path) => DesignModel::read(std::path::Path::new(path)),
-            }
-            .map_err(bad)?;
+            // The model the estimator itself would read for that setting (its look-up and
+            // messages), not a second resolution of the name.
+            let overrides: Vec<(String, String)> = design_response_file
+                .map(|f| vec![("design_response_file".to_string(), f)])
+                .unwrap_or_default();
+            let values = offline::settings(&overrides).map_err(bad)?;
+            let (config, _) = offline::config(&values, None).map_err(bad)?;
+            let m = config.design.ok_or_else(|| {
+                bad("design_response_file is empty: the fit needs the vehicle's gauge and gravity from a design-response model (or half_gauge and gravity)")
+            })?;
             (
                 half_gauge.unwrap_or(m.half_gauge),
                 gravity.unwrap_or(m.gravity),
