@@ -125,7 +125,8 @@ fn with_fitted_design(rec: &Record) -> Result<Record, Error> {
         fitted::with_fitted_design(&rec.samples, 1e-3, &model).map_err(Error::Input)?;
     Ok(Record {
         samples,
-        ..rec.clone()
+        distance: rec.distance.clone(),
+        alignment: rec.alignment.clone(),
     })
 }
 
