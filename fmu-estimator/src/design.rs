@@ -279,7 +279,9 @@ impl Design {
     /// A correction with `model` (`None`: off, every input ignored).
     pub fn new(model: Option<Arc<DesignModel>>) -> Design {
         Design {
-            grid: model.as_ref().map(|m| Grid::new(m.cell, UNUSED_HIGHPASS)),
+            grid: model
+                .as_ref()
+                .map(|m| Grid::new(m.cell, UNUSED_HIGHPASS, None)),
             model,
             history: VecDeque::new(),
             fir: [0.0; 5],

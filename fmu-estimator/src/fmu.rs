@@ -538,6 +538,7 @@ fn check_contract(
         config,
         bank.grid,
         bank.kalman_highpass,
+        bank.kalman_shelf,
         bank.contact.as_ref().map(|c| c.band),
         bank.provenance.sample_step,
     );

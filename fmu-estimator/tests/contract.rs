@@ -127,6 +127,7 @@ fn the_shipped_banks_carry_this_builds_contract() {
             &config,
             bank.grid,
             bank.kalman_highpass,
+            bank.kalman_shelf,
             bank.contact.as_ref().map(|c| c.band),
             bank.provenance.sample_step,
         );

@@ -1,7 +1,7 @@
 //! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
 //! sensor set and lag, with where they came from and what they require of the runtime.
 //!
-//! # Format (version 4; version 3 is read too)
+//! # Format (version 5; versions 3 and 4 are read too)
 //! | part | content |
 //! |---|---|
 //! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
@@ -10,7 +10,9 @@
 //!
 //! Version 4 adds the conicity conditions: each entry's `conicity`, the contact model's
 //! `conicity_range`, `extra_bands` and per-speed conicity models ([`super::contact`]). A
-//! version 3 bank has none, and is read as before.
+//! version 3 bank has none, and is read as before. Version 5 adds `kalman_shelf`, the shelf
+//! after the Kalman channel's high-pass ([`super::grid`]), and its design in the contract; a
+//! bank of version 3 or 4 has none, and is read as before.
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds
 //! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
@@ -44,10 +46,12 @@ use std::path::Path;
 pub const MAGIC: &str = "learned-taps";
 /// The format [`Header::to_bytes`] writes (and the header's `format`). Format 4 added the
 /// conicity conditions (entries' `conicity`, the contact model's conicity models): a reader of
-/// format 3 would take such a bank's entries of one speed for duplicates.
-pub const FORMAT: u32 = 4;
-/// The formats this reader takes (3: no conicity conditions).
-pub const READS: [u32; 2] = [3, 4];
+/// format 3 would take such a bank's entries of one speed for duplicates. Format 5 added the
+/// Kalman channel's shelf: a reader of format 4 would leave it out and feed the taps another
+/// channel than they were fitted on.
+pub const FORMAT: u32 = 5;
+/// The formats this reader takes (3: no conicity conditions; 3 and 4: no shelf).
+pub const READS: [u32; 3] = [3, 4, 5];
 
 /// Where the taps came from: enough to regenerate them and to judge where they hold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -136,6 +140,10 @@ pub struct Header {
     pub grid: f64,
     /// Cut-off wavelength of the Kalman channel's causal high-pass \[m\].
     pub kalman_highpass: f64,
+    /// The shelf after the high-pass: its pole at this many times the cut-off's wavenumber
+    /// ([`super::grid`]); absent: no shelf (formats 3 and 4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kalman_shelf: Option<f64>,
     /// Where the taps came from, for regenerating them and judging where they hold; only the
     /// sample step is relied on (the contract's Kalman matrices are discretized for it).
     pub provenance: Provenance,
@@ -381,6 +389,15 @@ impl Header {
         if !(self.kalman_highpass.is_finite() && self.kalman_highpass > 2.0 * self.grid) {
             return Err(BankProblem::KalmanHighpass(self.kalman_highpass));
         }
+        match self.kalman_shelf {
+            Some(beta) if self.format < 5 => {
+                return Err(BankProblem::ShelfFormat(beta, self.format));
+            }
+            Some(beta) if !(beta.is_finite() && beta > 0.0) => {
+                return Err(BankProblem::KalmanShelf(beta));
+            }
+            _ => {}
+        }
         if self.entries.is_empty() {
             return Err(BankProblem::NoEntries);
         }
@@ -450,7 +467,7 @@ pub(crate) mod tests {
     pub fn sample_contract() -> crate::learned::contract::Contract {
         let values = crate::offline::settings(&[]).unwrap();
         let (config, _) = crate::offline::config(&values, None).unwrap();
-        crate::learned::contract::Contract::expected(&config, 0.2, 500.0, None, 1e-3)
+        crate::learned::contract::Contract::expected(&config, 0.2, 500.0, None, None, 1e-3)
     }
 
     /// A small bank with recognisable taps.
@@ -481,6 +498,7 @@ pub(crate) mod tests {
             format: FORMAT,
             grid: 0.2,
             kalman_highpass: 500.0,
+            kalman_shelf: None,
             provenance: Provenance {
                 vehicle: "test".into(),
                 training_seed: 101,
@@ -571,6 +589,24 @@ pub(crate) mod tests {
         assert_eq!(via_f32.to_bytes(), bytes);
     }
 
+    /// A shelf must be a positive number, and only a format that has shelves may state one: a
+    /// reader of format 4 would leave it out.
+    #[test]
+    fn a_shelf_is_checked() {
+        let p = Path::new("x.taps");
+        let mut b = sample_bank();
+        b.kalman_shelf = Some(0.0);
+        let e = Bank::parse(&b.to_bytes(), p).unwrap_err().to_string();
+        assert!(e.contains("Kalman shelf 0"), "{e}");
+        b.kalman_shelf = Some(1.0);
+        b.format = 4;
+        let e = Bank::parse(&b.to_bytes(), p).unwrap_err().to_string();
+        assert!(e.contains("needs format 5"), "{e}");
+        b.format = FORMAT;
+        let read = Bank::parse(&b.to_bytes(), p).unwrap();
+        assert_eq!(read.kalman_shelf, Some(1.0));
+    }
+
     #[test]
     fn damaged_files_are_refused_by_name() {
         let bytes = sample_bank().to_bytes();
@@ -589,11 +625,13 @@ pub(crate) mod tests {
         assert!(e.contains("sample step 0 s"), "{e}");
         let e = Bank::parse(b"hello\n", p).unwrap_err().to_string();
         assert!(e.contains("first line"), "{e}");
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 4", "learned-taps 7");
+        let text = String::from_utf8_lossy(&bytes)
+            .replace(&format!("learned-taps {FORMAT}"), "learned-taps 7");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 7"), "{e}");
         // A bank of the formats before the contract says why it is refused.
-        let text = String::from_utf8_lossy(&bytes).replace("learned-taps 4", "learned-taps 2");
+        let text = String::from_utf8_lossy(&bytes)
+            .replace(&format!("learned-taps {FORMAT}"), "learned-taps 2");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 2") && e.contains("no contract"), "{e}");
     }

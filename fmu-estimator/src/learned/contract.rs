@@ -15,6 +15,7 @@
 //! | `grid_edge` | [`super::grid::EDGE`]: where a cell closes |
 //! | `contact_speed_power`, `contact_min_speed`, `contact_min_model_error` | the contact model's quotients, speed floor and weight floor ([`super::contact`]) |
 //! | `kalman_highpass_design` | the Kalman channel's causal high-pass, as its coefficients `[b0, b1, b2, a1, a2]` at the bank's grid and cut-off |
+//! | `kalman_shelf_design` | the shelf after it, as `[b0, b1, a1]` (absent without a shelf) |
 //! | `contact_band_design` | the contact features' high-pass and low-pass, the same way (absent without a contact model) |
 //! | `[contract.kalman]` | the Kalman channel: its states, `design_speed`, `min_speed`, and FNV-1a 64 hashes of its discrete `F`, `H`, `Q`, `R` at `reference_speed` and `reference_step` |
 //!
@@ -31,7 +32,7 @@
 //! taps then run on a channel they were not fitted for, an approximate use the user asked for.
 
 use super::contact::{CONTACT_SPEED_POWER, MIN_MODEL_ERROR, MIN_SPEED};
-use super::grid::{Biquad, EDGE};
+use super::grid::{Biquad, EDGE, Shelf};
 use super::stream::TAP_SPEED_POWER;
 use crate::config::Config;
 use crate::core::Core;
@@ -64,6 +65,9 @@ pub struct Contract {
     pub contact_min_model_error: f64,
     /// The Kalman channel's high-pass as `[b0, b1, b2, a1, a2]` at the bank's grid and cut-off.
     pub kalman_highpass_design: [f64; 5],
+    /// The shelf after the high-pass as `[b0, b1, a1]`; absent without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kalman_shelf_design: Option<[f64; 3]>,
     /// The contact features' high-pass and low-pass, the same way; absent without a contact
     /// model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -103,12 +107,13 @@ pub struct KalmanChannel {
 
 impl Contract {
     /// The contract of this library's runtime for a bank of grid step `grid`, Kalman high-pass
-    /// `kalman_highpass` and contact band `contact_band` (if it has a contact model), with the
-    /// Kalman channel `config` sampled every `step` seconds.
+    /// `kalman_highpass`, shelf `kalman_shelf` and contact band `contact_band` (if it has a
+    /// contact model), with the Kalman channel `config` sampled every `step` seconds.
     pub fn expected(
         config: &Config,
         grid: f64,
         kalman_highpass: f64,
+        kalman_shelf: Option<f64>,
         contact_band: Option<[f64; 2]>,
         step: f64,
     ) -> Contract {
@@ -119,6 +124,8 @@ impl Contract {
             contact_min_speed: MIN_SPEED,
             contact_min_model_error: MIN_MODEL_ERROR,
             kalman_highpass_design: Biquad::highpass(grid, kalman_highpass).coefficients(),
+            kalman_shelf_design: kalman_shelf
+                .map(|beta| Shelf::after_highpass(grid, kalman_highpass, beta).coefficients()),
             contact_band_design: contact_band.map(|[short, long]| {
                 [
                     Biquad::highpass(grid, long).coefficients(),
@@ -149,7 +156,7 @@ impl Contract {
     }
 
     /// The runtime constants and designs, each named as the runtime's source names it.
-    fn runtime_values(&self) -> [(&'static str, Vec<f64>); 7] {
+    fn runtime_values(&self) -> [(&'static str, Vec<f64>); 8] {
         [
             (
                 "TAP_SPEED_POWER (learned/stream.rs)",
@@ -171,6 +178,12 @@ impl Contract {
             (
                 "the Kalman channel's high-pass design (coefficients b0 b1 b2 a1 a2)",
                 self.kalman_highpass_design.to_vec(),
+            ),
+            (
+                "the Kalman channel's shelf design (coefficients b0 b1 a1)",
+                self.kalman_shelf_design
+                    .map(|d| d.to_vec())
+                    .unwrap_or_default(),
             ),
             (
                 "the contact features' band-pass design (high-pass, low-pass coefficients)",
@@ -320,13 +333,32 @@ mod tests {
     }
 
     fn expected(overrides: &[(&str, &str)]) -> Contract {
-        Contract::expected(&config(overrides), 0.2, 1000.0, Some([3.0, 25.0]), 1e-3)
+        Contract::expected(
+            &config(overrides),
+            0.2,
+            1000.0,
+            Some(1.0),
+            Some([3.0, 25.0]),
+            1e-3,
+        )
     }
 
     #[test]
     fn the_same_runtime_agrees_with_itself() {
         let a = expected(&[]);
         assert_eq!(a.differences(&expected(&[])), (vec![], vec![]));
+    }
+
+    /// A bank fitted with another shelf (or none) feeds its taps another Kalman channel: an
+    /// error naming the shelf, whatever the Kalman matrices say.
+    #[test]
+    fn another_shelf_is_a_runtime_difference() {
+        let shelved = expected(&[]);
+        let plain = Contract::expected(&config(&[]), 0.2, 1000.0, None, Some([3.0, 25.0]), 1e-3);
+        let (runtime, kalman) = plain.differences(&shelved);
+        assert_eq!(runtime.len(), 1, "{runtime:?}");
+        assert!(runtime[0].contains("shelf"), "{runtime:?}");
+        assert!(kalman.is_empty());
     }
 
     /// Oracle: each setting changes the matrix its own equations put it in (the wheelset mass

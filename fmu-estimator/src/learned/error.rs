@@ -106,6 +106,13 @@ pub enum BankProblem {
     /// The Kalman channel's high-pass cut-off is not above two grid steps \[m\].
     #[error("Kalman high-pass at {0} m")]
     KalmanHighpass(f64),
+    /// The shelf after the Kalman channel's high-pass is not a positive number.
+    #[error("Kalman shelf {0}: a positive number")]
+    KalmanShelf(f64),
+    /// A shelf in a bank of a format before 5, which had none: a reader of that format would
+    /// leave it out.
+    #[error("Kalman shelf {0} in a bank of format {1} (a shelf needs format 5)")]
+    ShelfFormat(f64, u32),
     /// The bank has no entries.
     #[error("no entries")]
     NoEntries,
@@ -319,11 +326,11 @@ mod tests {
         };
         assert_eq!(
             format("7"),
-            "x.taps: tap bank format 7 (this estimator reads formats [3, 4])"
+            "x.taps: tap bank format 7 (this estimator reads formats [3, 4, 5])"
         );
         assert_eq!(
             format("2"),
-            "x.taps: tap bank format 2 (this estimator reads formats [3, 4]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
+            "x.taps: tap bank format 2 (this estimator reads formats [3, 4, 5]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
         );
         let invalid = |problem: BankProblem| {
             BankError::Invalid {

@@ -22,6 +22,22 @@
 //! `kalman_highpass` metres, bilinear transform with pre-warping, i.e. the RBJ cookbook
 //! high-pass with `Q = 1/sqrt(2)`): the FIR sees a bounded signal, so its output stays bounded
 //! over any run length, and the taps learn the high-pass's phase inside the band.
+//!
+//! # The shelf after the high-pass (banks of format 5)
+//! In wavenumber `s = i 2 pi / wavelength`, the high-pass `H = s^2 / (s^2 + sqrt(2) w s + w^2)`
+//! (`w = 2 pi / kalman_highpass`) is, well inside its pass band, `1 + sqrt(2) w / s + O((w/s)^2)`:
+//! a phase lead of `sqrt(2) lambda / kalman_highpass` radians at wavelength `lambda`, 16 degrees
+//! at 200 m for a 1000 m cut-off. A 60 m window of taps cannot undo a phase that grows with the
+//! wavelength (it would need the high-pass's inverse, integrators with a memory of the cut-off's
+//! length), so the D3 band (70-200 m) paid for it. A bank may therefore state a first-order shelf
+//! `S = (s + (beta + sqrt(2)) w) / (s + beta w)` (`kalman_shelf = beta`), applied after the
+//! high-pass. `S = 1 + sqrt(2) w / s + O((w/s)^2)` at short waves, so `H S = 1 + O((w/s)^2)`:
+//! the lead cancels to first order. At long waves `H S` still falls as `s^2`, so a random walk
+//! (spectrum `1/s^2`) comes out bounded; the price is the shelf's gain `(beta + sqrt(2)) / beta`
+//! below the cut-off, which lets more of the random walk through (the trade and its figures:
+//! `KALMAN_SHELF` in `studies/src/study/learned/taps.rs`). Discretized by the bilinear
+//! transform `s = (2 / ds) (1 - z^-1) / (1 + z^-1)` without pre-warping: at `w ds` of 1e-3 the
+//! warping is below 1e-6.
 
 use serde::{Deserialize, Serialize};
 
@@ -96,6 +112,42 @@ impl Biquad {
     }
 }
 
+/// A causal first-order section, direct form II transposed: the shelf after the Kalman
+/// channel's high-pass (module docs).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct Shelf {
+    b: [f64; 2],
+    a1: f64,
+    s: f64,
+}
+
+impl Shelf {
+    /// The shelf `(s + (beta + sqrt(2)) w) / (s + beta w)` for the high-pass of cut-off
+    /// wavelength `cutoff` (`w = 2 pi / cutoff`) on a grid of `ds` (both metres), `beta > 0`.
+    pub fn after_highpass(ds: f64, cutoff: f64, beta: f64) -> Shelf {
+        let w = std::f64::consts::TAU / cutoff;
+        let (zero, pole) = ((beta + std::f64::consts::SQRT_2) * w, beta * w);
+        let k = 2.0 / ds;
+        Shelf {
+            b: [(k + zero) / (k + pole), (zero - k) / (k + pole)],
+            a1: (pole - k) / (k + pole),
+            s: 0.0,
+        }
+    }
+
+    /// `[b0, b1, a1]`: the design, as a bank's contract states it.
+    pub fn coefficients(&self) -> [f64; 3] {
+        [self.b[0], self.b[1], self.a1]
+    }
+
+    /// Filters the next grid value, as [`Biquad::step`].
+    pub fn step(&mut self, x: f64) -> f64 {
+        let y = self.b[0] * x + self.s;
+        self.s = self.b[1] * x - self.a1 * y;
+        y
+    }
+}
+
 /// How far before a cell's end a sample still closes it \[m\]. At 20 m/s and 1 kHz a 0.2 m cell
 /// holds exactly 10 samples, so every cell ends on a sample, and whether that sample's distance
 /// (a sum of `speed * h`) lands a rounding error before or after the boundary decided which cell
@@ -113,6 +165,7 @@ pub struct Grid {
     count: u32,
     last: [f64; 5],
     highpass: Biquad,
+    shelf: Option<Shelf>,
 }
 
 /// Cells closed by one sample: how many, their channel values (high-pass applied to the Kalman
@@ -129,8 +182,9 @@ pub struct Closed {
 
 impl Grid {
     /// An empty grid of cells `ds` long starting at distance 0, its Kalman channel high-passed
-    /// at the wavelength `kalman_highpass` (both metres, as the bank states them).
-    pub fn new(ds: f64, kalman_highpass: f64) -> Grid {
+    /// at the wavelength `kalman_highpass` (both metres) and, with `kalman_shelf`, shelved
+    /// after it (module docs), as the bank states them.
+    pub fn new(ds: f64, kalman_highpass: f64, kalman_shelf: Option<f64>) -> Grid {
         Grid {
             ds,
             next: ds,
@@ -138,6 +192,7 @@ impl Grid {
             count: 0,
             last: [0.0; 5],
             highpass: Biquad::highpass(ds, kalman_highpass),
+            shelf: kalman_shelf.map(|beta| Shelf::after_highpass(ds, kalman_highpass, beta)),
         }
     }
 
@@ -169,6 +224,9 @@ impl Grid {
             for _ in 0..n {
                 let mut cell = mean;
                 cell[KALMAN] = self.highpass.step(mean[KALMAN]);
+                if let Some(shelf) = &mut self.shelf {
+                    cell[KALMAN] = shelf.step(cell[KALMAN]);
+                }
                 cells.push(cell);
             }
             self.next += n as f64 * self.ds;
@@ -197,8 +255,14 @@ pub struct GridRecord {
 }
 
 /// Runs [`Grid`] over a whole record: `distance[k]` and `x[k]` of sample `k`.
-pub fn decimate(distance: &[f64], x: &[[f64; 5]], ds: f64, kalman_highpass: f64) -> GridRecord {
-    let mut g = Grid::new(ds, kalman_highpass);
+pub fn decimate(
+    distance: &[f64],
+    x: &[[f64; 5]],
+    ds: f64,
+    kalman_highpass: f64,
+    kalman_shelf: Option<f64>,
+) -> GridRecord {
+    let mut g = Grid::new(ds, kalman_highpass, kalman_shelf);
     let mut out = GridRecord::default();
     for (k, (d, s)) in distance.iter().zip(x).enumerate() {
         if let Some(c) = g.add(*d, s) {
@@ -221,7 +285,7 @@ mod tests {
         // distance 0 form cell 0, which sample 10 (0.2 m) closes.
         let d: Vec<f64> = (0..100).map(|k| 0.02 * k as f64 + 1e-12).collect();
         let x: Vec<[f64; 5]> = (0..100).map(|k| [k as f64, 0.0, 0.0, 0.0, 0.0]).collect();
-        let r = decimate(&d, &x, 0.2, 500.0);
+        let r = decimate(&d, &x, 0.2, 500.0, None);
         assert_eq!(r.closed_by[0], 10);
         assert!((r.cells[0][0] - 4.5).abs() < 1e-12, "{}", r.cells[0][0]);
         assert!((r.cells[1][0] - 14.5).abs() < 1e-12);
@@ -230,7 +294,7 @@ mod tests {
 
     #[test]
     fn a_coarse_step_closes_every_crossed_cell() {
-        let mut g = Grid::new(0.2, 500.0);
+        let mut g = Grid::new(0.2, 500.0, None);
         assert!(g.add(0.1, &[1.0; 5]).is_none());
         let c = g.add(0.75, &[3.0; 5]).unwrap();
         assert_eq!(c.cells.len(), 3);
@@ -282,8 +346,64 @@ mod tests {
     }
 
     #[test]
+    fn the_shelf_cancels_the_highpass_phase_lead() {
+        // Oracle: the analog H(s) S(s) of the module docs at s = i 2 pi / wavelength; the
+        // discrete chain's gain and phase measured by projecting its steady response to a sine
+        // onto sine and cosine.
+        let (ds, cutoff, beta) = (0.2, 1000.0, 1.0);
+        let measured = |wavelength: f64, shelf: bool| {
+            let mut g = Grid::new(ds, cutoff, shelf.then_some(beta));
+            let w = std::f64::consts::TAU * ds / wavelength;
+            let n = (40.0 * cutoff.max(wavelength) / ds) as usize;
+            // Sample k lies in the middle of cell k; the next sample closes that cell.
+            let mut y = Vec::with_capacity(n);
+            for k in 0..=n {
+                let x = (w * k as f64).sin();
+                if let Some(closed) = g.add((k as f64 + 0.5) * ds, &[0.0, 0.0, 0.0, 0.0, x]) {
+                    y.extend(closed.cells.iter().map(|cell| cell[KALMAN]));
+                }
+            }
+            let (mut c, mut q, mut m) = (0.0, 0.0, 0usize);
+            for (k, y) in y.iter().enumerate().skip(n / 2) {
+                c += y * (w * k as f64).sin();
+                q += y * (w * k as f64).cos();
+                m += 1;
+            }
+            let (c, q) = (2.0 * c / m as f64, 2.0 * q / m as f64);
+            ((c * c + q * q).sqrt(), q.atan2(c))
+        };
+        let analog = |wavelength: f64| {
+            let (s, w) = (
+                nalgebra::Complex::new(0.0, std::f64::consts::TAU / wavelength),
+                std::f64::consts::TAU / cutoff,
+            );
+            let r2 = std::f64::consts::SQRT_2;
+            let h = s * s / (s * s + r2 * w * s + w * w) * (s + (beta + r2) * w) / (s + beta * w);
+            (h.norm(), h.arg())
+        };
+        for wavelength in [70.0, 200.0, 1000.0, 20_000.0] {
+            let (g, p) = measured(wavelength, true);
+            let (ga, pa) = analog(wavelength);
+            assert!(
+                (g / ga - 1.0).abs() < 2e-3,
+                "{wavelength} m: gain {g} against {ga}"
+            );
+            assert!(
+                (p - pa).abs() < 2e-3,
+                "{wavelength} m: phase {p} against {pa}"
+            );
+        }
+        // At 200 m the high-pass alone leads by about sqrt(2) 200 / 1000 rad (16 degrees); with
+        // the shelf what is left is of higher order in 200 / 1000 (2 degrees).
+        let (_, alone) = measured(200.0, false);
+        assert!((alone - 0.2785).abs() < 0.01, "{alone}");
+        let (_, shelved) = measured(200.0, true);
+        assert!(shelved.abs() < 0.04, "{shelved}");
+    }
+
+    #[test]
     fn non_finite_samples_are_left_out_of_the_mean() {
-        let mut g = Grid::new(1.0, 500.0);
+        let mut g = Grid::new(1.0, 500.0, None);
         g.add(0.2, &[2.0; 5]);
         g.add(0.4, &[f64::NAN, 0.0, 0.0, 0.0, 0.0]);
         let c = g.add(1.0, &[0.0; 5]).unwrap();

@@ -119,7 +119,7 @@ impl Learned {
             conicity: 0.0,
             novelty: 0.0,
             judged: false,
-            grid: Grid::new(bank.grid, bank.kalman_highpass),
+            grid: Grid::new(bank.grid, bank.kalman_highpass, bank.kalman_shelf),
             history: History::new(selection.longest()),
             causal: Track::default(),
             lagged: Track::default(),

@@ -54,7 +54,7 @@ fn grid_estimates_are_the_taps_applied_to_the_history_blended_in_speed() {
     let mut l = three_sensors(&bank, 0.6);
     assert!((l.lag() - 0.6).abs() < 1e-12);
     // 0.05 m per sample at 12.5 m/s, 4 samples per 0.2 m cell.
-    let mut grid = Grid::new(0.2, 500.0);
+    let mut grid = Grid::new(0.2, 500.0, None);
     let mut cells = vec![];
     let mut d = 0.0;
     for k in 0..200 {
@@ -128,7 +128,7 @@ fn per_condition_taps_are_blended_by_the_estimated_or_told_contact() {
             ((k + 1) as f64 * 0.05, x)
         })
         .collect();
-    let mut grid = Grid::new(0.2, 500.0);
+    let mut grid = Grid::new(0.2, 500.0, None);
     let mut cells = vec![];
     for (d, x) in &signal {
         if let Some(c) = grid.add(*d, x) {
@@ -257,7 +257,7 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
             },
         )
         .unwrap();
-        let mut grid = Grid::new(0.2, 500.0);
+        let mut grid = Grid::new(0.2, 500.0, None);
         let (mut cells, mut d) = (vec![], 0.0);
         for k in 0..400 {
             d += 0.05;
@@ -478,7 +478,7 @@ fn while_the_speed_changes_each_cell_is_rescaled_to_the_current_speed() {
     let mut l = three_sensors(&bank, 0.0);
     // Speed rising from 4 m/s (below the bank's 10 m/s: its cells count as 10 m/s) to 16 m/s.
     let speed = |k: usize| 4.0 + 0.06 * k as f64;
-    let mut grid = Grid::new(0.2, 500.0);
+    let mut grid = Grid::new(0.2, 500.0, None);
     let (mut cells, mut speeds) = (vec![], vec![]);
     let mut d = 0.0;
     for k in 0..200 {
