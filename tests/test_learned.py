@@ -62,7 +62,12 @@ def test_the_default_estimate_does_not_drift_over_6_km(tmp_path):
     """Issue 13: the FMU's default `alignment` (learned, causal) stays within a few times the
     truth's rms over a run of several km, where the Kalman filter's random-walk estimate wanders
     (its long waves are unobservable). 300 s at 20 m/s, track seed 7 (neither a training,
-    validation nor study evaluation seed)."""
+    validation nor study evaluation seed). The bounds are 1.35 times the largest of the
+    validation seeds 102-106 (the same run): per 500 m the mean error 5.9 and the estimate's rms
+    6.3 times the truth's rms, the error's rms 3.3 times, the Kalman filter's largest error at
+    least 2.1 times the default's. They are wider than the high-pass alone gave (3.3, 3.8, 2.2,
+    3.3): the shelf after it lets more of the random walk through for the bands' sake
+    (`KALMAN_SHELF`, studies/src/study/learned/taps.rs)."""
     run_dir = tmp_path / "run"
     oc.run(
         "run", "--out", run_dir, "--quiet", "--stop", "300", *oc.standard_case_args(),
@@ -81,8 +86,8 @@ def test_the_default_estimate_does_not_drift_over_6_km(tmp_path):
     edges = np.arange(0.0, 6000.0, 500.0)
     for a in edges:
         m = (r["estimator.distance"] >= a) & (r["estimator.distance"] < a + 500.0)
-        assert abs(np.mean(learned_error[m])) < 3.0 * truth_rms, f"drift at {a} m"
-        assert np.sqrt(np.mean(r["estimator.alignment"][m] ** 2)) < 4.0 * truth_rms, f"rms at {a} m"
-    assert np.sqrt(np.mean(learned_error**2)) < 2.5 * truth_rms
+        assert abs(np.mean(learned_error[m])) < 8.0 * truth_rms, f"drift at {a} m"
+        assert np.sqrt(np.mean(r["estimator.alignment"][m] ** 2)) < 8.5 * truth_rms, f"rms at {a} m"
+    assert np.sqrt(np.mean(learned_error**2)) < 4.5 * truth_rms
     # The test can fail: the Kalman filter alone drifts beyond these bounds on the same run.
-    assert np.max(np.abs(kalman_error)) > 2.0 * np.max(np.abs(learned_error))
+    assert np.max(np.abs(kalman_error)) > 1.5 * np.max(np.abs(learned_error))
