@@ -13,7 +13,8 @@ pass covers it):
 
 for one pass (the mean over passes) and for the average of all passes.
 
-    XTASK_FMU_DIR=target/fmu .venv/bin/python tests/fleet_gain.py --seeds 101-106 [--passes 50]
+    XTASK_FMU_DIR=target/fmu .venv/bin/python tests/fleet_gain.py --seeds 101-106 [--passes 50] \
+        [--settings '{"tap_file": "learned-conicity.taps"}']
 
 Seeds: 101 calibration, 102-106 validation, 1-5 held out (evaluate on them, choose nothing).
 """
@@ -93,8 +94,9 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--seeds", default="101-106")
     p.add_argument("--passes", type=int, default=50)
+    p.add_argument("--settings", help="the estimator settings as JSON, e.g. {\"tap_file\": \"learned-conicity.taps\"}")
     a = p.parse_args()
-    options = fleet.Options()
+    options = fleet.Options(settings=json.loads(a.settings) if a.settings else None)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for seed in seeds(a.seeds):

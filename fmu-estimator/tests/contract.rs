@@ -272,9 +272,9 @@ fn a_bank_without_a_contract_is_refused_with_the_reason() {
     let bytes = std::fs::read(resources().join("learned-nominal.taps")).unwrap();
     let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
     let first = String::from_utf8(bytes[..nl].to_vec()).unwrap();
-    let mut old = first
-        .replacen("learned-taps 3", "learned-taps 2", 1)
-        .into_bytes();
+    let shipped = format!("learned-taps {} ", fmu_estimator::learned::bank::FORMAT);
+    assert!(first.starts_with(&shipped), "{first}");
+    let mut old = first.replacen(&shipped, "learned-taps 2 ", 1).into_bytes();
     old.extend_from_slice(&bytes[nl..]);
     let path = dir.join("old.taps");
     std::fs::write(&path, old).unwrap();
