@@ -35,7 +35,7 @@
 //! with its own at initialization. Formats 1 and 2 (before 2026-11-25) had no contract and are
 //! refused: without one, a bank fitted by another build or with another Kalman channel would
 //! run silently wrong, which is what the contract is for; `alignment-studies taps` makes a
-//! format 4 bank.
+//! format 5 bank.
 
 use super::error::{BankError, BankProblem, EntryProblem};
 use serde::{Deserialize, Serialize};

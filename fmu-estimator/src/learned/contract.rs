@@ -359,6 +359,18 @@ mod tests {
         assert_eq!(runtime.len(), 1, "{runtime:?}");
         assert!(runtime[0].contains("shelf"), "{runtime:?}");
         assert!(kalman.is_empty());
+        // Another pole is another design, named the same way.
+        let other = Contract::expected(
+            &config(&[]),
+            0.2,
+            1000.0,
+            Some(2.0),
+            Some([3.0, 25.0]),
+            1e-3,
+        );
+        let (runtime, _) = other.differences(&shelved);
+        assert_eq!(runtime.len(), 1, "{runtime:?}");
+        assert!(runtime[0].contains("shelf"), "{runtime:?}");
     }
 
     /// Oracle: each setting changes the matrix its own equations put it in (the wheelset mass
