@@ -32,7 +32,7 @@
 //! taps then run on a channel they were not fitted for, an approximate use the user asked for.
 
 use super::contact::{CONTACT_SPEED_POWER, MIN_MODEL_ERROR, MIN_SPEED};
-use super::grid::{Biquad, EDGE, Shelf};
+use super::grid::{Biquad, EDGE};
 use super::stream::TAP_SPEED_POWER;
 use crate::config::Config;
 use crate::core::Core;
@@ -124,8 +124,10 @@ impl Contract {
             contact_min_speed: MIN_SPEED,
             contact_min_model_error: MIN_MODEL_ERROR,
             kalman_highpass_design: Biquad::highpass(grid, kalman_highpass).coefficients(),
-            kalman_shelf_design: kalman_shelf
-                .map(|beta| Shelf::after_highpass(grid, kalman_highpass, beta).coefficients()),
+            kalman_shelf_design: kalman_shelf.map(|beta| {
+                let [b0, b1, _, a1, _] = Biquad::shelf(grid, kalman_highpass, beta).coefficients();
+                [b0, b1, a1]
+            }),
             contact_band_design: contact_band.map(|[short, long]| {
                 [
                     Biquad::highpass(grid, long).coefficients(),

@@ -98,6 +98,20 @@ impl Biquad {
         }
     }
 
+    /// The shelf `(s + (beta + sqrt(2)) w) / (s + beta w)` after the high-pass of cut-off
+    /// wavelength `cutoff` (`w = 2 pi / cutoff`) on a grid of `ds` (both metres), `beta > 0`
+    /// (module docs): a first-order section, its second-order coefficients zero.
+    pub fn shelf(ds: f64, cutoff: f64, beta: f64) -> Biquad {
+        let w = std::f64::consts::TAU / cutoff;
+        let (zero, pole) = ((beta + std::f64::consts::SQRT_2) * w, beta * w);
+        let k = 2.0 / ds;
+        Biquad {
+            b: [(k + zero) / (k + pole), (zero - k) / (k + pole), 0.0],
+            a: [(pole - k) / (k + pole), 0.0],
+            s: [0.0; 2],
+        }
+    }
+
     /// `[b0, b1, b2, a1, a2]`: the design, as a bank's contract states it.
     pub fn coefficients(&self) -> [f64; 5] {
         [self.b[0], self.b[1], self.b[2], self.a[0], self.a[1]]
@@ -109,42 +123,6 @@ impl Biquad {
         let y = self.b[0] * x + self.s[0];
         self.s[0] = self.b[1] * x - self.a[0] * y + self.s[1];
         self.s[1] = self.b[2] * x - self.a[1] * y;
-        y
-    }
-}
-
-/// A causal first-order section, direct form II transposed: the shelf after the Kalman
-/// channel's high-pass (module docs).
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct Shelf {
-    b: [f64; 2],
-    a1: f64,
-    s: f64,
-}
-
-impl Shelf {
-    /// The shelf `(s + (beta + sqrt(2)) w) / (s + beta w)` for the high-pass of cut-off
-    /// wavelength `cutoff` (`w = 2 pi / cutoff`) on a grid of `ds` (both metres), `beta > 0`.
-    pub fn after_highpass(ds: f64, cutoff: f64, beta: f64) -> Shelf {
-        let w = std::f64::consts::TAU / cutoff;
-        let (zero, pole) = ((beta + std::f64::consts::SQRT_2) * w, beta * w);
-        let k = 2.0 / ds;
-        Shelf {
-            b: [(k + zero) / (k + pole), (zero - k) / (k + pole)],
-            a1: (pole - k) / (k + pole),
-            s: 0.0,
-        }
-    }
-
-    /// `[b0, b1, a1]`: the design, as a bank's contract states it.
-    pub fn coefficients(&self) -> [f64; 3] {
-        [self.b[0], self.b[1], self.a1]
-    }
-
-    /// Filters the next grid value, as [`Biquad::step`].
-    pub fn step(&mut self, x: f64) -> f64 {
-        let y = self.b[0] * x + self.s;
-        self.s = self.b[1] * x - self.a1 * y;
         y
     }
 }
@@ -166,7 +144,7 @@ pub struct Grid {
     count: u32,
     last: [f64; 5],
     highpass: Biquad,
-    shelf: Option<Shelf>,
+    shelf: Option<Biquad>,
 }
 
 /// Cells closed by one sample: how many, their channel values (the high-pass, and the shelf if
@@ -193,7 +171,7 @@ impl Grid {
             count: 0,
             last: [0.0; 5],
             highpass: Biquad::highpass(ds, kalman_highpass),
-            shelf: kalman_shelf.map(|beta| Shelf::after_highpass(ds, kalman_highpass, beta)),
+            shelf: kalman_shelf.map(|beta| Biquad::shelf(ds, kalman_highpass, beta)),
         }
     }
 
