@@ -193,6 +193,18 @@ pub enum SettingError {
         /// Where it was looked for (resolved against the resources directory).
         path: PathBuf,
     },
+    /// The offline entry points were given a calibration file twice, as their own argument and
+    /// as the `calibration_file` setting, naming different files: which one was meant is not
+    /// known.
+    #[error(
+        "the calibration is named twice: '{argument}' (calibration) and '{setting}' (setting calibration_file); give one"
+    )]
+    CalibrationTwice {
+        /// The calibration argument (the `--calibration` option, `calibration=` in Python).
+        argument: PathBuf,
+        /// The `calibration_file` setting as given.
+        setting: String,
+    },
     /// A `tap_file` the user named does not exist where it was looked for.
     #[error("parameter 'tap_file' = '{name}': {} does not exist{}", path.display(), nor_here(name))]
     TapFileMissing {

@@ -256,9 +256,15 @@ pub fn settings(overrides: &[(String, String)]) -> Result<Values, Error> {
     Ok(v)
 }
 
-/// The configuration for `values`. The calibration file is the one named by `calibration`, or,
-/// if none is given and `use_calibration_file` is on, the file shipped in the FMU (built in).
+/// The configuration for `values`. The calibration file is the one named by `calibration`, or
+/// by the `calibration_file` setting as the FMU resolves it (absolute, or relative to the working
+/// directory: there are no resources here), or, if neither names one and
+/// `use_calibration_file` is on, the file shipped in the FMU (built in). The setting is honoured
+/// because a user who passes the FMU's parameters expects the FMU's result; both naming
+/// different files is refused.
 pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Vec<Note>), Error> {
+    let named = setting_calibration(values, calibration)?;
+    let calibration = calibration.or(named.as_deref());
     let use_file = values.boolean[vr::USE_CALIBRATION_FILE as usize];
     let mut v = values.clone();
     v.boolean[vr::USE_CALIBRATION_FILE as usize] = false;
@@ -287,6 +293,39 @@ pub fn config(values: &Values, calibration: Option<&Path>) -> Result<(Config, Ve
         config = config.with_calibration(c);
     }
     Ok((config, notes))
+}
+
+/// The calibration file the `calibration_file` setting names, when it is not the shipped one's
+/// name: checked to exist, and to agree with the `calibration` argument if both are given.
+fn setting_calibration(
+    values: &Values,
+    calibration: Option<&Path>,
+) -> Result<Option<std::path::PathBuf>, Error> {
+    let name = &values.string[vr::CALIBRATION_FILE as usize];
+    if name == crate::config::DEFAULT_CALIBRATION_FILE
+        || !values.boolean[vr::USE_CALIBRATION_FILE as usize]
+    {
+        return Ok(None);
+    }
+    let missing = |path: std::path::PathBuf| SettingError::CalibrationMissing {
+        name: name.clone(),
+        path,
+    };
+    let path = crate::config::user_file(name, None)
+        .ok_or_else(|| missing(Path::new(name).to_path_buf()))?;
+    if !path.is_file() {
+        return Err(missing(path).into());
+    }
+    match calibration {
+        Some(given) if std::path::absolute(given).ok().as_deref() != Some(path.as_path()) => {
+            Err(SettingError::CalibrationTwice {
+                argument: given.to_path_buf(),
+                setting: name.clone(),
+            }
+            .into())
+        }
+        _ => Ok(Some(path)),
+    }
 }
 
 /// The learned filter `values` ask for (`estimator` 2), as the FMU builds it, with the tap bank
@@ -969,5 +1008,55 @@ mod tests {
             );
             assert_eq!((check.not_positive_definite, check.eigen_steps), (0, 4));
         }
+    }
+
+    /// The `calibration_file` setting gives what the `calibration` argument gives (the FMU
+    /// honours it; the offline path once ignored it and ran the shipped calibration), and
+    /// naming two different files, or one that does not exist, is refused.
+    #[test]
+    fn the_calibration_file_setting_is_the_calibration_argument() {
+        let dir = std::env::temp_dir().join(format!("offline-calibration-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // The shipped calibration with the yaw gyroscope's R four times larger.
+        let text = calibration::SHIPPED.replacen(
+            "[-2.5541701478697552e-5, 2.495913417533243e-7,",
+            "[-2.5541701478697552e-5, 9.983653670132972e-7,",
+            1,
+        );
+        assert_ne!(
+            text,
+            calibration::SHIPPED,
+            "the shipped R row moved: update the test"
+        );
+        let file = dir.join("other.toml");
+        std::fs::write(&file, text).unwrap();
+        let run = |setting: Option<&Path>, argument: Option<&Path>| {
+            let mut overrides = vec![("estimator".to_string(), "1".to_string())];
+            if let Some(p) = setting {
+                overrides.push(("calibration_file".into(), p.to_str().unwrap().into()));
+            }
+            let (config, _) = config(&settings(&overrides).unwrap(), argument)?;
+            let recorded = samples(1500, |_| 20.0);
+            Ok::<_, Error>(process(&config, 1e-3, &recorded, false).unwrap().filtered)
+        };
+        let by_setting = run(Some(&file), None).unwrap();
+        assert_eq!(by_setting, run(None, Some(&file)).unwrap());
+        assert_eq!(by_setting, run(Some(&file), Some(&file)).unwrap());
+        assert_ne!(by_setting, run(None, None).unwrap());
+        let shipped = dir.join("shipped.toml");
+        std::fs::write(&shipped, calibration::SHIPPED).unwrap();
+        let twice = run(Some(&file), Some(&shipped)).unwrap_err().to_string();
+        assert!(
+            twice.contains("named twice") && twice.contains("other.toml"),
+            "{twice}"
+        );
+        let missing = run(Some(&dir.join("none.toml")), None)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            missing.contains("calibration_file") && missing.contains("none.toml"),
+            "{missing}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
