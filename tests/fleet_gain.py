@@ -31,17 +31,9 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from project import packaged_fmus  # noqa: E402
+from project import packaged_fmus, seed_list  # noqa: E402
 
 from track_alignment import fleet, synthetic  # noqa: E402
-
-
-def seeds(text: str) -> list[int]:
-    out = []
-    for part in text.split(","):
-        lo, _, hi = part.partition("-")
-        out.extend(range(int(lo), int(hi or lo) + 1))
-    return out
 
 
 def on_common(a_start: int, a: np.ndarray, b_start: int, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -99,7 +91,7 @@ def main() -> int:
     options = fleet.Options(settings=json.loads(a.settings) if a.settings else None)
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for seed in seeds(a.seeds):
+        for seed in seed_list(a.seeds):
             t = time.perf_counter()
             rows.append(measure(seed, a.passes, Path(tmp), options))
             print(json.dumps(rows[-1]), f"({time.perf_counter() - t:.0f} s)", flush=True)

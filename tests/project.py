@@ -30,3 +30,12 @@ def packaged_fmus() -> dict[str, Path]:
     missing = [str(p) for p in paths.values() if not p.is_file()]
     assert not missing, f"`cargo xtask fmu` did not produce {missing}"
     return {n: p.resolve() for n, p in paths.items()}
+
+
+def seed_list(text: str) -> list[int]:
+    """Track seeds from a command line: `1-5`, `101,103-106`."""
+    out = []
+    for part in text.split(","):
+        lo, _, hi = part.partition("-")
+        out.extend(range(int(lo), int(hi or lo) + 1))
+    return out

@@ -29,8 +29,6 @@ other errors are removed at a standstill or cost nothing: docs/accuracy.md).
 from __future__ import annotations
 
 import argparse
-import sys
-from pathlib import Path
 
 import numpy as np
 from scipy import signal
@@ -111,18 +109,9 @@ def apply(h: np.ndarray, x: np.ndarray) -> np.ndarray:
     return sum(np.convolve(xi, hi)[half: half + x.shape[-1]] for xi, hi in zip(x, h))
 
 
-def seed_list(text: str) -> list[int]:
-    out = []
-    for part in text.split(","):
-        lo, _, hi = part.partition("-")
-        out.extend(range(int(lo), int(hi or lo) + 1))
-    return out
-
-
 def main() -> None:
-    sys.path.insert(0, str(Path(__file__).parent))
     import track_alignment as ta
-    from project import packaged_fmus
+    from project import packaged_fmus, seed_list
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--train-seeds", type=seed_list, default=seed_list("101-112"))
