@@ -174,11 +174,11 @@ class Slave:
         self.fmu.freeLibrary()
 
 
-def instantiate_raw(slave: Slave, guid: str, name: str = "raw") -> int | None:
-    """fmi2Instantiate with an arbitrary GUID through `slave`'s library; the new component
-    pointer, or None for NULL."""
+def instantiate_raw(slave: Slave, guid: str, name: str = "raw", resources: bool = True) -> int | None:
+    """fmi2Instantiate with an arbitrary GUID through `slave`'s library, with the FMU's resources
+    location or (`resources` False) a NULL one; the new component pointer, or None for NULL."""
     cb = slave.callbacks
-    uri = (Path(slave.fmu.unzipDirectory) / "resources").as_uri().encode()
+    uri = (Path(slave.fmu.unzipDirectory) / "resources").as_uri().encode() if resources else None
     f = slave.raw("fmi2Instantiate")
     return f(c_char_p(name.encode()), c_int(1), c_char_p(guid.encode()), c_char_p(uri), byref(cb), c_int(0), c_int(0))
 

@@ -99,6 +99,31 @@ def test_instantiate_with_a_wrong_guid_returns_null(make_slave):
     assert "GUID" in s.log.messages(ERROR)[-1]
 
 
+def test_without_a_resources_location_the_learned_filter_is_refused_by_name(make_slave, model_description):
+    """The FMU's library builds no tap bank in (it reads its resources): an importer that gives
+    no fmuResourceLocation gets fmi2Error naming tap_file and the missing location at
+    initialization, not a crash; the paper's filter, which needs no file, still runs."""
+    from ctypes import c_double, c_int, c_uint, c_void_p
+
+    s = make_slave("no-resources")
+    guid = model_description.guid
+    estimator = next(v.valueReference for v in model_description.modelVariables if v.name == "estimator")
+    for paper, expected in [(False, ERROR), (True, OK)]:
+        c = instantiate_raw(s, guid, name="no-resources", resources=False)
+        assert c is not None, s.log.messages(ERROR)
+        comp = c_void_p(c)
+        if paper:
+            vr = (c_uint * 1)(estimator)
+            assert s.raw("fmi2SetInteger")(comp, vr, 1, (c_int * 1)(1)) == OK
+        assert s.raw("fmi2SetupExperiment")(comp, c_int(0), c_double(0.0), c_double(0.0), c_int(0), c_double(0.0)) == OK
+        assert s.raw("fmi2EnterInitializationMode")(comp) == OK
+        assert s.raw("fmi2ExitInitializationMode")(comp) == expected
+        if not paper:
+            message = last_error(s)
+            assert "tap_file" in message and "fmuResourceLocation" in message, message
+        s.raw("fmi2FreeInstance")(comp)
+
+
 def test_nan_sample_is_skipped_with_a_warning_and_estimation_continues(make_slave, short_runs):
     s = initialized(make_slave, "nan")
     signals = short_runs[0].signals

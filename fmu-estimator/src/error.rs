@@ -213,11 +213,11 @@ pub enum SettingError {
         /// Where it was looked for (resolved against the resources directory).
         path: PathBuf,
     },
-    /// A relative `tap_file` that is no shipped bank and no file in the working directory, with
-    /// no resources directory to look in.
+    /// A relative `tap_file` that is no bank built into the library and no file in the working
+    /// directory, with no resources directory to look in (the FMU's shared library builds no bank
+    /// in: it needs the importer's `fmuResourceLocation` for its shipped banks).
     #[error(
-        "tap_file '{name}' is relative, not in the working directory, and the FMU has no resources directory: give an absolute path or a shipped bank ({})",
-        crate::learned::SHIPPED.join(", ")
+        "tap_file '{name}' is relative, not in the working directory, and there is no resources directory (no fmuResourceLocation) to look in: give an absolute path, or instantiate the FMU with its resources location"
     )]
     TapFileRelative {
         /// The `tap_file` parameter as given.

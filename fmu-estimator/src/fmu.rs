@@ -445,9 +445,9 @@ impl Estimator {
 }
 
 /// The learned filter the parameters ask for (`estimator` 2), from `tap_file` (in the resources
-/// directory unless absolute; the bank built into the library when there is no resources
-/// directory, as offline), its contract checked against this runtime and the Kalman channel
-/// `config` builds ([`crate::learned::contract`]).
+/// directory unless absolute; when there is no resources directory, as offline, the bank built
+/// into the library with the `builtin-banks` feature), its contract checked against this
+/// runtime and the Kalman channel `config` builds ([`crate::learned::contract`]).
 pub fn learned_from_values(
     v: &Values,
     resources: Option<&std::path::Path>,

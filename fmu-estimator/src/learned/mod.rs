@@ -63,7 +63,10 @@ pub(crate) fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
 }
 
 /// A tap bank shipped in the FMU's resources ([`SHIPPED`]), as built into this library
-/// (offline processing without an unpacked FMU); `None` for any other name.
+/// (offline processing without an unpacked FMU); `None` for any other name, and for every name
+/// in a build without the `builtin-banks` feature (the FMU's shared library, which reads its
+/// resources).
+#[cfg(feature = "builtin-banks")]
 pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
     let bytes: &[u8] = match name {
         "learned.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps")),
@@ -82,7 +85,14 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
     ))
 }
 
+/// Without the `builtin-banks` feature no bank is built in.
+#[cfg(not(feature = "builtin-banks"))]
+pub fn shipped_named(_name: &str) -> Option<Result<Bank, BankError>> {
+    None
+}
+
 /// The default tap bank (`learned.taps`), as built into this library.
+#[cfg(feature = "builtin-banks")]
 pub fn shipped() -> Result<Bank, BankError> {
     shipped_named(SHIPPED[0]).expect("a shipped name")
 }
