@@ -216,8 +216,18 @@ pub enum SettingError {
     /// A relative `tap_file` that is no bank built into the library and no file in the working
     /// directory, with no resources directory to look in (the FMU's shared library builds no bank
     /// in: it needs the importer's `fmuResourceLocation` for its shipped banks).
-    #[error(
-        "tap_file '{name}' is relative, not in the working directory, and there is no resources directory (no fmuResourceLocation) to look in: give an absolute path, or instantiate the FMU with its resources location"
+    #[cfg_attr(
+        feature = "builtin-banks",
+        error(
+            "tap_file '{name}' is relative and not in the working directory: give an absolute path or a shipped bank ({})",
+            crate::learned::SHIPPED.join(", ")
+        )
+    )]
+    #[cfg_attr(
+        not(feature = "builtin-banks"),
+        error(
+            "tap_file '{name}' is relative, not in the working directory, and there is no resources directory (no fmuResourceLocation) to look in: give an absolute path, or instantiate the FMU with its resources location"
+        )
     )]
     TapFileRelative {
         /// The `tap_file` parameter as given.

@@ -313,17 +313,21 @@ fn setting_calibration(
     };
     let path = crate::config::user_file(name, None)
         .ok_or_else(|| missing(Path::new(name).to_path_buf()))?;
-    if !path.is_file() {
+    // Not a regular file (a directory, a device) is the loader's error, as in the FMU.
+    if !path.exists() {
         return Err(missing(path).into());
     }
+    // One file named two ways (`..`, a link) is one file.
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
     match calibration {
-        Some(given) if std::path::absolute(given).ok().as_deref() != Some(path.as_path()) => {
-            Err(SettingError::CalibrationTwice {
-                argument: given.to_path_buf(),
-                setting: name.clone(),
-            }
-            .into())
+        Some(given) if !same(given, &path) => Err(SettingError::CalibrationTwice {
+            argument: given.to_path_buf(),
+            setting: name.clone(),
         }
+        .into()),
         _ => Ok(Some(path)),
     }
 }
@@ -1042,6 +1046,11 @@ mod tests {
         let by_setting = run(Some(&file), None).unwrap();
         assert_eq!(by_setting, run(None, Some(&file)).unwrap());
         assert_eq!(by_setting, run(Some(&file), Some(&file)).unwrap());
+        let roundabout = dir
+            .join("..")
+            .join(dir.file_name().unwrap())
+            .join("other.toml");
+        assert_eq!(by_setting, run(Some(&file), Some(&roundabout)).unwrap());
         assert_ne!(by_setting, run(None, None).unwrap());
         let shipped = dir.join("shipped.toml");
         std::fs::write(&shipped, calibration::SHIPPED).unwrap();

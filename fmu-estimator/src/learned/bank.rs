@@ -261,8 +261,10 @@ impl Header {
                     .write(&w.taps, w.past + w.future + 1, &mut data);
             }
         }
+        // The header's own format: a bank re-encoded from an older one keeps its format on both.
         let mut out = format!(
-            "{MAGIC} {FORMAT} {} {} {:016x}\n",
+            "{MAGIC} {} {} {} {:016x}\n",
+            self.format,
             header.len(),
             data.len(),
             fnv1a(&data)
@@ -316,6 +318,12 @@ impl Header {
         let head = std::str::from_utf8(head).map_err(|_| bad(BankProblem::HeaderText))?;
         let mut bank: Bank =
             toml::from_str(head).map_err(|e| bad(BankProblem::Toml(e.to_string())))?;
+        if f[1] != bank.format.to_string() {
+            return Err(bad(BankProblem::FormatDisagrees {
+                line: f[1].parse().unwrap_or_default(),
+                header: bank.format,
+            }));
+        }
         bank.check().map_err(bad)?;
         let encoding = bank.encoding;
         let needed: usize = bank
@@ -629,6 +637,21 @@ pub(crate) mod tests {
             .replace(&format!("learned-taps {FORMAT}"), "learned-taps 7");
         let e = Bank::parse(text.as_bytes(), p).unwrap_err().to_string();
         assert!(e.contains("format 7"), "{e}");
+        // A first line edited to another format this reader takes disagrees with the header.
+        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
+        let first = String::from_utf8(bytes[..nl].to_vec()).unwrap().replacen(
+            &format!("learned-taps {FORMAT}"),
+            "learned-taps 4",
+            1,
+        );
+        let edited = [first.as_bytes(), &bytes[nl..]].concat();
+        let e = Bank::parse(&edited, p).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!(
+                "first line says format 4, the header format {FORMAT}"
+            )),
+            "{e}"
+        );
         // A bank of the formats before the contract says why it is refused.
         let text = String::from_utf8_lossy(&bytes)
             .replace(&format!("learned-taps {FORMAT}"), "learned-taps 2");

@@ -83,6 +83,15 @@ pub enum BankProblem {
     /// The header's `format` is not one this reader takes.
     #[error("header format {0}")]
     HeaderFormat(u32),
+    /// The first line's format and the header's differ: one of them was edited, and which
+    /// format's rules the file follows is not known.
+    #[error("the first line says format {line}, the header format {header}")]
+    FormatDisagrees {
+        /// The first line's format.
+        line: u32,
+        /// The header's `format`.
+        header: u32,
+    },
     /// The contact model cannot be used.
     #[error(transparent)]
     Contact(#[from] ContactProblem),
