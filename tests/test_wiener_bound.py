@@ -1,18 +1,23 @@
-"""tests/wiener_bound.py's Wiener machinery against the textbook case: a first-order
-autoregressive signal seen in white noise, whose non-causal Wiener error spectrum is
-`S_y N / (S_y + N)` in closed form, and a second sensor that adds information."""
+"""tests/wiener_bound.py's Wiener machinery against cases whose answer is known: a first-order
+autoregressive signal seen in white noise (non-causal Wiener error `S_y N / (S_y + N)` in closed
+form), two independent looks at it, a look delayed in time (complex cross-spectra: a transposed
+or conjugated solve, or a reversed FIR, fails it), and noise-free exact derivatives of a steep
+signal, whose error must be nil (Welch's window loses coherence there unless the channels are
+shaped alike)."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy import signal
 
-from wiener_bound import apply, fir, spectra, wiener
+from wiener_bound import apply, back_to_target, bound, fir, shape, spectra, wiener
 
 FS = 50.0
 A = 0.95
 SIGMA = 1.0
-NOISE = 4.0 * 2 * SIGMA**2 / FS  # the density at which the signal's DC level is 1/4 of the noise
+# The noise density: 4 times the innovation's, so that the signal (100 times the noise at DC)
+# dominates below about 1 Hz and the noise above.
+NOISE = 4.0 * 2 * SIGMA**2 / FS
 
 
 def ar1(rng: np.random.Generator, n: int) -> np.ndarray:
@@ -22,6 +27,11 @@ def ar1(rng: np.random.Generator, n: int) -> np.ndarray:
 def analytic_spectrum(f: np.ndarray) -> np.ndarray:
     """One-sided PSD of the AR(1) process at sample rate FS."""
     return 2 * SIGMA**2 / FS / np.abs(1 - A * np.exp(-2j * np.pi * f / FS)) ** 2
+
+
+def white(rng: np.random.Generator, n: int) -> np.ndarray:
+    """White noise of one-sided density NOISE at FS."""
+    return np.sqrt(NOISE * FS / 2) * rng.standard_normal(n)
 
 
 def test_the_wiener_error_is_the_textbook_one_and_the_fir_reaches_it():
@@ -38,18 +48,19 @@ def test_the_wiener_error_is_the_textbook_one_and_the_fir_reaches_it():
     w, err = wiener(s, 1, (0,), np.array([NOISE, 0.0]))
     sy = analytic_spectrum(f)
     expected = sy * NOISE / (sy + NOISE)
-    df = f[1] - f[0]
-    assert abs(np.sum(err) * df / (np.sum(expected) * df) - 1) < 0.03
-    # Where the signal dominates the weight is near 1, where the noise does near 0.
-    assert abs(w[0, 0].real - sy[0] / (sy[0] + NOISE)) < 0.05
-    assert abs(w[0, -1]) < 0.1
+    assert abs(np.sum(err) / np.sum(expected) - 1) < 0.03
+    # The weight follows the signal-to-noise ratio: 0.98 at 0.5 Hz, 0.07 at 20 Hz.
+    bins = [int(0.5 / f[1]), int(20 / f[1])]
+    np.testing.assert_allclose(w[0, bins].real, (sy / (sy + NOISE))[bins], rtol=0.1)
+    assert np.all(np.abs(w[0, bins].imag) < 0.02)
 
     # The two-sided FIR on a fresh noisy record reaches the bound's error variance.
     y = ar1(rng, 400_000)
-    x = y + np.sqrt(NOISE * FS / 2) * rng.standard_normal(len(y))
+    x = y + white(rng, len(y))
     est = apply(fir(w[:1], nperseg), x[None, :])
     inner = slice(nperseg, -nperseg)
     mse = np.mean((est[inner] - y[inner]) ** 2)
+    df = f[1] - f[0]
     assert abs(mse / (np.sum(expected) * df) - 1) < 0.05
     # Doing nothing and trusting the sensor are both worse.
     assert mse < 0.8 * min(np.var(y), np.mean((x - y) ** 2))
@@ -70,3 +81,63 @@ def test_a_second_sensor_with_independent_noise_lowers_the_error_as_two_looks_do
     expected = sy * (NOISE / 2) / (sy + NOISE / 2)
     assert abs(np.sum(two) / np.sum(expected) - 1) < 0.03
     assert np.sum(two) < 0.75 * np.sum(one)
+
+
+def test_a_delayed_look_is_undone_by_the_fir_and_its_error_is_the_bound():
+    """A sensor that sees the signal 5 samples late (and a second one 3 samples early) makes the
+    cross-spectra complex: only the right orientation of the normal equations and the right
+    direction of the FIR give the bound's error on a fresh record."""
+    rng = np.random.default_rng(3)
+    nperseg = 1024
+    late, early = 5, 3
+
+    def looks(n: int) -> tuple[np.ndarray, np.ndarray]:
+        y = ar1(rng, n + 16)
+        return np.array([y[8 - late: 8 - late + n], y[8 + early: 8 + early + n]]), y[8: 8 + n]
+
+    runs = []
+    for _ in range(8):
+        x, y = looks(200_000)
+        runs.append(np.vstack([x, y]))
+    f, s = spectra(runs, FS, nperseg)
+    w, err = wiener(s, 2, (0, 1), np.array([NOISE, NOISE, 0.0]))
+    x, y = looks(400_000)
+    x = x + np.array([white(rng, x.shape[1]), white(rng, x.shape[1])])
+    est = apply(fir(w, nperseg), x)
+    inner = slice(nperseg, -nperseg)
+    mse = np.mean((est[inner] - y[inner]) ** 2)
+    df = f[1] - f[0]
+    assert abs(mse / (np.sum(err) * df) - 1) < 0.05
+    # Two noisy looks, re-aligned: better than either alone would be.
+    assert mse < 0.75 * np.mean((x[0, late:] - y[:-late]) ** 2)
+
+
+def test_shaped_exact_derivatives_leave_no_error():
+    """A steep signal (a doubly integrated random walk, falling by decades across each band) and
+    its exact derivatives without noise: the alignment is known exactly, so every band's error
+    must be nil. Shaped alike (the target differenced twice, the rate once), Welch keeps the
+    coherence; unshaped, its window leaves a floor that no noise causes."""
+    rng = np.random.default_rng(1)
+    fs, speed = FS, 20.0
+    b, a = signal.butter(2, 1.5, fs=fs)  # a "suspension" low-pass for the frame channel
+
+    def make(n: int) -> np.ndarray:
+        e = rng.standard_normal(n + 20_000)
+        y = signal.lfilter([1], [1, -0.999], signal.lfilter([1], [1, -0.999], e))[20_000:]
+        acc = np.gradient(np.gradient(y))
+        return np.array([np.gradient(y), acc, signal.lfilter(b, a, acc), y])
+
+    orders = (-1, 0, 0, -2)
+    runs = [make(14_000) for _ in range(12)]
+    shaped = [np.array([shape(c, o, fs) for c, o in zip(r, orders)]) for r in runs]
+    nothing = np.zeros(4)
+
+    f, s = spectra(shaped, fs, 4096)
+    back = np.abs(back_to_target(orders[3], f, fs, speed)) ** 2
+    _, err = wiener(s, 3, (0, 1, 2), nothing)
+    for name, j in bound(err * back, s[3, 3].real * back, f, fs, speed).items():
+        assert j < 0.005, (name, j)
+
+    f, s = spectra(runs, fs, 4096)
+    _, err = wiener(s, 3, (1,), nothing)
+    assert bound(err, s[3, 3].real, f, fs, speed)["D3"] > 0.05
