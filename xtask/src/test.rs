@@ -93,6 +93,24 @@ pub fn test(o: TestOptions) -> Result<bool> {
                 workspace::run(&mut cargo(&args))
             },
         ));
+        // The FMU's library builds fmu-estimator without its default features (no banks built
+        // in); the workspace lint above sees them on (the studies ask for them).
+        stages.push(timed(
+            "cargo clippy -p fmu-estimator --no-default-features --lib -- -D warnings",
+            || {
+                let args = [
+                    "clippy",
+                    "-p",
+                    "fmu-estimator",
+                    "--no-default-features",
+                    "--lib",
+                    "--",
+                    "-D",
+                    "warnings",
+                ];
+                workspace::run(&mut cargo(&args))
+            },
+        ));
         // The crate docs hold the derivations: a broken link or a malformed doc comment fails.
         stages.push(timed(
             "cargo doc --workspace --no-deps (RUSTDOCFLAGS=-D warnings)",
