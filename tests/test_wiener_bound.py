@@ -141,3 +141,22 @@ def test_shaped_exact_derivatives_leave_no_error():
     f, s = spectra(runs, fs, 4096)
     _, err = wiener(s, 3, (1,), nothing)
     assert bound(err, s[3, 3].real, f, fs, speed)["D3"] > 0.05
+
+
+def test_the_d3_fir_is_causal_when_asked():
+    """The D3 FIR's lags: positive ones reach the past only. A sensor that leads the target by
+    10 s gives it back exactly to a causal window; one that trails it by 10 s (more than a D3
+    period at 20 m/s) does not, but a two-sided window gives that back too."""
+    from wiener_bound import d3_fir
+
+    rng = np.random.default_rng(5)
+    fs, shift = FS, 500
+    runs = []
+    for _ in range(6):
+        y = signal.lfilter([1.0], [1.0, -0.99], rng.standard_normal(20_000 + 2 * shift))
+        runs.append(np.array([y[2 * shift:], y[:-2 * shift], y[shift:-shift]]))  # leads, trails, target
+    nothing = np.zeros(3)
+    causal, both = list(range(0, 41)), list(range(-40, 41))
+    assert d3_fir(runs, nothing, (0,), causal, fs, rng) < 0.03
+    assert d3_fir(runs, nothing, (1,), causal, fs, rng) > 0.3
+    assert d3_fir(runs, nothing, (1,), both, fs, rng) < 0.03
