@@ -24,7 +24,10 @@ Method (nothing here is taken from the estimator):
    error) and judged by `track_alignment.band_metrics`, the project's metric: the best linear
    estimate that may look both ways over the whole 400 m record, with its edges as they are.
 5. `learned`: the shipped default (causal) on the same records, three and four sensors.
-6. What a causal output of D3 alone can do with a long memory: a ridge least-squares FIR over
+6. Per record: the held-out seeds with `--draws` noise draws each, the Wiener FIR against the
+   default (the paper's sensors, three sensors): how much one 400 m record's D3 moves with the
+   draw.
+7. What a causal output of D3 alone can do with a long memory: a ridge least-squares FIR over
    the last `--memory` metres (and, for comparison, a two-sided one) fitted in the D3 band alone
    (regressors and truth band-passed alike by the metric's filter, then at 2 Hz; its response
    outside D3 is left free), on the first two thirds of the training runs with one draw of the
@@ -213,6 +216,38 @@ def d3_fir(runs: list[np.ndarray], sensors: tuple[int, ...], lags: list[int], fs
     return jrel(fit(data[:train], ridge), data[train:]), ridge
 
 
+def per_draw(ta, vehicle, s: np.ndarray, f: np.ndarray, fs: float, nperseg: int, seeds: list[int], draws: int) -> None:
+    """The paper's sensors, three sensors: each held-out seed with `draws` noise draws
+    (`noise_seed` = seed + 1000 k), D3 and whole of the Wiener FIR and of the default."""
+    target = len(CHANNELS)
+    sensors = SETS["3"]
+    gains = np.array([np.abs(shape_response(SHAPE[i], f, fs)) ** 2 for i in range(target)])
+    noise = np.array(GRADES["paper's sensors"])[:, None] * gains
+    w, _ = wiener(s, target, sensors, noise)
+    h = fir(w * back_to_target(SHAPE[target], f, fs, SPEED), nperseg)
+    print(f"\nPer record: the paper's sensors, three sensors, {draws} noise draws per held-out seed "
+          "(noise_seed = seed + 1000 k). Wiener FIR D3 / whole; default D3 / whole.\n")
+    print("| seed | noise_seed | Wiener FIR | learned default |")
+    print("|---|---|---|---|")
+    rows = []
+    for seed in seeds:
+        for k in range(1, draws + 1):
+            out = ta.simulate(vehicle, 20.0, step=STEP, parameters={"track_seed": seed, "noise_seed": seed + 1000 * k},
+                              variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
+            r = {name: np.ascontiguousarray(v[1:]) for name, v in out.items()}
+            x = decimate(np.array([r[CHANNELS[i]] for i in sensors]))
+            est = apply(h, np.array([shape(xi, SHAPE[i], fs) for xi, i in zip(x, sensors)]))
+            at = np.ascontiguousarray(r["distance"][::int(np.prod(DECIMATION))][: len(est)])
+            m = ta.band_metrics(at, np.ascontiguousarray(est), r["distance"], r["alignment"])
+            o = ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP)
+            d = ta.band_metrics(o["distance"], o["alignment"], r["distance"], r["alignment"])
+            rows.append([m["D3"]["Jrel"], m["whole"]["Jrel"], d["D3"]["Jrel"], d["whole"]["Jrel"]])
+            print(f"| {seed} | {seed + 1000 * k} | {rows[-1][0]:.3f} / {rows[-1][1]:.3f} | {rows[-1][2]:.3f} / {rows[-1][3]:.3f} |", flush=True)
+    lo, hi, mean = np.min(rows, axis=0), np.max(rows, axis=0), np.mean(rows, axis=0)
+    print(f"| range (mean) | | D3 {lo[0]:.3f}-{hi[0]:.3f} ({mean[0]:.3f}), whole ({mean[1]:.3f}) | "
+          f"D3 {lo[2]:.3f}-{hi[2]:.3f} ({mean[2]:.3f}), whole ({mean[3]:.3f}) |")
+
+
 def main() -> None:
     import track_alignment as ta
     from project import packaged_fmus, seed_list
@@ -223,9 +258,12 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=300.0, help="each training run [s]")
     ap.add_argument("--segment", type=float, default=1638.4, help="Welch segment [m]")
     ap.add_argument("--memory", type=float, default=600.0, help="the D3 FIR's window [m]")
+    ap.add_argument("--draws", type=int, default=3, help="noise draws per held-out seed in the per-record table")
     a = ap.parse_args()
     if set(a.train_seeds) & set(a.seeds):
         ap.error(f"training and held-out seeds overlap: {sorted(set(a.train_seeds) & set(a.seeds))}")
+    if a.draws < 1:
+        ap.error(f"--draws {a.draws}: at least one noise draw")
     if a.duration < 2 * a.segment / SPEED + 20:
         ap.error(f"--duration {a.duration} s holds fewer than two --segment {a.segment} m windows")
     vehicle = packaged_fmus()["RailVehicle"]
@@ -275,6 +313,8 @@ def main() -> None:
             mean = lambda ms: {k: float(np.mean([m[k]["Jrel"] for m in ms])) for k in BANDS}  # noqa: E731
             stationary = bound(err * np.abs(to_alignment) ** 2, syy, f, fs, SPEED)
             print(f"| {grade} | {name} | {fmt(stationary)} | {fmt(mean(applied))} | {fmt(mean(learned))} |", flush=True)
+
+    per_draw(ta, vehicle, s, f, fs, nperseg, a.seeds, a.draws)
 
     checked = a.train_seeds[len(a.train_seeds) * 2 // 3:]
     steps = int(round(a.memory / SPEED * 2.0))
