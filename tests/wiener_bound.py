@@ -39,7 +39,7 @@ Method (nothing here is taken from the estimator):
     XTASK_FMU_DIR=target/fmu .venv/bin/python tests/wiener_bound.py [--train-seeds 101-112] \
         [--seeds 1-5] [--duration 300] [--segment 1638.4]
 
-Seeds: training 101-112 (calibration and validation), held out 1-5 (only judged). About 8 min
+Seeds: training 101-112 (calibration and validation), held out 1-5 (only judged). About 10 min
 on 2 cores. Only the noise is modelled: biases, scale and misalignment are left out (the presets'
 other errors are removed at a standstill or cost nothing: docs/accuracy.md).
 """
