@@ -27,13 +27,10 @@ import argparse
 import numpy as np
 from scipy import signal
 
-SPEED = 20.0
-STEP = 1e-3
-CHANNELS = ("ws_yaw_rate", "ws_acc_y", "frame_acc_y", "ws_roll_rate")
-NOISE = {
-    "paper": {},
-    "tactical": {f"{c}_noise_psd": n for c, n in zip(CHANNELS, (3.64e-5**2, 3.3e-4**2, 3.3e-4**2, 3.64e-5**2))},
-}
+from wiener_bound import CHANNELS, GRADES, SPEED, STEP, default_estimate, lagged, noise_parameters, noisy_record
+
+# The paper's sensors as the vehicle FMU's default per-sample sigmas; the tactical preset's noise.
+NOISE = {"paper": {}, "tactical": noise_parameters(GRADES["tactical (HG1700)"])}
 EVERY = int(round(10.0 / (SPEED * STEP)))  # samples between taps: 10 m
 LAGS = range(0, 61)  # 600 m
 HIGH = signal.butter(2, SPEED / 400.0, btype="high", fs=1 / STEP, output="sos")
@@ -44,32 +41,18 @@ BANDS = ("whole", "D1", "D2", "D3")
 
 def record(ta, vehicle, seed: int, duration: float, grade: str, sensors: int, estimate: bool) -> dict:
     """One run of the vehicle FMU, the default's estimate of it, and the stage's inputs."""
-    out = ta.simulate(vehicle, duration, step=STEP,
-                      parameters={"track_seed": seed, "noise_seed": seed + 1000, **NOISE[grade]},
-                      variables=[*CHANNELS, "forward_speed", "distance", "alignment"])
-    r = {k: np.ascontiguousarray(v[1:]) for k, v in out.items()}
-    roll = sensors == 4
-    o = ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP,
-                    ws_roll_rate=r["ws_roll_rate"] if roll else None,
-                    settings={"use_roll_rate": True} if roll else None)
+    r = noisy_record(ta, vehicle, seed, duration, NOISE[grade], seed + 1000)
+    o = default_estimate(ta, r, sensors)
     r["estimate"], r["estimate_distance"] = o["alignment"], o["distance"]
     inputs = [r[c] for c in CHANNELS[:sensors]] + ([o["alignment"]] if estimate else [])
     r["inputs"] = np.array([signal.sosfilt(LOW, signal.sosfilt(HIGH, x)) for x in inputs])
     return r
 
 
-def lagged(inputs: np.ndarray) -> np.ndarray:
-    """Each input delayed by each of LAGS x EVERY samples (the past only), zero before the start."""
-    n = inputs.shape[1]
-    cols = []
-    for x in inputs:
-        for lag in LAGS:
-            z = np.zeros(n)
-            d = lag * EVERY
-            if d < n:
-                z[d:] = x[: n - d]
-            cols.append(z)
-    return np.array(cols)
+def delayed(inputs: np.ndarray) -> np.ndarray:
+    """Each input delayed by each of LAGS x EVERY samples (the past only), zero before the start:
+    one row per input and lag."""
+    return lagged(inputs, [lag * EVERY for lag in LAGS]).T
 
 
 def main() -> None:
@@ -92,7 +75,7 @@ def main() -> None:
         for seed in range(101, 109):
             r = record(ta, vehicle, seed, 300.0, a.grade, sensors, not a.without_estimate)
             keep = slice(int(800.0 / (SPEED * STEP)), None, int(2.0 / (SPEED * STEP)))  # past 800 m, every 2 m
-            rows.append(np.array([whole(x)[keep] for x in lagged(r["inputs"])]).T)
+            rows.append(np.array([whole(x)[keep] for x in delayed(r["inputs"])]).T)
             target.append(whole(r["alignment"] - r["estimate"])[keep])
         x, y = np.concatenate(rows), np.concatenate(target)
         gram = x.T @ x
@@ -105,7 +88,7 @@ def main() -> None:
                 if seed not in cache:
                     cache[seed] = record(ta, vehicle, seed, duration, a.grade, sensors, not a.without_estimate)
                 r = cache[seed]
-                stage = np.ascontiguousarray(r["estimate"] + w @ lagged(r["inputs"]))
+                stage = np.ascontiguousarray(r["estimate"] + w @ delayed(r["inputs"]))
                 before.append(ta.band_metrics(r["estimate_distance"], r["estimate"], r["distance"], r["alignment"], trim=trim))
                 after.append(ta.band_metrics(r["estimate_distance"], stage, r["distance"], r["alignment"], trim=trim))
             return before, after

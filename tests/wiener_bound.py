@@ -166,15 +166,16 @@ def apply(h: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def lagged(x: np.ndarray, lags: list[int]) -> np.ndarray:
-    """The regressors: each channel of `x` shifted by each lag (positive: the past), zero-filled."""
+    """The regressors: each channel of `x` shifted by each lag (positive: the past), zero-filled
+    (all zeros for a lag beyond the record)."""
     n = x.shape[1]
     cols = []
     for c in x:
         for lag in lags:
             z = np.zeros(n)
-            if lag >= 0:
+            if 0 <= lag < n:
                 z[lag:] = c[: n - lag]
-            else:
+            elif -n < lag < 0:
                 z[:lag] = c[-lag:]
             cols.append(z)
     return np.array(cols).T
@@ -216,15 +217,59 @@ def d3_fir(runs: list[np.ndarray], sensors: tuple[int, ...], lags: list[int], fs
     return jrel(fit(data[:train], ridge), data[train:]), ridge
 
 
+def noise_parameters(density) -> dict[str, float]:
+    """The vehicle FMU's noise densities of a grade (`<sensor>_noise_psd`)."""
+    return {f"{c}_noise_psd": n for c, n in zip(CHANNELS, density)}
+
+
+def noisy_record(ta, vehicle, seed: int, duration: float, noise: dict[str, float], noise_seed: int) -> dict[str, np.ndarray]:
+    """A run of the vehicle FMU at the standard case's speed with the sensor noise `noise` (its
+    parameters: [`noise_parameters`], or none for the FMU's default sigmas)."""
+    out = ta.simulate(vehicle, duration, step=STEP,
+                      parameters={"track_seed": seed, "noise_seed": noise_seed, **noise},
+                      variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
+    return {k: np.ascontiguousarray(v[1:]) for k, v in out.items()}
+
+
+def default_estimate(ta, r: dict[str, np.ndarray], sensors: int) -> dict[str, np.ndarray]:
+    """The shipped default's outputs over a record, with the roll gyroscope for four sensors."""
+    roll = sensors == 4
+    return ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP,
+                       ws_roll_rate=r["ws_roll_rate"] if roll else None,
+                       settings={"use_roll_rate": True} if roll else None)
+
+
+def default_metrics(ta, r: dict[str, np.ndarray], sensors: int, trim: float = 10.0) -> dict:
+    """The shipped default's band metrics over a record."""
+    o = default_estimate(ta, r, sensors)
+    return ta.band_metrics(o["distance"], o["alignment"], r["distance"], r["alignment"], trim=trim)
+
+
+def wiener_fir(s: np.ndarray, f: np.ndarray, fs: float, nperseg: int, density,
+               sensors: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The two-sided FIR of `sensors` (shaped) that estimates the alignment under a grade's
+    noise, and its error spectrum in the alignment's units."""
+    target = len(CHANNELS)
+    gains = np.array([np.abs(shape_response(order, f, fs)) ** 2 for order in SHAPE[:target]])
+    w, err = wiener(s, target, sensors, np.array(density)[:, None] * gains)
+    to_alignment = back_to_target(SHAPE[target], f, fs, SPEED)
+    return fir(w * to_alignment, nperseg), err * np.abs(to_alignment) ** 2
+
+
+def wiener_metrics(ta, h: np.ndarray, r: dict[str, np.ndarray], sensors: tuple[int, ...], fs: float) -> dict:
+    """The band metrics of the FIR `h` over a record's sensors (decimated, shaped)."""
+    x = decimate(np.array([r[CHANNELS[i]] for i in sensors]))
+    est = apply(h, np.array([shape(xi, SHAPE[i], fs) for xi, i in zip(x, sensors)]))
+    at = np.ascontiguousarray(r["distance"][::int(np.prod(DECIMATION))][: len(est)])
+    return ta.band_metrics(at, np.ascontiguousarray(est), r["distance"], r["alignment"])
+
+
 def per_draw(ta, vehicle, s: np.ndarray, f: np.ndarray, fs: float, nperseg: int, seeds: list[int], draws: int) -> None:
     """The paper's sensors, three sensors: each held-out seed with `draws` noise draws
     (`noise_seed` = seed + 1000 k), D3 and whole of the Wiener FIR and of the default."""
-    target = len(CHANNELS)
     sensors = SETS["3"]
-    gains = np.array([np.abs(shape_response(SHAPE[i], f, fs)) ** 2 for i in range(target)])
-    noise = np.array(GRADES["paper's sensors"])[:, None] * gains
-    w, _ = wiener(s, target, sensors, noise)
-    h = fir(w * back_to_target(SHAPE[target], f, fs, SPEED), nperseg)
+    density = GRADES["paper's sensors"]
+    h, _ = wiener_fir(s, f, fs, nperseg, density, sensors)
     print(f"\nPer record: the paper's sensors, three sensors, {draws} noise draws per held-out seed "
           "(noise_seed = seed + 1000 k). Wiener FIR D3 / whole; default D3 / whole.\n")
     print("| seed | noise_seed | Wiener FIR | learned default |")
@@ -232,15 +277,9 @@ def per_draw(ta, vehicle, s: np.ndarray, f: np.ndarray, fs: float, nperseg: int,
     rows = []
     for seed in seeds:
         for k in range(1, draws + 1):
-            out = ta.simulate(vehicle, 20.0, step=STEP, parameters={"track_seed": seed, "noise_seed": seed + 1000 * k},
-                              variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
-            r = {name: np.ascontiguousarray(v[1:]) for name, v in out.items()}
-            x = decimate(np.array([r[CHANNELS[i]] for i in sensors]))
-            est = apply(h, np.array([shape(xi, SHAPE[i], fs) for xi, i in zip(x, sensors)]))
-            at = np.ascontiguousarray(r["distance"][::int(np.prod(DECIMATION))][: len(est)])
-            m = ta.band_metrics(at, np.ascontiguousarray(est), r["distance"], r["alignment"])
-            o = ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP)
-            d = ta.band_metrics(o["distance"], o["alignment"], r["distance"], r["alignment"])
+            r = noisy_record(ta, vehicle, seed, 20.0, noise_parameters(density), seed + 1000 * k)
+            m = wiener_metrics(ta, h, r, sensors, fs)
+            d = default_metrics(ta, r, len(sensors))
             rows.append([m["D3"]["Jrel"], m["whole"]["Jrel"], d["D3"]["Jrel"], d["whole"]["Jrel"]])
             print(f"| {seed} | {seed + 1000 * k} | {rows[-1][0]:.3f} / {rows[-1][1]:.3f} | {rows[-1][2]:.3f} / {rows[-1][3]:.3f} |", flush=True)
     lo, hi, mean = np.min(rows, axis=0), np.max(rows, axis=0), np.mean(rows, axis=0)
@@ -279,39 +318,21 @@ def main() -> None:
         runs.append(x[:, int(20.0 * fs):])
     f, s = spectra(runs, fs, nperseg)
     target = len(CHANNELS)
-    # Back from the shaped alignment to the alignment; no weight on waves beyond LONGEST.
-    to_alignment = back_to_target(SHAPE[target], f, fs, SPEED)
-    syy = s[target, target].real * np.abs(to_alignment) ** 2
-    gains = np.array([np.abs(shape_response(order, f, fs)) ** 2 for order in SHAPE[:target]])
+    # The truth's spectrum back from the shaped alignment; no weight on waves beyond LONGEST.
+    syy = s[target, target].real * np.abs(back_to_target(SHAPE[target], f, fs, SPEED)) ** 2
     print(f"Training: seeds {a.train_seeds[0]}-{a.train_seeds[-1]}, {a.duration:g} s each at {SPEED:g} m/s; "
           f"held out: {a.seeds}. Jrel whole / D1 / D2 / D3.\n")
     print("| sensors (noise only) | sensor set | Wiener bound (stationary) | Wiener FIR, non-causal, on the records | learned default, causal |")
     print("|---|---|---|---|---|")
     fmt = lambda d: " / ".join(f"{d[k]:.3f}" for k in BANDS)  # noqa: E731
     for grade, density in GRADES.items():
-        noise = np.array(density)[:, None] * gains
-        params = {f"{c}_noise_psd": n for c, n in zip(CHANNELS, density)}
-        records = []
-        for seed in a.seeds:
-            out = ta.simulate(vehicle, 20.0, step=STEP, parameters={"track_seed": seed, "noise_seed": seed + 1000, **params},
-                              variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
-            records.append({k: np.ascontiguousarray(v[1:]) for k, v in out.items()})
+        records = [noisy_record(ta, vehicle, seed, 20.0, noise_parameters(density), seed + 1000) for seed in a.seeds]
         for name, sensors in SETS.items():
-            w, err = wiener(s, target, sensors, noise)
-            h = fir(w * to_alignment, nperseg)
-            applied, learned = [], []
-            for r in records:
-                x = decimate(np.array([r[CHANNELS[i]] for i in sensors]))
-                est = apply(h, np.array([shape(xi, SHAPE[i], fs) for xi, i in zip(x, sensors)]))
-                at = np.ascontiguousarray(r["distance"][::int(np.prod(DECIMATION))][: len(est)])
-                applied.append(ta.band_metrics(at, np.ascontiguousarray(est), r["distance"], r["alignment"]))
-                roll = len(sensors) == 4
-                o = ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP,
-                                ws_roll_rate=r["ws_roll_rate"] if roll else None,
-                                settings={"use_roll_rate": True} if roll else None)
-                learned.append(ta.band_metrics(o["distance"], o["alignment"], r["distance"], r["alignment"]))
+            h, err = wiener_fir(s, f, fs, nperseg, density, sensors)
+            applied = [wiener_metrics(ta, h, r, sensors, fs) for r in records]
+            learned = [default_metrics(ta, r, len(sensors)) for r in records]
             mean = lambda ms: {k: float(np.mean([m[k]["Jrel"] for m in ms])) for k in BANDS}  # noqa: E731
-            stationary = bound(err * np.abs(to_alignment) ** 2, syy, f, fs, SPEED)
+            stationary = bound(err, syy, f, fs, SPEED)
             print(f"| {grade} | {name} | {fmt(stationary)} | {fmt(mean(applied))} | {fmt(mean(learned))} |", flush=True)
 
     per_draw(ta, vehicle, s, f, fs, nperseg, a.seeds, a.draws)
@@ -327,22 +348,12 @@ def main() -> None:
     for grade, density in GRADES.items():
         # One noise draw per grade, shared by both windows.
         noisy = [with_noise(r, np.array(density), fs, rng) for r in plain]
-        params = {f"{c}_noise_psd": n for c, n in zip(CHANNELS, density)}
-        long_runs = []
-        for seed in checked:
-            out = ta.simulate(vehicle, a.duration, step=STEP, parameters={"track_seed": seed, "noise_seed": seed + 1000, **params},
-                              variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
-            long_runs.append({k: np.ascontiguousarray(v[1:]) for k, v in out.items()})
+        long_runs = [noisy_record(ta, vehicle, seed, a.duration, noise_parameters(density), seed + 1000)
+                     for seed in checked]
         for name, sensors in SETS.items():
             causal, causal_ridge = d3_fir(noisy, sensors, list(range(0, steps + 1)), fs)
             both, both_ridge = d3_fir(noisy, sensors, list(range(-steps, steps + 1)), fs)
-            roll = len(sensors) == 4
-            d3 = []
-            for r in long_runs:
-                o = ta.estimate(r["forward_speed"], r["ws_acc_y"], r["ws_yaw_rate"], r["frame_acc_y"], step=STEP,
-                                ws_roll_rate=r["ws_roll_rate"] if roll else None,
-                                settings={"use_roll_rate": True} if roll else None)
-                d3.append(ta.band_metrics(o["distance"], o["alignment"], r["distance"], r["alignment"], trim=200)["D3"]["Jrel"])
+            d3 = [default_metrics(ta, r, len(sensors), trim=200.0)["D3"]["Jrel"] for r in long_runs]
             print(f"| {grade} | {name} | {causal:.3f} ({causal_ridge:g}) | {both:.3f} ({both_ridge:g}) | {np.mean(d3):.3f} |", flush=True)
 
 

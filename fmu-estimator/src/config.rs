@@ -193,7 +193,7 @@ fn design_line_file(
 }
 
 /// Where the calibration file named by the parameters is, if anywhere.
-fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
+pub(crate) fn calibration_path(v: &Values, resources: Option<&Path>) -> Option<PathBuf> {
     user_file(&v.string[vr::CALIBRATION_FILE as usize], resources)
 }
 

@@ -311,7 +311,7 @@ fn setting_calibration(
         name: name.clone(),
         path,
     };
-    let path = crate::config::user_file(name, None)
+    let path = crate::config::calibration_path(values, None)
         .ok_or_else(|| missing(Path::new(name).to_path_buf()))?;
     // Not a regular file (a directory, a device) is the loader's error, as in the FMU.
     if !path.exists() {
