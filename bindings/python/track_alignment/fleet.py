@@ -66,7 +66,7 @@ BANDS = {name.lower(): edges for name, edges in _native.BANDS if name in ("D1", 
 #: error every pass over a track shares, ``INDEPENDENT`` the one averaging removes. Measured on
 #: the calibration and validation track seeds 101-106 (``tests/fleet_gain.py``, 20 passes each;
 #: docs/python.md); the segment SDs are divided by its square root.
-SD_MODEL = {"d1": (0.960, 0.0119, 0.0223), "d2": (0.968, 0.0009, 0.0015)}
+SD_MODEL = {"d1": (0.966, 0.0087, 0.0162), "d2": (0.967, 0.0008, 0.0016)}
 
 
 def sd_factor(band: str, passes) -> np.ndarray:

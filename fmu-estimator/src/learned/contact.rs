@@ -53,8 +53,11 @@
 //! speed (`alignment-studies taps`). Each set is judged by its own speed's model, and the
 //! estimates are averaged with weights of how much of the last `memory` metres each set holds
 //! over that model's squared validation error, then clamped to the trained range. On the
-//! validation seeds at 20 m/s it reaches about +-0.08 after 200 m of track (a scale of 1.0, 0.75
-//! or 0.5).
+//! validation seeds (`learned.taps`, a scale of 1.0, 0.75 or 0.5) it reaches about +-0.03 rms
+//! after 200 m of track at every bank speed.
+//!
+//! Out of its training: on a track without cross-level (a simulation's; every training run has
+//! it) the 3-6 m octave's features read the nominal contact as the lowest trained scale.
 //!
 //! Why sets per speed: with one set of moments for all speeds (until 2026-11-25), a run that
 //! starts slowly kept its slow cells in the memory while it accelerated, and the model of the
