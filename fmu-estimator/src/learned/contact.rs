@@ -30,7 +30,7 @@
 //! | `M_02 / sqrt(M_00 M_22)` | correlation of wheelset and frame accelerations |
 //! | `M_12 / sqrt(M_11 M_22)` | correlation of yaw rate and frame acceleration |
 //!
-//! # The octaves of D1 (a bank at the vehicle's own conicity)
+//! # The octaves of D1
 //! The features are also taken in D1's octaves, 3-6, 6-12 and 12-25 m: 20 features, all of
 //! which the Kalker scale is a linear function of. Over the memory's 200 m a track's own
 //! spectrum tilts within D1 from one stretch to the next, and the whole band's ratios and
@@ -42,10 +42,11 @@
 //! # Conicity (a bank fitted over conicities)
 //! The features are taken in three more bands, the octaves 5-10, 10-20 and 20-40 m around the
 //! wheelset's kinematic wavelength `2 pi sqrt(r0 l / conicity)` (13 m for the ML95 at 0.1),
-//! where a conicity shows: 20 features. `ln(conicity)` is a linear function of all of them
-//! ([`ConicityModel`]); the Kalker scale, one per bank conicity, of the first band's five
-//! ([`NodeModel`]), blended at the conicity. The `novelty` checks the 20 against a model of
-//! what the training runs showed ([`ConicityModel`]).
+//! where a conicity shows: 35 features. `ln(conicity)` is a linear function of all of them
+//! ([`ConicityModel`]); the Kalker scale, one model per bank conicity, of D1's and its
+//! octaves' 20 ([`NodeModel`], which reads as many of the first bands as its coefficients
+//! give: banks before 2026-11-27 read D1's five), blended at the conicity. The `novelty` checks
+//! all of them against a model of what the training runs showed ([`ConicityModel`]).
 //!
 //! # Estimate
 //! At each model speed the Kalker-coefficient scale is a linear function of the features,
@@ -245,7 +246,9 @@ pub struct SpeedModel {
 pub struct NodeModel {
     /// The bank conicity.
     pub conicity: f64,
-    /// [`FEATURES`] coefficients of the first band's features, then the constant.
+    /// One coefficient per feature of the first bands, then the constant: as many bands as the
+    /// coefficients give ([`FEATURES`] each; banks before 2026-11-27 read the first band only).
+    /// The bands come in [`ContactModel::bands`] order, so a model reads a prefix of them.
     pub coefficients: Vec<f64>,
     /// Root-mean-square error on that conicity's validation runs after the memory filled.
     pub rms_error: f64,
@@ -289,7 +292,10 @@ impl ContactModel {
         }
         for s in &self.speeds {
             let bad_node = |n: &NodeModel| {
-                n.coefficients.len() != FEATURES + 1
+                let read = n.coefficients.len().saturating_sub(1);
+                read == 0
+                    || read % FEATURES != 0
+                    || read > features
                     || n.coefficients.iter().any(|c| !c.is_finite())
                     || !(n.conicity > 0.0 && n.rms_error.is_finite())
             };
@@ -380,7 +386,7 @@ impl ContactModel {
                         .iter()
                         .fold((0.0, 0.0), |(k, r), (j, a)| {
                             let n = &m.kalker_by_conicity[*j];
-                            let e = linear(&n.coefficients, &f[..FEATURES])
+                            let e = linear(&n.coefficients, &f[..n.coefficients.len() - 1])
                                 .clamp(self.range[0], self.range[1]);
                             (k + a * e, r + a * n.rms_error)
                         })
@@ -679,5 +685,68 @@ mod tests {
                 .to_string()
                 .contains("coefficients")
         );
+    }
+
+    /// A bank over conicities whose per-conicity Kalker models read the first band, or the
+    /// first two: each reads the prefix of the features its coefficients give, and nothing
+    /// else is accepted.
+    #[test]
+    fn a_conicity_s_kalker_model_reads_the_bands_its_coefficients_give() {
+        let n = 2 * FEATURES;
+        let node = |conicity: f64, read: usize, slope: f64| NodeModel {
+            conicity,
+            // The last feature read gets `slope`; the constant 0.75.
+            coefficients: (0..read)
+                .map(|i| if i + 1 == read { slope } else { 0.0 })
+                .chain([0.75])
+                .collect(),
+            rms_error: 0.05,
+        };
+        let conicity = ConicityModel {
+            // ln(conicity) = ln(0.1), whatever the features.
+            coefficients: (0..n).map(|_| 0.0).chain([0.1f64.ln()]).collect(),
+            rms_error: 0.1,
+            forward: vec![vec![0.0; FORWARD_TERMS]; n],
+            precision: (0..n * n)
+                .map(|i| f64::from(u8::from(i % (n + 1) == 0)))
+                .collect(),
+            level: 1.0,
+        };
+        let mut m = ContactModel {
+            band: [3.0, 25.0],
+            extra_bands: vec![[6.0, 12.0]],
+            memory: 200.0,
+            range: [0.5, 1.0],
+            speeds: vec![SpeedModel {
+                speed: 20.0,
+                coefficients: vec![0.0; n + 1],
+                rms_error: 0.1,
+                conicity: Some(conicity),
+                // Told 0.1: the first node alone decides.
+                kalker_by_conicity: vec![node(0.1, n, 0.01), node(0.2, FEATURES, 0.0)],
+            }],
+            conicity_range: Some([0.1, 0.2]),
+        };
+        m.check().unwrap();
+        let mut moments = m.moments(0.2);
+        let mut noise = uniform(3);
+        for _ in 0..3000 {
+            let (u, w, z) = (noise(), noise(), noise());
+            moments.push(&[400.0 * u, 20.0 * (u + w), 400.0 * z, 0.0, 0.0], 20.0);
+        }
+        let f = moments.features(0).unwrap().to_vec();
+        let got = m.estimate(&moments, Some(0.1)).unwrap().kalker;
+        let want = (0.75 + 0.01 * f[n - 1]).clamp(0.5, 1.0);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        // Reading the first band only, the same slope sees the first band's last feature.
+        m.speeds[0].kalker_by_conicity[0] = node(0.1, FEATURES, 0.01);
+        let got = m.estimate(&moments, Some(0.1)).unwrap().kalker;
+        let want = (0.75 + 0.01 * f[FEATURES - 1]).clamp(0.5, 1.0);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        // Part of a band, or more features than the bands hold: refused.
+        for read in [FEATURES + 2, n + FEATURES] {
+            m.speeds[0].kalker_by_conicity[0] = node(0.1, read, 0.01);
+            assert!(m.check().is_err(), "{read} features read");
+        }
     }
 }
