@@ -294,7 +294,7 @@ impl ContactModel {
             let bad_node = |n: &NodeModel| {
                 let read = n.coefficients.len().saturating_sub(1);
                 read == 0
-                    || read % FEATURES != 0
+                    || !read.is_multiple_of(FEATURES)
                     || read > features
                     || n.coefficients.iter().any(|c| !c.is_finite())
                     || !(n.conicity > 0.0 && n.rms_error.is_finite())
