@@ -72,7 +72,8 @@ use super::grid::Biquad;
 use serde::{Deserialize, Serialize};
 
 /// The least rms error a speed's model is weighted by (Kalker scale): a model that happened to fit
-/// its training runs perfectly must not take all the weight (the fitted errors are 0.07-0.13).
+/// its training runs perfectly must not take all the weight (the shipped banks' fitted errors are
+/// 0.02-0.13).
 pub const MIN_MODEL_ERROR: f64 = 1e-3;
 
 /// The channels the features read ([`super::grid::CHANNELS`] indices).
@@ -95,9 +96,9 @@ pub const MIN_SPEED: f64 = 1.0;
 pub struct ContactModel {
     /// Shortest and longest wavelength of the features' band \[m\].
     pub band: [f64; 2],
-    /// Further bands whose features join the first band's, in a bank fitted over conicities
-    /// (shortest and longest wavelength \[m\]): the conicity moves the wheelset's kinematic
-    /// wavelength, and the ratios and correlations of the sensors per band show where it lies.
+    /// Further bands whose features join the first band's (shortest and longest wavelength
+    /// \[m\]): D1's octaves, where the contact shows, and in a bank fitted over conicities the
+    /// octaves around the kinematic wavelength, where the conicity does ([module docs](self)).
     #[serde(default)]
     pub extra_bands: Vec<[f64; 2]>,
     /// Memory of the running moments \[m\].
@@ -222,7 +223,7 @@ pub struct SpeedModel {
     /// The constant speed of the runs it was fitted on \[m/s\]: cells count towards it by
     /// their speed's interpolation share.
     pub speed: f64,
-    /// [`FEATURES`] coefficients in the features' order, then the constant.
+    /// One coefficient per feature ([`FEATURES`] per band, every band), then the constant.
     pub coefficients: Vec<f64>,
     /// Root-mean-square error of the estimate on the validation seeds after 200 m.
     pub rms_error: f64,
@@ -230,7 +231,8 @@ pub struct SpeedModel {
     #[serde(default)]
     pub conicity: Option<ConicityModel>,
     /// In a bank fitted over conicities: per bank conicity, the Kalker scale from the first
-    /// band's features, fitted on that conicity's runs alone; the estimate blends them at the
+    /// bands' features ([`NodeModel::coefficients`]), fitted on that conicity's runs alone; the
+    /// estimate blends them at the
     /// conicity (linearly in its logarithm) instead of using [`Self::coefficients`].
     #[serde(default)]
     pub kalker_by_conicity: Vec<NodeModel>,
@@ -386,7 +388,12 @@ impl ContactModel {
                         .iter()
                         .fold((0.0, 0.0), |(k, r), (j, a)| {
                             let n = &m.kalker_by_conicity[*j];
-                            let e = linear(&n.coefficients, &f[..n.coefficients.len() - 1])
+                            // `check` bounds the features read by the model's; a restored
+                            // state's moments are not checked against it, so a short feature
+                            // vector gives no estimate (NaN: the set is skipped), not a panic.
+                            let e = f
+                                .get(..n.coefficients.len().saturating_sub(1))
+                                .map_or(f64::NAN, |f| linear(&n.coefficients, f))
                                 .clamp(self.range[0], self.range[1]);
                             (k + a * e, r + a * n.rms_error)
                         })
@@ -743,10 +750,20 @@ mod tests {
         let got = m.estimate(&moments, Some(0.1)).unwrap().kalker;
         let want = (0.75 + 0.01 * f[FEATURES - 1]).clamp(0.5, 1.0);
         assert!((got - want).abs() < 1e-12, "{got} {want}");
-        // Part of a band, or more features than the bands hold: refused.
-        for read in [FEATURES + 2, n + FEATURES] {
+        // Between the bank conicities both nodes count, each reading its own prefix (linear in
+        // ln conicity: 0.14 lies at w of the way from 0.1 to 0.2).
+        m.speeds[0].kalker_by_conicity = vec![node(0.1, n, 0.01), node(0.2, FEATURES, 0.02)];
+        let w = (0.14f64.ln() - 0.1f64.ln()) / (0.2f64.ln() - 0.1f64.ln());
+        let got = m.estimate(&moments, Some(0.14)).unwrap().kalker;
+        let want = (1.0 - w) * (0.75 + 0.01 * f[n - 1]).clamp(0.5, 1.0)
+            + w * (0.75 + 0.02 * f[FEATURES - 1]).clamp(0.5, 1.0);
+        assert!((got - want).abs() < 1e-12, "{got} {want}");
+        // No feature, part of a band, or more features than the bands hold: refused.
+        for read in [0, FEATURES + 2, n + FEATURES] {
             m.speeds[0].kalker_by_conicity[0] = node(0.1, read, 0.01);
             assert!(m.check().is_err(), "{read} features read");
         }
+        m.speeds[0].kalker_by_conicity[0].coefficients.clear();
+        assert!(m.check().is_err(), "no coefficients");
     }
 }

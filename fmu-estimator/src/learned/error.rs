@@ -217,7 +217,8 @@ pub enum ContactProblem {
         speed: f64,
         /// Coefficients it has.
         count: usize,
-        /// Coefficients it must have ([`super::contact::FEATURES`] + 1).
+        /// Coefficients it must have (one per feature, [`super::contact::FEATURES`] per band,
+        /// and the constant).
         want: usize,
     },
     /// The speeds are not strictly increasing (the blend interpolates between them).

@@ -109,7 +109,7 @@ pub(super) fn fit(
         None
     };
     let kalker_by_conicity = if coned {
-        by_conicity(speed, &train, &valid)?
+        by_conicity(speed, &train, &valid, bands)?
     } else {
         vec![]
     };
@@ -131,11 +131,19 @@ fn by_conicity(
     speed: f64,
     train: &[(Condition, Vec<f64>)],
     valid: &[(Condition, Vec<f64>)],
+    bands: &[[f64; 2]],
 ) -> Result<Vec<NodeModel>, Error> {
     let mut nodes: Vec<f64> = train.iter().filter_map(|(c, _)| c.conicity).collect();
     nodes.sort_by(f64::total_cmp);
     nodes.dedup();
-    let read = FEATURES * (1 + KALKER_BANDS.len());
+    // The runtime reads a prefix of the bands: D1's octaves must follow D1.
+    let kalker = 1 + KALKER_BANDS.len();
+    if bands.get(1..kalker) != Some(&KALKER_BANDS[..]) {
+        return Err(Error::input(format!(
+            "the contact bands {bands:?} do not start with D1 and its octaves {KALKER_BANDS:?}"
+        )));
+    }
+    let read = FEATURES * kalker;
     let first = |f: &[f64]| -> Vec<f64> { f[..read].iter().copied().chain([1.0]).collect() };
     nodes
         .into_iter()
