@@ -132,3 +132,40 @@ fn a_small_fit_writes_files_the_estimator_takes_and_a_failed_one_leaves_nothing(
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("not empty"));
 }
+
+/// A vehicle FMU that lacks the fit's minimum interface (here the feedthrough test FMU, which
+/// has none of its variables) is refused before any run, with exit 2, naming the file and every
+/// variable missing, and nothing is written.
+#[test]
+fn a_vehicle_fmu_without_the_interface_is_refused_by_name() {
+    let parent = tempfile::tempdir().unwrap();
+    let out = parent.path().join("fitted");
+    let vehicle = common::fmu("Feedthrough");
+    let o = Command::new(env!("CARGO_BIN_EXE_alignment-studies"))
+        .args(["fit", "--quiet", "--vehicle"])
+        .arg(&vehicle)
+        .arg("--estimator")
+        .arg(common::fmu("AlignmentEstimator"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(&vehicle.display().to_string()), "{err}");
+    for missing in [
+        "output ws_acc_y",
+        "output ws_yaw_rate",
+        "output frame_acc_y",
+        "output alignment",
+        "output distance",
+        "input speed",
+        "parameter track_seed",
+    ] {
+        assert!(err.contains(missing), "{missing}: {err}");
+    }
+    // The optional part is not asked for.
+    assert!(!err.contains("kalker_scale"), "{err}");
+    assert!(!out.exists());
+    assert_eq!(std::fs::read_dir(parent.path()).unwrap().count(), 0);
+}
