@@ -232,8 +232,8 @@ pub struct SpeedModel {
     pub conicity: Option<ConicityModel>,
     /// In a bank fitted over conicities: per bank conicity, the Kalker scale from the first
     /// bands' features ([`NodeModel::coefficients`]), fitted on that conicity's runs alone; the
-    /// estimate blends them at the
-    /// conicity (linearly in its logarithm) instead of using [`Self::coefficients`].
+    /// estimate blends them at the conicity (linearly in its logarithm) instead of using
+    /// [`Self::coefficients`].
     #[serde(default)]
     pub kalker_by_conicity: Vec<NodeModel>,
 }

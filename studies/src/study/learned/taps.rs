@@ -160,9 +160,8 @@ pub const CONTACT_BAND: [f64; 2] = [3.0, 25.0];
 pub const CONICITY_BANDS: [[f64; 2]; 3] = [[5.0, 10.0], [10.0, 20.0], [20.0, 40.0]];
 /// The further bands of the contact features \[m\]: [`CONTACT_BAND`]'s octaves. The Kalker
 /// scale moves the wheelset's response differently across D1, and over 200 m a track's own
-/// spectrum tilts within the band, which
-/// moves the whole band's ratios and correlations; per octave the features follow the
-/// vehicle's transfer functions more than the track. Chosen on validation seeds 102-106 at
+/// spectrum tilts within the band, which moves the whole band's ratios and correlations; per
+/// octave the features follow the vehicle's transfer functions more than the track. Chosen on validation seeds 102-106 at
 /// 20 m/s (standard case told nothing, whole Jrel at Kalker 100 / 75 / 50 %): ML95 0.086 /
 /// 0.111 / 0.123 with the band alone, 0.097 / 0.102 / 0.096 with its octaves (the scale's rms
 /// error after 200 m 0.078 -> 0.029); the Manchester vehicle fitted by `fit`, 0.110 / 0.114 /
