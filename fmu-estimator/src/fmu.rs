@@ -409,7 +409,7 @@ impl Estimator {
             let why = if l.beyond_conicities() {
                 let c = l.selected_conicities();
                 format!(
-                    "conicity_estimate {:.3} lies beyond the selected taps' conicities ({}-{}; use_roll_rate: the four-sensor taps hold 0.1 only)",
+                    "conicity_estimate {:.3} lies beyond the conicities the selected taps were fitted at ({}-{}): the wheels are not the ones they know",
                     l.conicity(),
                     c[0],
                     c[c.len() - 1]

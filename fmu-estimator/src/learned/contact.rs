@@ -136,10 +136,12 @@ pub const LEVEL_SHARE: f64 = 0.002;
 /// The novelty above which `outside_training` sets: the level itself (the novelty's unit).
 pub const NOVELTY_LEVEL: f64 = 1.0;
 
-/// The share of a set's memory its cells must fill before its novelty counts (0.1: 20 m of
-/// the 200 m memory). Before it, the first metres' features set `outside_training` at the start
-/// of every run (10 km runs on trained conditions, seeds 1-2: at 0-2 m on every one).
-pub const NOVELTY_FROM: f64 = 0.1;
+/// The share of a set's memory its cells must fill before its novelty counts (0.25: 50 m of
+/// the 200 m memory). Before it the young features' scatter sets `outside_training` at the start
+/// of runs on trained conditions: from 0-2 m on every one (10 km runs, seeds 1-2) with no wait;
+/// from 20 m (0.1) on 9 of the 15 validation runs (seeds 102-106, conicity 0.1 at Kalker 100, 75
+/// and 50 %, the default bank: novelty up to 2.3 over 20-50 m, at most 0.66 from 50 m on).
+pub const NOVELTY_FROM: f64 = 0.25;
 
 /// Terms of the forward model of a feature in the condition (`x` ln conicity, `y` Kalker scale).
 pub const FORWARD_TERMS: usize = 6;
@@ -349,17 +351,24 @@ impl ContactModel {
     /// A young set's novelty is scaled by how full its memory is: the features' scatter about
     /// the training surface shrinks as the memory fills, and the level was set on full ones.
     pub fn estimate(&self, moments: &Moments, told: Option<f64>) -> Option<Condition> {
-        self.estimate_told(moments, told, None)
+        self.estimate_told(moments, told, None, None)
     }
 
     /// [`Self::estimate`] with the Kalker scale told too (`kalker_scale` parameter): the
     /// condition's Kalker scale is then the one told (clamped to the trained range), and the
-    /// novelty is judged at it.
+    /// novelty is judged at it. `taps`: the lowest and highest conicity of the taps the
+    /// estimate serves, where they cover less than the model's range (the default bank's taps
+    /// hold the ML95's conicity only, its contact model the bank over conicities'): the Kalker
+    /// scale is read at the conicity clamped to them, the one the taps are blended at, so that
+    /// taps fitted at one conicity get the contact estimate fitted on their own runs (on the
+    /// nominal vehicle exactly what a bank without conicities reads). The conicity estimate and
+    /// the novelty still see the whole range: they are what says the taps no longer fit.
     pub fn estimate_told(
         &self,
         moments: &Moments,
         told: Option<f64>,
         told_kalker: Option<f64>,
+        taps: Option<[f64; 2]>,
     ) -> Option<Condition> {
         let ln_range = self.conicity_range.map(|[lo, hi]| [lo.ln(), hi.ln()]);
         let (mut k_sum, mut k_weight) = (0.0, 0.0);
@@ -377,14 +386,16 @@ impl ContactModel {
                 }),
                 _ => None,
             };
-            let (k, rms) = match (x, m.kalker_by_conicity.is_empty()) {
-                (Some(x), false) => {
+            // The conicity the Kalker scale is read at: the taps' where they cover less.
+            let at = x.map(|x| taps.map_or(x, |[lo, hi]| x.clamp(lo.ln(), hi.ln())));
+            let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {
+                (Some(at), false) => {
                     let ln: Vec<f64> = m
                         .kalker_by_conicity
                         .iter()
                         .map(|n| n.conicity.ln())
                         .collect();
-                    super::weights(&ln, x)
+                    super::weights(&ln, at)
                         .iter()
                         .fold((0.0, 0.0), |(k, r), (j, a)| {
                             let n = &m.kalker_by_conicity[*j];
@@ -758,6 +769,20 @@ mod tests {
         let want = (1.0 - w) * (0.75 + 0.01 * f[n - 1]).clamp(0.5, 1.0)
             + w * (0.75 + 0.02 * f[FEATURES - 1]).clamp(0.5, 1.0);
         assert!((got - want).abs() < 1e-12, "{got} {want}");
+        // Taps at conicity 0.1 alone (the default bank's): told (or estimating) 0.14, the
+        // Kalker scale is read at 0.1, where the taps are blended; the conicity stays 0.14.
+        let at = |told| {
+            m.estimate_told(&moments, told, None, Some([0.1, 0.1]))
+                .unwrap()
+        };
+        let pinned = (0.75 + 0.01 * f[n - 1]).clamp(0.5, 1.0);
+        assert!((at(Some(0.14)).kalker - pinned).abs() < 1e-12);
+        assert_eq!(at(Some(0.14)).conicity, Some(0.14));
+        // Estimated (the model says 0.1 whatever the features): the same reading.
+        assert!((at(None).kalker - pinned).abs() < 1e-12);
+        // Taps covering the model's range read where the estimate is, as without `taps`.
+        let wide = m.estimate_told(&moments, Some(0.14), None, Some([0.1, 0.2]));
+        assert_eq!(wide.map(|c| c.kalker), Some(got));
         // No feature, part of a band, or more features than the bands hold: refused.
         for read in [0, FEATURES + 2, n + FEATURES] {
             m.speeds[0].kalker_by_conicity[0] = node(0.1, read, 0.01);

@@ -34,15 +34,18 @@ pub use bank::Bank;
 pub use error::{BankError, LearnedError};
 pub use stream::{Choice, Learned};
 
+/// The default tap bank (`tap_file`'s default).
+pub const DEFAULT_BANK: &str = "learned.taps";
+
 /// The tap banks shipped in the FMU's resources, by file name:
 ///
 /// | file | trained on | use |
 /// |---|---|---|
-/// | `learned.taps` | conicity 0.1, Kalker 100, 75 and 50 %, taps per condition | the default: blended by the contact estimated from the sensors |
+/// | `learned.taps` | conicity 0.1, Kalker 100, 75 and 50 %, taps per condition; the contact model of `learned-conicity.taps` (`alignment-studies taps --contact-from`) | the default: blended by the contact estimated from the sensors; `outside_training` says when the wheels' conicity is not 0.1 (beyond 15 %) or the sensors are unlike the training |
 /// | `learned-nominal.taps` | conicity 0.1, Kalker 100 % only | a vehicle whose wheels are known to be the ML95's nominal ones |
-/// | `learned-conicity.taps` | conicity 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4, each at Kalker 100, 75 and 50 %, taps per condition (four-sensor taps at conicity 0.1 only) | wheels of any conicity 0.05-0.4: blended by the conicity and contact estimated from the sensors (or the `conicity` given); `novelty` and `outside_training` say when the sensors are unlike the training. Not yet the default: on the nominal ML95 told nothing it loses to `learned.taps` (docs/accuracy.md) |
+/// | `learned-conicity.taps` | conicity 0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4, each at Kalker 100, 75 and 50 %, taps per condition (four-sensor taps at conicity 0.1 only) | wheels of any conicity 0.05-0.4: blended by the conicity and contact estimated from the sensors (or the `conicity` given); `novelty` and `outside_training` say when the sensors are unlike the training. Not the default: on the nominal ML95 told nothing it loses to `learned.taps` (docs/accuracy.md) |
 pub const SHIPPED: [&str; 3] = [
-    "learned.taps",
+    DEFAULT_BANK,
     "learned-nominal.taps",
     "learned-conicity.taps",
 ];
@@ -136,9 +139,10 @@ impl Learned {
     /// The outputs at `distance`: the learned estimates where they exist, else the Kalman
     /// filter's (`kalman`: its alignment and standard deviation), flagged by `active`.
     pub fn estimate(&self, distance: f64, kalman: (f64, f64)) -> Estimate {
-        // Outside the training (novelty above 1) the validation rms errors understate the
-        // error: grown with the Mahalanobis distance (the novelty's square root).
-        let grow = self.novelty().max(1.0).sqrt();
+        // Outside the training the validation rms errors understate the error: grown with the
+        // Mahalanobis distance (the novelty's square root, above 1), or with the judged
+        // conicity's distance from the taps' (`CONICITY_ERROR_SCALE`), whichever says more.
+        let grow = self.novelty().max(1.0).sqrt().max(self.conicity_growth());
         let (alignment, std, active) = match self.causal(distance) {
             Some((a, s)) => (a, s * grow, ACTIVE_LEARNED),
             None => (kalman.0, kalman.1, ACTIVE_PAPER),

@@ -65,12 +65,28 @@ use std::sync::Arc;
 /// worse still (0.203), 1 / 0 0.135.
 pub const TAP_SPEED_POWER: [f64; 5] = [1.5, 1.0, 1.5, 1.0, 0.0];
 
-/// How far (as a ratio) the conicity may lie beyond the selected taps' conicities before
-/// `outside_training` sets, so that an estimate's scatter about a bank conicity does not set it:
-/// twice the conicity estimate's rms error on the validation runs when it was chosen (11 % at
-/// 20 m/s); with D1's octaves among the features that error is 7 %, so the margin is now about
-/// three and a half of them.
-pub const CONICITY_MARGIN: f64 = 1.25;
+/// How far (as a ratio) the judged conicity ([`CONICITY_MEMORY`]) may lie beyond the selected
+/// taps' conicities before `outside_training` sets. Why 1.15: the default's taps, fitted at
+/// conicity 0.1, lose twice their error from about 15-20 % off it (validation seeds 102-106,
+/// 400 m at 20 m/s, whole Jrel over the nominal's: 0.09 1.3-1.8, 0.08 2.1-3.2, 0.12 1.9-2.5), and
+/// on the same seeds 1.15 and 1.12 both flagged every run past twice the nominal error within
+/// 300 m, with no false alarm over 9 runs of 10 km at conicity 0.1 (1.10: 0.65 % of their
+/// distance; 1.18 missed 4 runs of 107).
+pub const CONICITY_MARGIN: f64 = 1.15;
+
+/// The memory of the judged conicity \[m\]: a running mean of `ln(conicity_estimate)`, over
+/// the distance since it began until it reaches this, then exponential. The estimate itself
+/// (200 m of features) scatters by 5-8 % in `ln` about 0.1 over 10 km on the nominal ML95 (one
+/// track seed's spectrum moves it): read raw, 1.25 set `outside_training` on 1.5 % of a
+/// seed's distance; over 500 m of it, none on the same runs.
+pub const CONICITY_MEMORY: f64 = 500.0;
+
+/// How the error of taps fitted at one conicity grows with the wheels' distance from it, in
+/// `ln(conicity)`: `sqrt(1 + (d / CONICITY_ERROR_SCALE)^2)` times the validation error. Fitted by
+/// eye on the default's whole Jrel over its nominal one (validation seeds 102-106, conicity
+/// 0.075-0.3, Kalker 100 and 75 %: within 20 % from 0.075 to 0.2, the rule 20 % low at
+/// Kalker 50 % and at 0.3), what `alignment_std` is grown by.
+pub const CONICITY_ERROR_SCALE: f64 = 0.1;
 
 /// `V^TAP_SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
@@ -106,6 +122,14 @@ pub struct Learned {
     /// Whether the features fill enough of their memory to be judged
     /// ([`super::contact::NOVELTY_FROM`]): `outside_training` waits for it.
     judged: bool,
+    /// The judged conicity: `ln` of the one told, or the running mean of the estimate's over
+    /// [`CONICITY_MEMORY`] from where the features' memory first filled; `None` before (or in a
+    /// bank without conicity conditions).
+    judged_conicity: Option<f64>,
+    /// Where the features' memory began (the first closed cell) and where the judged
+    /// conicity's mean began \[m\].
+    started: Option<f64>,
+    judged_from: f64,
 }
 
 impl Learned {
@@ -121,6 +145,9 @@ impl Learned {
             conicity: 0.0,
             novelty: 0.0,
             judged: false,
+            judged_conicity: None,
+            started: None,
+            judged_from: 0.0,
             grid: Grid::new(bank.grid, bank.kalman_highpass, bank.kalman_shelf),
             history: History::new(selection.longest()),
             causal: Track::default(),
@@ -151,23 +178,34 @@ impl Learned {
     }
 
     /// Whether the sensors are unlike what the selected taps were fitted on: the novelty
-    /// exceeds its level (1), or the conicity lies beyond the selected taps' conicities by more
-    /// than [`CONICITY_MARGIN`] (the four-sensor taps of `learned-conicity.taps` hold conicity
-    /// 0.1 only, while its contact model estimates 0.05-0.4).
+    /// exceeds its level (1), or the judged conicity lies beyond the selected taps' conicities
+    /// by more than [`CONICITY_MARGIN`] (the default bank's taps, and the four-sensor taps of
+    /// `learned-conicity.taps`, hold conicity 0.1 only, while their contact model estimates
+    /// 0.05-0.4).
     pub fn outside_training(&self) -> bool {
         self.judged && (self.beyond_conicities() || self.novelty > super::contact::NOVELTY_LEVEL)
     }
 
-    /// Whether the conicity lies beyond the selected taps' conicities by more than
+    /// Whether the judged conicity lies beyond the selected taps' conicities by more than
     /// [`CONICITY_MARGIN`].
     pub fn beyond_conicities(&self) -> bool {
+        self.conicity_distance() > CONICITY_MARGIN.ln()
+    }
+
+    /// How far the judged conicity lies beyond the selected taps' conicities, in
+    /// `ln(conicity)` (0 inside them, before it is judged, and without conicity conditions).
+    pub fn conicity_distance(&self) -> f64 {
         let c = &self.selection.conicities;
-        match (c.first(), c.last()) {
-            (Some(lo), Some(hi)) if self.conicity > 0.0 => {
-                self.conicity < lo / CONICITY_MARGIN || self.conicity > hi * CONICITY_MARGIN
-            }
-            _ => false,
+        match (c.first(), c.last(), self.judged_conicity) {
+            (Some(lo), Some(hi), Some(x)) => (lo.ln() - x).max(x - hi.ln()).max(0.0),
+            _ => 0.0,
         }
+    }
+
+    /// The factor the taps' validation error is grown by for the judged conicity's distance
+    /// from theirs ([`CONICITY_ERROR_SCALE`]).
+    pub fn conicity_growth(&self) -> f64 {
+        (1.0 + (self.conicity_distance() / CONICITY_ERROR_SCALE).powi(2)).sqrt()
     }
 
     /// The conicities of the selected taps (empty without conicity conditions).
@@ -220,13 +258,18 @@ impl Learned {
                 m.push(cell, speed);
             }
         }
+        let first = *self.started.get_or_insert(closed.distance);
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
-            match model.estimate_told(m, self.told_conicity, self.told_kalker) {
+            let c = &self.selection.conicities;
+            let taps = c.first().zip(c.last()).map(|(lo, hi)| [*lo, *hi]);
+            match model.estimate_told(m, self.told_conicity, self.told_kalker, taps) {
                 Some(c) => {
                     self.contact_scale = c.kalker;
                     self.conicity = c.conicity.unwrap_or(0.0);
                     self.novelty = c.novelty.unwrap_or(0.0);
                     self.judged = c.novelty.is_some();
+                    let memory_full = closed.distance - first >= model.memory;
+                    self.judge_conicity(closed.distance, closed.cells.len(), memory_full);
                 }
                 // Until the features exist (the first cells of a run): nominal contact, and
                 // in a bank over conicities the conicity told or the range's geometric middle.
@@ -286,6 +329,35 @@ impl Learned {
                 std,
                 distance: d,
             });
+        }
+    }
+
+    /// Adds the conicity of `cells` closed cells ending at `distance` to the judged one: the
+    /// one told at once; an estimate from where the features' memory is full (`memory_full`),
+    /// before which its scatter set `outside_training` at the start of runs on the conicity
+    /// the taps were fitted at (10 of 15 validation runs from 100 m on).
+    fn judge_conicity(&mut self, distance: f64, cells: usize, memory_full: bool) {
+        if self.conicity <= 0.0 {
+            return;
+        }
+        let x = self.conicity.ln();
+        if self.told_conicity.is_some() {
+            self.judged_conicity = Some(x);
+            return;
+        }
+        if !memory_full {
+            return;
+        }
+        let step = cells as f64 * self.grid.step_length();
+        match self.judged_conicity {
+            None => {
+                self.judged_conicity = Some(x);
+                self.judged_from = distance;
+            }
+            Some(y) => {
+                let span = (distance - self.judged_from + step).min(CONICITY_MEMORY);
+                self.judged_conicity = Some(y + step / span * (x - y));
+            }
         }
     }
 

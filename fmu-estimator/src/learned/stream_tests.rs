@@ -297,11 +297,21 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
             l.novelty()
         );
         // Told 0.3, beyond the bank's 0.2 by more than CONICITY_MARGIN: outside whatever the
-        // novelty says.
+        // novelty says, and the std grown by the distance ln(0.3 / 0.2) too. Estimated (20 m of
+        // track, the features' memory not yet full), the conicity is not judged yet.
         assert_eq!(l.outside_training(), want > 1.0 || told == Some(0.3));
+        let grow = match told {
+            Some(0.3) => (1.0 + (1.5f64.ln() / CONICITY_ERROR_SCALE).powi(2)).sqrt(),
+            _ => 1.0,
+        };
+        assert!(
+            (l.conicity_growth() - grow).abs() < 1e-12,
+            "{}",
+            l.conicity_growth()
+        );
         let e = l.estimate(l.causal.points[1].distance, (0.0, 1.0));
         assert!(
-            (e.std - std * want.max(1.0).sqrt()).abs() < 1e-15,
+            (e.std - std * want.max(1.0).sqrt().max(grow)).abs() < 1e-12 * e.std,
             "{} {std}",
             e.std
         );
@@ -524,4 +534,53 @@ fn the_speed_factors_are_the_documented_powers() {
             assert!((f[c] - v.powf(*p)).abs() <= 1e-14 * v.powf(*p), "{v} {c}");
         }
     }
+}
+
+/// The judged conicity: nothing until the features' memory is full, then the running mean of
+/// `ln(conicity_estimate)` over the distance since, exponential once CONICITY_MEMORY is
+/// reached; `outside_training` and the std's growth read it, not the estimate of the moment.
+#[test]
+fn the_judged_conicity_is_a_running_mean_of_the_estimate_from_a_full_memory() {
+    let bank = coned_bank();
+    let mut l = three_sensors(&bank, 0.0);
+    let ds = l.grid.step_length();
+    let mut d = 0.0;
+    let mut push = |l: &mut Learned, c: f64, full: bool| {
+        d += ds;
+        l.conicity = c;
+        l.judge_conicity(d, 1, full);
+    };
+    // Far beyond the bank's 0.05-0.2, but the memory not full: not judged.
+    push(&mut l, 1.0, false);
+    assert_eq!((l.conicity_distance(), l.conicity_growth()), (0.0, 1.0));
+    // 0.4 then 0.05 over equal steps: the mean of their logarithms (0.14), inside the bank.
+    push(&mut l, 0.4, true);
+    assert!((l.conicity_distance() - 2f64.ln()).abs() < 1e-12);
+    push(&mut l, 0.05, true);
+    let mean = (0.4f64.ln() + 0.05f64.ln()) / 2.0;
+    assert!((l.judged_conicity.unwrap() - mean).abs() < 1e-12);
+    assert_eq!(l.conicity_distance(), 0.0);
+    // Beyond CONICITY_MEMORY, each step moves it by step / memory of the way.
+    for _ in 0..(CONICITY_MEMORY / ds) as usize + 10 {
+        push(&mut l, 0.1, true);
+    }
+    let before = l.judged_conicity.unwrap();
+    push(&mut l, 0.3, true);
+    let want = before + ds / CONICITY_MEMORY * (0.3f64.ln() - before);
+    assert!((l.judged_conicity.unwrap() - want).abs() < 1e-12);
+    // Told: the told conicity at once, memory or not.
+    let mut told = Learned::new(
+        &bank,
+        Choice {
+            roll_rate: false,
+            lag: 0.0,
+            conicity: Some(0.3),
+            kalker: None,
+        },
+    )
+    .unwrap();
+    told.conicity = 0.3;
+    told.judge_conicity(0.2, 1, false);
+    assert!((told.conicity_distance() - 1.5f64.ln()).abs() < 1e-12);
+    assert!(told.beyond_conicities());
 }
