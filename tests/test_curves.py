@@ -177,17 +177,25 @@ def test_the_fmu_and_the_bindings_remove_the_same_response(curved):
 
 def test_a_curve_beyond_the_envelope_sets_outside_training():
     """A 250 m curve with little cant is beyond what the shipped design response was fitted on
-    (radius 360 m at most): outside_training sets in it and clears 60 m after its end (370 m)."""
+    (radius 360 m at most). With the taps of learned-nominal.taps (no contact model: the design
+    rule alone) outside_training sets in it and clears 60 m after its end (370 m). The default's
+    contact features see the flange contact too: their novelty passes 1 in the curve, and the
+    flag stays set while their 200 m memory holds it."""
     r = ta.simulate(packaged_fmus()["RailVehicle"], 30.0, step=1e-3,
                     parameters={"speed": 15.0, "curve_radius": 250.0, "curve_cant": 0.02,
                                 "curve_start": 50.0, "flange_contact": True},
                     variables=VARIABLES)
     r = {k: np.ascontiguousarray(v[1:]) for k, v in r.items()}
-    out, _ = estimate(r)
     d = r["distance"]
+    out, _ = estimate(r, tap_file="learned-nominal.taps")
     assert not out["outside_training"][d < 50].any()
     assert out["outside_training"][(d > 120) & (d < 420)].all()
     assert not out["outside_training"][d > 440].any()
+    default, _ = estimate(r)
+    assert not default["outside_training"][d < 40].any()
+    assert default["outside_training"][(d > 60) & (d < 450)].all()
+    assert (default["novelty"][(d > 120) & (d < 370)] > 1.0).any()
+    assert (default["novelty"][d > 440] > 1.0).all()
 
 
 def test_a_missing_or_broken_design_response_file_is_named(tmp_path):

@@ -60,6 +60,12 @@ pub struct TapsArgs {
     /// Keep this tap bank's taps and refit only its contact model (same runs, no tap solves).
     #[arg(long, value_name = "BANK")]
     pub taps_from: Option<PathBuf>,
+    /// With --taps-from and one --conicities (the one those taps were fitted at): take this
+    /// bank's contact model (fitted over conicities) instead of fitting one; no runs. The
+    /// default bank is made so: its taps know when the wheels are not the ones they were
+    /// fitted for (`outside_training`).
+    #[arg(long, value_name = "BANK")]
+    pub contact_from: Option<PathBuf>,
     /// Spread every condition's runs over the vehicle and this many random variants of it
     /// (masses, inertias, wheelbase, bogie spacing, suspension stiffness and damping within
     /// about +-40 %, wheel radius +-15 %; `studies/src/study/vehicles.rs`): taps that hold for
@@ -92,6 +98,7 @@ const MARK: &[u8] = b"learned-taps ";
 pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
     let mut inputs = vec![a.fmus.vehicle.as_path(), a.fmus.estimator.as_path()];
     inputs.extend(a.taps_from.as_deref());
+    inputs.extend(a.contact_from.as_deref());
     let guard = super::guard(&a.out, &inputs, a.force, Some(MARK))?;
     let mut o = Options::shipped();
     o.speeds = a.speeds.clone();
@@ -112,7 +119,14 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             fmu_estimator::learned::bank::Bank::load(p).map_err(|e| Error::input(e.to_string()))?,
         );
     }
+    if let Some(p) = &a.contact_from {
+        o.contact_from = Some(
+            fmu_estimator::learned::bank::Bank::load(p)
+                .map_err(|e| Error::input(format!("--contact-from: {e}")))?,
+        );
+    }
     o.validation_seeds = a.validation_seeds.clone();
+    crate::study::learned::taps::check(&o)?;
     let defaults = Options::shipped();
     if a.taps_from.is_some()
         || (

@@ -67,6 +67,10 @@ pub struct CurveRun {
     /// share of its samples with `outside_training` set, and the wide curves' stretches' whole
     /// Jrel (mean of the two).
     pub flange: (BandMetrics, f64, f64),
+    /// The line without flange contact, the default: the share of its samples with
+    /// `outside_training` set, design known (a false alarm), then told nothing (where the
+    /// estimate is useless, the flag should be set).
+    pub line_flagged: [f64; 2],
 }
 
 /// How a run is laid: the line, straight, or the tight curve with flange contact.
@@ -173,7 +177,18 @@ type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
 
 /// The default told the design over `rec`.
 fn flagged(rec: &Record) -> Result<Flagged, Error> {
-    let (out, _) = run_learned(&rec.samples, 1e-3, &[])?;
+    flagged_told(rec, true)
+}
+
+/// The default over `rec`, told the design or not (`told`).
+fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
+    let mut samples = rec.samples.clone();
+    if !told {
+        for s in &mut samples {
+            s.design = [0.0; 2];
+        }
+    }
+    let (out, _) = run_learned(&samples, 1e-3, &[])?;
     let est: Vec<f64> = out
         .learned
         .as_ref()
@@ -182,6 +197,13 @@ fn flagged(rec: &Record) -> Result<Flagged, Error> {
         .map(|e| e.alignment)
         .collect();
     Ok((out.distance, est, out.outside_training.unwrap_or_default()))
+}
+
+/// The share of the default's samples over `rec` with `outside_training` set, told the design
+/// or not.
+fn share(rec: &Record, told: bool) -> Result<f64, Error> {
+    let (_, _, flags) = flagged_told(rec, told)?;
+    Ok(flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64)
 }
 
 /// The line with flange contact: the run's figures, the share flagged, the wide curves' whole.
@@ -252,6 +274,7 @@ fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
         wide: [wide(&straight, false)?, wide(&line, true)?],
         tight: tight(fmus, seed)?,
         flange: with_flanges(fmus, seed)?,
+        line_flagged: [share(&line, true)?, share(&line, false)?],
     })
 }
 
@@ -301,6 +324,11 @@ pub fn markdown(seeds: &[u32], runs: &[CurveRun]) -> String {
     s.push_str(&format!(
         "| the line, told nothing | | {} |\n",
         bands(runs, |r| &r.untold)
+    ));
+    s.push_str(&format!(
+        "\n`outside_training` (default) on the line: design known {:.1} % of the samples, told nothing {:.1} %.\n",
+        100.0 * mean(runs.iter().map(|r| r.line_flagged[0])),
+        100.0 * mean(runs.iter().map(|r| r.line_flagged[1]))
     ));
     s.push_str(&format!(
         "\nCurves of radius 500 m and more (stretches {WIDE_CURVES:?} m), default, whole: straight {:.3}, design known {:.3}.\n",

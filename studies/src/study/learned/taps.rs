@@ -234,6 +234,10 @@ pub struct Options {
     /// fit, the tap solves skipped): a change to the contact model's fit without refitting
     /// taps that do not depend on it.
     pub taps_from: Option<Bank>,
+    /// With [`Self::taps_from`] and one conicity in [`Self::conicities`] (the one those taps
+    /// were fitted at): take this bank's contact model (fitted over conicities) instead of
+    /// fitting one, with no runs ([`with_contact_from`]).
+    pub contact_from: Option<Bank>,
     /// Vehicle files (the vehicle FMU's `vehicle` parameter) the runs of every condition are
     /// spread over: each gets `1/n` of the training distance, and the validation seeds take
     /// them in turn. Empty: the vehicle FMU's own vehicle.
@@ -263,6 +267,7 @@ impl Options {
             validation_seeds: vec![102, 103, 104, 105, 106],
             encoding: Encoding::I16,
             taps_from: None,
+            contact_from: None,
             vehicles: vec![],
             calibration: None,
             command: "alignment-studies taps".into(),
@@ -1037,6 +1042,17 @@ pub fn fit_each(
     done: &dyn Fn(f64),
 ) -> Result<Bank, Error> {
     check(o)?;
+    if let (Some(taps), Some(contact)) = (&o.taps_from, &o.contact_from) {
+        let expected = Contract::expected(
+            &kalman_config(o)?,
+            BANK_GRID,
+            KALMAN_HIGHPASS,
+            Some(KALMAN_SHELF),
+            Some(CONTACT_BAND),
+            STEP,
+        );
+        return with_contact_from(taps, contact, o.conicities[0], &expected, &o.command);
+    }
     let mut entries = vec![];
     let mut models = vec![];
     for v in &o.speeds {
@@ -1049,8 +1065,99 @@ pub fn fit_each(
     assemble(fmus, o, entries, models)
 }
 
+/// A bank of `taps`' entries, fitted at `conicity` (the vehicle's own), with the contact model
+/// of `contact`, a bank fitted over conicities that holds `conicity`: taps of one wheel state
+/// that know when the wheels are in another. Its conicity estimate and novelty then set
+/// `outside_training` where those taps do not hold, and its Kalker-scale model at `conicity`
+/// (fitted on that conicity's runs alone, as `taps`' own was) blends the taps as before
+/// ([`fmu_estimator::learned::contact::ContactModel::estimate_told`]). No runs: both banks
+/// must come from this build (`expected`: its contract) and hold the same speeds, and the
+/// entries are tagged with `conicity`.
+pub fn with_contact_from(
+    taps: &Bank,
+    contact: &Bank,
+    conicity: f64,
+    expected: &Contract,
+    command: &str,
+) -> Result<Bank, Error> {
+    let bad = |what: String| Err(Error::input(format!("--contact-from: {what}")));
+    for (name, b) in [("--taps-from", taps), ("--contact-from", contact)] {
+        if &b.contract != expected {
+            return bad(format!(
+                "the {name} bank was made by another build or for another Kalman channel (its contract differs from this build's): fit it again"
+            ));
+        }
+    }
+    if taps.grid != contact.grid || taps.provenance.sample_step != contact.provenance.sample_step {
+        return bad("the two banks' grids or sample steps differ".into());
+    }
+    let Some(model) = contact.contact.clone() else {
+        return bad("the bank has no contact model".into());
+    };
+    let Some([lo, hi]) = model.conicity_range else {
+        return bad("the bank's contact model is not fitted over conicities".into());
+    };
+    if !(lo..=hi).contains(&conicity) {
+        return bad(format!(
+            "the conicity {conicity} lies outside the bank's {lo}-{hi}"
+        ));
+    }
+    let mut speeds: Vec<f64> = taps.entries.iter().map(|e| e.speed).collect();
+    speeds.sort_by(f64::total_cmp);
+    speeds.dedup();
+    let modelled: Vec<f64> = model.speeds.iter().map(|m| m.speed).collect();
+    if speeds != modelled {
+        return bad(format!(
+            "the taps' speeds {speeds:?} differ from the contact model's {modelled:?}"
+        ));
+    }
+    if let Some(m) = model
+        .speeds
+        .iter()
+        .find(|m| !m.kalker_by_conicity.iter().any(|n| n.conicity == conicity))
+    {
+        return bad(format!(
+            "at {} m/s the contact model has no Kalker-scale model fitted at conicity {conicity}",
+            m.speed
+        ));
+    }
+    let [k_lo, k_hi] = model.range;
+    let mut entries = taps.entries.clone();
+    for e in &mut entries {
+        if e.conicity.is_some_and(|c| c != conicity) {
+            return bad(format!(
+                "the --taps-from bank has taps at conicity {:?}, not {conicity}",
+                e.conicity
+            ));
+        }
+        if e.condition.is_some_and(|k| !(k_lo..=k_hi).contains(&k)) {
+            return bad(format!(
+                "the --taps-from bank's Kalker scale {:?} lies outside the contact model's {k_lo}-{k_hi}",
+                e.condition
+            ));
+        }
+        e.conicity = Some(conicity);
+    }
+    let mut bank = taps.clone();
+    bank.format = fmu_estimator::learned::bank::FORMAT;
+    bank.entries = entries;
+    bank.contact = Some(model);
+    let p = &mut bank.provenance;
+    p.objective += &format!(
+        "; the taps fitted at conicity {conicity}, the contact model (Kalker scale, conicity, novelty) taken from a bank over conicities {lo}-{hi} ({})",
+        contact.provenance.command
+    );
+    p.command = command.to_string();
+    Ok(bank)
+}
+
 /// The options' own consistency, checked before any run: seeds, speeds, conicities, lags.
 pub fn check(o: &Options) -> Result<(), Error> {
+    if o.contact_from.is_some() && (o.taps_from.is_none() || o.conicities.len() != 1) {
+        return Err(Error::input(
+            "--contact-from takes the taps of --taps-from and one conicity (--conicities): the one they were fitted at",
+        ));
+    }
     if o.validation_seeds.contains(&o.training_seed) {
         return Err(Error::input(
             "the validation seeds must differ from the training seed",
@@ -1263,6 +1370,54 @@ mod tests {
             assert_eq!(bank.kalman_highpass, KALMAN_HIGHPASS, "{name}");
             assert_eq!(bank.kalman_shelf, Some(KALMAN_SHELF), "{name}");
         }
+    }
+
+    /// The default bank is the default's taps with the bank over conicities' contact model
+    /// (`--contact-from`): made again from the shipped banks, it has the default's taps, tagged
+    /// with the ML95's conicity, and the other's contact model. A conicity the contact model
+    /// has no Kalker model at, taps tagged with another conicity, no contact model or one not
+    /// fitted over conicities, and another build's contract are refused, each by name.
+    #[test]
+    fn the_default_bank_is_its_taps_with_the_contact_model_over_conicities() {
+        let shipped = |name| {
+            fmu_estimator::learned::shipped_named(name)
+                .expect("a shipped name")
+                .expect("the shipped bank reads")
+        };
+        let (taps, over) = (
+            shipped(fmu_estimator::learned::DEFAULT_BANK),
+            shipped("learned-conicity.taps"),
+        );
+        let expected = &over.contract;
+        let made = with_contact_from(&taps, &over, NOMINAL_CONICITY, expected, "again").unwrap();
+        assert_eq!(made.contact, over.contact);
+        assert_eq!(made.entries, taps.entries);
+        assert!(
+            made.entries
+                .iter()
+                .all(|e| e.conicity == Some(NOMINAL_CONICITY))
+        );
+        assert_eq!(made.provenance.command, "again");
+        let err = |r: Result<Bank, Error>| r.unwrap_err().to_string();
+        assert!(err(with_contact_from(&taps, &over, 0.12, expected, "")).contains("conicity 0.12"));
+        assert!(err(with_contact_from(&taps, &over, 0.15, expected, "")).contains("not 0.15"));
+        let mut none = over.clone();
+        none.contact = None;
+        assert!(
+            err(with_contact_from(&taps, &none, 0.1, expected, "")).contains("no contact model")
+        );
+        let mut flat = over.clone();
+        flat.contact.as_mut().unwrap().conicity_range = None;
+        assert!(
+            err(with_contact_from(&taps, &flat, 0.1, expected, ""))
+                .contains("not fitted over conicities")
+        );
+        let mut other = over.clone();
+        other.contract.grid_edge += 1.0;
+        assert!(
+            err(with_contact_from(&taps, &over, 0.1, &other.contract, ""))
+                .contains("another build")
+        );
     }
 
     /// The fit judges its choices on estimates made "as the FMU makes them": this holds only if
