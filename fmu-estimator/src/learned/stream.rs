@@ -130,6 +130,8 @@ pub struct Learned {
     /// conicity's mean began \[m\].
     started: Option<f64>,
     judged_from: f64,
+    /// Closed cells until the novelty is judged again ([`super::contact::NOVELTY_EVERY`]).
+    to_novelty: usize,
 }
 
 impl Learned {
@@ -148,6 +150,7 @@ impl Learned {
             judged_conicity: None,
             started: None,
             judged_from: 0.0,
+            to_novelty: 0,
             grid: Grid::new(bank.grid, bank.kalman_highpass, bank.kalman_shelf),
             history: History::new(selection.longest()),
             causal: Track::default(),
@@ -262,12 +265,19 @@ impl Learned {
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
             let c = &self.selection.conicities;
             let taps = c.first().zip(c.last()).map(|(lo, hi)| [*lo, *hi]);
-            match model.estimate_told(m, self.told_conicity, self.told_kalker, taps) {
+            self.to_novelty = self.to_novelty.saturating_sub(closed.cells.len());
+            let judge = self.to_novelty == 0;
+            if judge {
+                self.to_novelty = super::contact::NOVELTY_EVERY;
+            }
+            match model.estimate_told(m, self.told_conicity, self.told_kalker, taps, judge) {
                 Some(c) => {
                     self.contact_scale = c.kalker;
                     self.conicity = c.conicity.unwrap_or(0.0);
-                    self.novelty = c.novelty.unwrap_or(0.0);
-                    self.judged = c.novelty.is_some();
+                    if judge {
+                        self.novelty = c.novelty.unwrap_or(0.0);
+                        self.judged = c.novelty.is_some();
+                    }
                     let memory_full = closed.distance - first >= model.memory;
                     self.judge_conicity(closed.distance, closed.cells.len(), memory_full);
                 }

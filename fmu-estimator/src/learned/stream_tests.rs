@@ -259,7 +259,9 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
         .unwrap();
         let mut grid = Grid::new(0.2, 500.0, None);
         let (mut cells, mut d) = (vec![], 0.0);
-        for k in 0..400 {
+        // 20 m, then on to the next cell at which the novelty is judged (every NOVELTY_EVERY).
+        let mut k = 0;
+        while k < 400 || l.to_novelty != crate::learned::contact::NOVELTY_EVERY {
             d += 0.05;
             let u = (k as f64 * 0.3).sin();
             let x = [u, 0.12 * u, 0.3 * (k as f64 * 0.7).cos(), 0.0, 0.1];
@@ -267,6 +269,7 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
                 cells.extend(c.cells);
             }
             l.step(d, 10.0, &x, 0.0);
+            k += 1;
         }
         (l, cells)
     };
