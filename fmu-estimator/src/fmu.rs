@@ -408,11 +408,15 @@ impl Estimator {
         {
             let why = if l.beyond_conicities() {
                 let c = l.selected_conicities();
+                let fitted = if c[0] == c[c.len() - 1] {
+                    format!("{}", c[0])
+                } else {
+                    format!("{}-{}", c[0], c[c.len() - 1])
+                };
                 format!(
-                    "conicity_estimate {:.3} lies beyond the conicities the selected taps were fitted at ({}-{}): the wheels are not the ones they know",
-                    l.conicity(),
-                    c[0],
-                    c[c.len() - 1]
+                    "the wheels' conicity ({:.3}: the one told, or conicity_estimate's running mean) lies more than {:.0} % beyond the conicity the selected taps were fitted at ({fitted}): the wheels are not the ones they know",
+                    l.judged_conicity().unwrap_or(l.conicity()),
+                    (crate::learned::stream::CONICITY_MARGIN - 1.0) * 100.0,
                 )
             } else {
                 format!(

@@ -366,8 +366,11 @@ impl ContactModel {
     /// hold the ML95's conicity only, its contact model the bank over conicities'): the Kalker
     /// scale is read at the conicity clamped to them, the one the taps are blended at, so that
     /// taps fitted at one conicity get the contact estimate fitted on their own runs (on the
-    /// nominal vehicle exactly what a bank without conicities reads). The conicity estimate and
-    /// the novelty still see the whole range: they are what says the taps no longer fit.
+    /// nominal vehicle exactly what a bank without conicities reads). The conicity estimate
+    /// still sees the whole range: it is what says the taps no longer fit. The novelty is
+    /// judged at the estimated conicity and that Kalker scale (its level was set with the
+    /// Kalker scale read at the estimated conicity; the held-out envelope measures the pair as
+    /// it runs: docs/accuracy.md).
     /// `novelty`: whether to judge the novelty (its quadratic form over every feature is half
     /// the contact model's cost; the runtime judges it every [`NOVELTY_EVERY`] cells); without
     /// it the condition's `novelty` is `None`.

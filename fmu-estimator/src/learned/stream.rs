@@ -113,11 +113,11 @@ pub struct Learned {
     told_conicity: Option<f64>,
     /// The Kalker scale given by the user (`kalker_scale` parameter), if any.
     told_kalker: Option<f64>,
-    /// The conicity the taps are blended at: the one told or estimated (0 in a bank without
-    /// conicity conditions).
+    /// The conicity told or estimated (0 in a bank without a conicity model); the taps are
+    /// blended at it within their own conicities.
     conicity: f64,
     /// The features' novelty ([`super::contact::Condition::novelty`]; 0 in a bank without
-    /// conicity conditions, and before the features exist).
+    /// conicity conditions, and before the novelty is first judged: [`super::contact::NOVELTY_FROM`]).
     novelty: f64,
     /// Whether the features fill enough of their memory to be judged
     /// ([`super::contact::NOVELTY_FROM`]): `outside_training` waits for it.
@@ -167,15 +167,21 @@ impl Learned {
         self.contact_scale
     }
 
-    /// The wheels' equivalent conicity the taps are blended at: the one told, or estimated
-    /// from the sensors; 0 when the taps have no conicity conditions.
+    /// The wheels' equivalent conicity, told or estimated from the sensors (the taps are blended
+    /// at it within their own conicities); 0 when the bank has no conicity model.
     pub fn conicity(&self) -> f64 {
         self.conicity
     }
 
+    /// The judged conicity ([`CONICITY_MEMORY`]) that `outside_training` reads; `None` before
+    /// it is judged and without a conicity model.
+    pub fn judged_conicity(&self) -> Option<f64> {
+        self.judged_conicity.map(f64::exp)
+    }
+
     /// How far the sensors' features lie from what the taps were fitted on, in units of the
     /// level exceeded on 0.2 % of the validation distance ([`super::contact::LEVEL_SHARE`]);
-    /// 0 when the taps have no conicity conditions, or before the features exist.
+    /// 0 when the taps have no conicity conditions, or before it is first judged ([`super::contact::NOVELTY_FROM`]; then every [`super::contact::NOVELTY_EVERY`] cells).
     pub fn novelty(&self) -> f64 {
         self.novelty
     }
@@ -186,7 +192,7 @@ impl Learned {
     /// `learned-conicity.taps`, hold conicity 0.1 only, while their contact model estimates
     /// 0.05-0.4).
     pub fn outside_training(&self) -> bool {
-        self.judged && (self.beyond_conicities() || self.novelty > super::contact::NOVELTY_LEVEL)
+        self.beyond_conicities() || (self.judged && self.novelty > super::contact::NOVELTY_LEVEL)
     }
 
     /// Whether the judged conicity lies beyond the selected taps' conicities by more than

@@ -300,8 +300,8 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
             l.novelty()
         );
         // Told 0.3, beyond the bank's 0.2 by more than CONICITY_MARGIN: outside whatever the
-        // novelty says, and the std grown by the distance ln(0.3 / 0.2) too. Estimated (20 m of
-        // track, the features' memory not yet full), the conicity is not judged yet.
+        // novelty says (at once: not waiting for the novelty to be judged), and the std grown by
+        // the distance ln(0.3 / 0.2) too. Estimated (about 0.1, inside 0.05-0.2): no growth.
         assert_eq!(l.outside_training(), want > 1.0 || told == Some(0.3));
         let grow = match told {
             Some(0.3) => (1.0 + (1.5f64.ln() / CONICITY_ERROR_SCALE).powi(2)).sqrt(),

@@ -61,9 +61,10 @@ pub struct TapsArgs {
     #[arg(long, value_name = "BANK")]
     pub taps_from: Option<PathBuf>,
     /// With --taps-from and one --conicities (the one those taps were fitted at): take this
-    /// bank's contact model (fitted over conicities) instead of fitting one; no runs. The
-    /// default bank is made so: its taps know when the wheels are not the ones they were
-    /// fitted for (`outside_training`).
+    /// bank's contact model (fitted over conicities) instead of fitting one; no runs, so the
+    /// fit's other options (speeds, scales, lags, encoding, seeds) are not used. The default
+    /// bank is made so: its taps know when the wheels are not the ones they were fitted for
+    /// (`outside_training`).
     #[arg(long, value_name = "BANK")]
     pub contact_from: Option<PathBuf>,
     /// Spread every condition's runs over the vehicle and this many random variants of it

@@ -1065,6 +1065,9 @@ pub fn fit_each(
     assemble(fmus, o, entries, models)
 }
 
+/// How [`with_contact_from`]'s note in the provenance's objective begins.
+const CONTACT_FROM_NOTE: &str = "; the taps fitted at conicity";
+
 /// A bank of `taps`' entries, fitted at `conicity` (the vehicle's own), with the contact model
 /// of `contact`, a bank fitted over conicities that holds `conicity`: taps of one wheel state
 /// that know when the wheels are in another. Its conicity estimate and novelty then set
@@ -1124,16 +1127,14 @@ pub fn with_contact_from(
     let [k_lo, k_hi] = model.range;
     let mut entries = taps.entries.clone();
     for e in &mut entries {
-        if e.conicity.is_some_and(|c| c != conicity) {
+        if let Some(c) = e.conicity.filter(|c| *c != conicity) {
             return bad(format!(
-                "the --taps-from bank has taps at conicity {:?}, not {conicity}",
-                e.conicity
+                "the --taps-from bank has taps at conicity {c}, not {conicity}"
             ));
         }
-        if e.condition.is_some_and(|k| !(k_lo..=k_hi).contains(&k)) {
+        if let Some(k) = e.condition.filter(|k| !(k_lo..=k_hi).contains(k)) {
             return bad(format!(
-                "the --taps-from bank's Kalker scale {:?} lies outside the contact model's {k_lo}-{k_hi}",
-                e.condition
+                "the --taps-from bank's Kalker scale {k} lies outside the contact model's {k_lo}-{k_hi}"
             ));
         }
         e.conicity = Some(conicity);
@@ -1141,10 +1142,20 @@ pub fn with_contact_from(
     let mut bank = taps.clone();
     bank.format = fmu_estimator::learned::bank::FORMAT;
     bank.entries = entries;
+    let bands: Vec<String> = model
+        .bands()
+        .iter()
+        .map(|[short, long]| format!("{short}-{long} m"))
+        .collect();
     bank.contact = Some(model);
     let p = &mut bank.provenance;
+    // Made again from a bank made so: its note replaced, not repeated.
+    if let Some(at) = p.objective.find(CONTACT_FROM_NOTE) {
+        p.objective.truncate(at);
+    }
     p.objective += &format!(
-        "; the taps fitted at conicity {conicity}, the contact model (Kalker scale, conicity, novelty) taken from a bank over conicities {lo}-{hi} ({})",
+        "{CONTACT_FROM_NOTE} {conicity}, the contact model (Kalker scale, conicity, novelty; features in {}) taken from a bank over conicities {lo}-{hi} ({})",
+        bands.join(", "),
         contact.provenance.command
     );
     p.command = command.to_string();
@@ -1391,6 +1402,12 @@ mod tests {
         let expected = &over.contract;
         let made = with_contact_from(&taps, &over, NOMINAL_CONICITY, expected, "again").unwrap();
         assert_eq!(made.contact, over.contact);
+        // The shipped default carries the shipped bank over conicities' contact model: a refit
+        // of the one without remaking the other fails here.
+        assert_eq!(taps.contact, over.contact);
+        // Made again from itself, the provenance's note is replaced, not repeated.
+        let again = with_contact_from(&made, &over, NOMINAL_CONICITY, expected, "").unwrap();
+        assert_eq!(again.provenance.objective, made.provenance.objective);
         assert_eq!(made.entries, taps.entries);
         assert!(
             made.entries
