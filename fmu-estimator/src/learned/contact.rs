@@ -792,6 +792,12 @@ mod tests {
         assert_eq!(at(Some(0.14)).conicity, Some(0.14));
         // Estimated (the model says 0.1 whatever the features): the same reading.
         assert!((at(None).kalker - pinned).abs() < 1e-12);
+        // Not asked to judge the novelty (the runtime asks every NOVELTY_EVERY cells): none.
+        let quiet = m
+            .estimate_told(&moments, Some(0.14), None, None, false)
+            .unwrap();
+        assert_eq!(quiet.novelty, None);
+        assert!(m.estimate(&moments, Some(0.14)).unwrap().novelty.is_some());
         // Taps covering the model's range read where the estimate is, as without `taps`.
         let wide = m.estimate_told(&moments, Some(0.14), None, Some([0.1, 0.2]), true);
         assert_eq!(wide.map(|c| c.kalker), Some(got));
