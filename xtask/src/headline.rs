@@ -105,7 +105,9 @@ fn nominal_note(standard: &[Value], kalker_50: Option<&Vec<Value>>) -> String {
         "Nominal-only taps (`tap_file = learned-nominal.taps`{here}) look better on this vehicle \
          because they were fitted for exactly it and its wheel state; the default blends tap banks \
          fitted for other wheel/rail contact conditions too, to stay usable when the contact \
-         differs{worn}, and pays for that on the nominal case.\n"
+         differs{worn}, and pays for that on the nominal case. Its taps hold for wheels near \
+         the ML95's conicity only: on others, and on vehicles they were not fitted for, the \
+         estimator sets `outside_training` (docs/accuracy.md).\n"
     )
 }
 
