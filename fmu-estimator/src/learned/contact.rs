@@ -383,6 +383,7 @@ impl ContactModel {
         novelty: bool,
     ) -> Option<Condition> {
         let ln_range = self.conicity_range.map(|[lo, hi]| [lo.ln(), hi.ln()]);
+        let ln_taps = taps.map(|[lo, hi]| [lo.ln(), hi.ln()]);
         let (mut k_sum, mut k_weight) = (0.0, 0.0);
         let (mut c_sum, mut c_weight) = (0.0, 0.0);
         let (mut n_sum, mut n_weight) = (0.0, 0.0);
@@ -399,7 +400,7 @@ impl ContactModel {
                 _ => None,
             };
             // The conicity the Kalker scale is read at: the taps' where they cover less.
-            let at = x.map(|x| taps.map_or(x, |[lo, hi]| x.clamp(lo.ln(), hi.ln())));
+            let at = x.map(|x| ln_taps.map_or(x, |[lo, hi]| x.clamp(lo, hi)));
             let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {
                 (Some(at), false) => {
                     let ln: Vec<f64> = m

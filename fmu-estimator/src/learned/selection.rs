@@ -87,6 +87,12 @@ impl Selection {
         })
     }
 
+    /// The lowest and highest conicity of the selected taps; `None` without conicity
+    /// conditions.
+    pub(super) fn conicity_range(&self) -> Option<[f64; 2]> {
+        Some([*self.conicities.first()?, *self.conicities.last()?])
+    }
+
     /// The most cells of history any selected window reads (at least 1).
     pub(super) fn longest(&self) -> usize {
         self.causal

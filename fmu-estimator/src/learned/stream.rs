@@ -204,9 +204,8 @@ impl Learned {
     /// How far the judged conicity lies beyond the selected taps' conicities, in
     /// `ln(conicity)` (0 inside them, before it is judged, and without conicity conditions).
     pub fn conicity_distance(&self) -> f64 {
-        let c = &self.selection.conicities;
-        match (c.first(), c.last(), self.judged_conicity) {
-            (Some(lo), Some(hi), Some(x)) => (lo.ln() - x).max(x - hi.ln()).max(0.0),
+        match (self.selection.conicity_range(), self.judged_conicity) {
+            (Some([lo, hi]), Some(x)) => (lo.ln() - x).max(x - hi.ln()).max(0.0),
             _ => 0.0,
         }
     }
@@ -269,8 +268,7 @@ impl Learned {
         }
         let first = *self.started.get_or_insert(closed.distance);
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
-            let c = &self.selection.conicities;
-            let taps = c.first().zip(c.last()).map(|(lo, hi)| [*lo, *hi]);
+            let taps = self.selection.conicity_range();
             self.to_novelty = self.to_novelty.saturating_sub(closed.cells.len());
             let judge = self.to_novelty == 0;
             if judge {

@@ -12,7 +12,7 @@
 
 use super::{Evaluation, Report};
 use crate::Error;
-use crate::study::cases::{SWEEP_SPEED, sweep_speed};
+use crate::study::cases::{SWEEP_SPEED, shipped_bank, sweep_speed, tap_conicities};
 use crate::study::runs::{Fmus, Settings, seeded, standard_run_recording};
 use crate::study::standard::evaluate_results;
 use orchestrator::system::Value;
@@ -45,18 +45,12 @@ struct Condition {
 }
 
 impl Condition {
-    /// Whether `bank`'s three-sensor causal taps cover the condition's conicity.
-    fn trained(&self, bank: &fmu_estimator::learned::Bank) -> bool {
-        let held: Vec<f64> = bank
-            .entries
-            .iter()
-            .filter(|e| e.lag == 0 && !e.channels.iter().any(|c| c == "ws_roll_rate"))
-            .filter_map(|e| e.conicity)
-            .collect();
-        let lo = held.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = held.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        self.conicity
-            .is_some_and(|c| c >= lo - 1e-12 && c <= hi + 1e-12)
+    /// Whether taps at the conicities `held` ([`tap_conicities`]) cover the condition's.
+    fn trained(&self, held: &[f64]) -> bool {
+        match (held.first(), held.last(), self.conicity) {
+            (Some(lo), Some(hi), Some(c)) => c >= lo - 1e-12 && c <= hi + 1e-12,
+            _ => false,
+        }
     }
 }
 
@@ -179,9 +173,10 @@ fn table(
          | condition | speed (m/s) | trained | whole Jrel | flagged (mean / max) | first set (m) |\n\
          |---|---|---|---|---|---|\n"
     );
+    let held = tap_conicities(bank);
     let (mut false_alarm, mut trained_runs, mut missed) = (0.0, 0, vec![]);
     for (i, c) in conditions.iter().enumerate() {
-        let trained = if c.trained(bank) { "yes" } else { "no" };
+        let trained = if c.trained(&held) { "yes" } else { "no" };
         let f: Vec<&RunFigures> = figures[i * seeds..(i + 1) * seeds]
             .iter()
             .flatten()
@@ -211,7 +206,7 @@ fn table(
             };
             format!("{lo:.0}-{hi:.0}{all}")
         };
-        if c.trained(bank) {
+        if c.trained(&held) {
             false_alarm += f.iter().map(|r| r.flagged).sum::<f64>();
             trained_runs += f.len();
         }
@@ -256,15 +251,12 @@ pub fn envelope(
     evaluation.held_out()?;
     let dir =
         tempfile::tempdir().map_err(|e| Error::input(format!("a temporary directory: {e}")))?;
-    let conditions = conditions(&crate::study::cases::conicity_bank()?, dir.path())?;
     let banks: Vec<fmu_estimator::learned::Bank> = BANKS
         .iter()
-        .map(|b| {
-            fmu_estimator::learned::shipped_named(b)
-                .expect("a shipped name")
-                .map_err(|e| Error::input(e.to_string()))
-        })
+        .map(|b| shipped_bank(b))
         .collect::<Result<_, _>>()?;
+    // The speeds: where the bank over conicities holds each condition.
+    let conditions = conditions(&banks[1], dir.path())?;
     let seeds = &evaluation.seeds;
     let jobs: Vec<(usize, usize, u32)> = (0..BANKS.len())
         .flat_map(|b| (0..conditions.len()).map(move |c| (b, c)))

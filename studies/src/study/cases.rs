@@ -127,9 +127,33 @@ pub const CONICITY_BANK: &str = "learned-conicity.taps";
 
 /// The shipped bank fitted over conicities ([`CONICITY_BANK`], built into the library).
 pub fn conicity_bank() -> Result<fmu_estimator::learned::Bank, Error> {
-    fmu_estimator::learned::shipped_named(CONICITY_BANK)
+    shipped_bank(CONICITY_BANK)
+}
+
+/// A shipped bank by name ([`fmu_estimator::learned::SHIPPED`]), built into the library.
+pub fn shipped_bank(name: &str) -> Result<fmu_estimator::learned::Bank, Error> {
+    fmu_estimator::learned::shipped_named(name)
         .expect("a shipped name")
         .map_err(|e| Error::input(e.to_string()))
+}
+
+/// The conicities of a bank's three-sensor causal taps, ascending (empty without conicity
+/// conditions): where its taps for the sweep's estimator are fitted.
+pub fn tap_conicities(bank: &fmu_estimator::learned::Bank) -> Vec<f64> {
+    let mut nodes: Vec<f64> = bank
+        .entries
+        .iter()
+        .filter(three_sensor_causal)
+        .filter_map(|e| e.conicity)
+        .collect();
+    nodes.sort_by(f64::total_cmp);
+    nodes.dedup();
+    nodes
+}
+
+/// Whether an entry holds the three-sensor causal taps.
+fn three_sensor_causal(e: &&fmu_estimator::learned::bank::Entry) -> bool {
+    e.lag == 0 && !e.channels.iter().any(|c| c == "ws_roll_rate")
 }
 
 /// The Kalker-coefficient scales of the conicity sweep: nominal, and worn wheels and rails.
@@ -143,23 +167,13 @@ pub const SWEEP_SPEED: f64 = 20.0;
 /// conicities, the higher one's (the lower critical speed); `None` if the bank holds the
 /// condition at no speed up to [`SWEEP_SPEED`].
 pub fn sweep_speed(bank: &fmu_estimator::learned::Bank, conicity: f64, kalker: f64) -> Option<f64> {
-    let three = |e: &&fmu_estimator::learned::bank::Entry| {
-        e.lag == 0 && !e.channels.iter().any(|c| c == "ws_roll_rate")
-    };
-    let mut nodes: Vec<f64> = bank
-        .entries
-        .iter()
-        .filter(three)
-        .filter_map(|e| e.conicity)
-        .collect();
-    nodes.sort_by(f64::total_cmp);
-    nodes.dedup();
+    let nodes = tap_conicities(bank);
     // The bank's conicity at or above this one (the highest if beyond).
     let node = nodes.iter().copied().find(|c| *c >= conicity - 1e-12);
     let node = node.or(nodes.last().copied());
     bank.entries
         .iter()
-        .filter(three)
+        .filter(three_sensor_causal)
         .filter(|e| e.speed <= SWEEP_SPEED + 1e-9)
         .filter(|e| e.conicity == node && e.condition == Some(kalker))
         .map(|e| e.speed)

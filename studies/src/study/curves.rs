@@ -16,7 +16,7 @@ use super::records::{Output, Record, estimate, estimate_learned, record_table, r
 use super::runs::{Fmus, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
-use fmu_estimator::offline::fitted;
+use fmu_estimator::offline::{Sample, fitted};
 use orchestrator::system::Value;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -142,12 +142,7 @@ fn judged(
     told: bool,
     window: Option<(f64, f64)>,
 ) -> Result<BandMetrics, Error> {
-    let mut samples = rec.samples.clone();
-    if !told {
-        for s in &mut samples {
-            s.design = [0.0; 2];
-        }
-    }
+    let samples = samples_told(rec, told);
     let (distance, est) = if paper {
         estimate(
             &samples,
@@ -180,15 +175,25 @@ fn flagged(rec: &Record) -> Result<Flagged, Error> {
     flagged_told(rec, true)
 }
 
-/// The default over `rec`, told the design or not (`told`).
-fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
+/// `rec`'s samples with the design inputs, or (`told` false) without them.
+fn samples_told(rec: &Record, told: bool) -> Vec<Sample> {
     let mut samples = rec.samples.clone();
     if !told {
         for s in &mut samples {
             s.design = [0.0; 2];
         }
     }
-    let (out, _) = run_learned(&samples, 1e-3, &[])?;
+    samples
+}
+
+/// The share of `flags` set.
+fn share_of(flags: &[bool]) -> f64 {
+    flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64
+}
+
+/// The default over `rec`, told the design or not (`told`).
+fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
+    let (out, _) = run_learned(&samples_told(rec, told), 1e-3, &[])?;
     let est: Vec<f64> = out
         .learned
         .as_ref()
@@ -203,14 +208,14 @@ fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
 /// or not.
 fn share(rec: &Record, told: bool) -> Result<f64, Error> {
     let (_, _, flags) = flagged_told(rec, told)?;
-    Ok(flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64)
+    Ok(share_of(&flags))
 }
 
 /// The line with flange contact: the run's figures, the share flagged, the wide curves' whole.
 fn with_flanges(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64, f64), Error> {
     let rec = record(fmus, seed, Lay::LineWithFlanges)?;
     let (distance, est, flags) = flagged(&rec)?;
-    let share = flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64;
+    let share = share_of(&flags);
     let m = evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
     let wide = WIDE_CURVES
         .iter()
@@ -236,7 +241,7 @@ fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
         .filter(|(d, _)| **d >= a && **d <= b)
         .map(|(_, f)| *f)
         .collect();
-    let share = inside.iter().filter(|f| **f).count() as f64 / inside.len().max(1) as f64;
+    let share = share_of(&inside);
     let m = evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
     Ok((m, share))
 }

@@ -442,6 +442,28 @@ fn kalman_config(o: &Options) -> Result<Config, Error> {
     Ok(offline::config(&values, o.calibration.as_deref())?.0)
 }
 
+/// The contract a bank of `o` states ([`Contract::expected`]), with a contact model's band
+/// (`None`: no contact model).
+fn contract(o: &Options, contact_band: Option<[f64; 2]>) -> Result<Contract, Error> {
+    Ok(Contract::expected(
+        &kalman_config(o)?,
+        BANK_GRID,
+        KALMAN_HIGHPASS,
+        Some(KALMAN_SHELF),
+        contact_band,
+        STEP,
+    ))
+}
+
+/// Contact bands as the provenance states them: "3-25 m, 3-6 m, ...".
+fn band_list(bands: &[[f64; 2]]) -> String {
+    bands
+        .iter()
+        .map(|[short, long]| format!("{short}-{long} m"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The channel indices ([`CHANNELS`]) of a sensor set.
 fn channel_set(roll: bool) -> Vec<usize> {
     (0..CHANNELS.len())
@@ -1043,14 +1065,7 @@ pub fn fit_each(
 ) -> Result<Bank, Error> {
     check(o)?;
     if let (Some(taps), Some(contact)) = (&o.taps_from, &o.contact_from) {
-        let expected = Contract::expected(
-            &kalman_config(o)?,
-            BANK_GRID,
-            KALMAN_HIGHPASS,
-            Some(KALMAN_SHELF),
-            Some(CONTACT_BAND),
-            STEP,
-        );
+        let expected = contract(o, Some(CONTACT_BAND))?;
         return with_contact_from(taps, contact, o.conicities[0], &expected, &o.command);
     }
     let mut entries = vec![];
@@ -1142,11 +1157,7 @@ pub fn with_contact_from(
     let mut bank = taps.clone();
     bank.format = fmu_estimator::learned::bank::FORMAT;
     bank.entries = entries;
-    let bands: Vec<String> = model
-        .bands()
-        .iter()
-        .map(|[short, long]| format!("{short}-{long} m"))
-        .collect();
+    let bands = band_list(&model.bands());
     bank.contact = Some(model);
     let p = &mut bank.provenance;
     // Made again from a bank made so: its note replaced, not repeated.
@@ -1155,8 +1166,7 @@ pub fn with_contact_from(
     }
     p.objective += &format!(
         "{CONTACT_FROM_NOTE} {conicity}, the contact model (Kalker scale, conicity, novelty; features in {}) taken from a bank over conicities {lo}-{hi} ({})",
-        bands.join(", "),
-        contact.provenance.command
+        bands, contact.provenance.command
     );
     p.command = command.to_string();
     Ok(bank)
@@ -1251,14 +1261,7 @@ fn assemble(
         .iter()
         .map(|k| format!("{}", k * 100.0))
         .collect();
-    let contract = Contract::expected(
-        &kalman_config(o)?,
-        BANK_GRID,
-        KALMAN_HIGHPASS,
-        Some(KALMAN_SHELF),
-        contact.as_ref().map(|c| c.band),
-        STEP,
-    );
+    let contract = contract(o, contact.as_ref().map(|c| c.band))?;
     Ok(Header {
         format: fmu_estimator::learned::bank::FORMAT,
         contract,
@@ -1281,11 +1284,7 @@ fn assemble(
             ) + &if o.per_condition && o.kalker_scales.len() > 1 {
                 format!(
                     "; each condition's taps fitted on its own runs and validated on its own validation runs, blended at run time by the contact model (features in {}, {CONTACT_MEMORY} m memory, least squares on the training runs)",
-                    contact_bands(o)
-                        .iter()
-                        .map(|[short, long]| format!("{short}-{long} m"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    band_list(&contact_bands(o))
                 )
             } else {
                 "; the conditions' runs pooled into one fit".to_string()
