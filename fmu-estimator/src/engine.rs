@@ -35,6 +35,7 @@ use crate::smoother::History;
 use crate::statespace::{Discrete, StateSpace, XI};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 
 /// How the gain is computed (FMI parameter `gain`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -215,8 +216,10 @@ pub struct Engine<const N: usize> {
     pub filter: Kalman<N>,
     /// The discrete matrices of the last step's speed and step; none before the first step.
     pub discrete: Option<Discrete<N>>,
-    /// The steady-state gain in use (`Gain::SteadyState` only).
-    pub steady: Option<SteadyState<N>>,
+    /// The steady-state gain in use (`Gain::SteadyState` only); shared with the bin's entry
+    /// in `gains`: under a measured speed the bin changes at almost every sample, and a copy
+    /// of its matrices each time cost a tenth of the bindings' time.
+    pub steady: Option<Arc<SteadyState<N>>>,
     /// How often the discrete matrices were rebuilt (the FMU output `rebuilds`).
     pub rebuilds: i32,
     /// How many updates were skipped (the FMU output `skipped_updates`).
@@ -227,7 +230,7 @@ pub struct Engine<const N: usize> {
     /// The steady-state gains solved so far, by speed bin, for the step `gains_h` (derived
     /// data: not part of a saved state).
     #[serde(skip)]
-    gains: std::collections::HashMap<i64, SteadyState<N>>,
+    gains: std::collections::HashMap<i64, Arc<SteadyState<N>>>,
     #[serde(skip)]
     gains_h: f64,
     /// The bin `steady` belongs to (a step in the same bin keeps it as it is).
@@ -286,12 +289,16 @@ impl<const N: usize> Engine<N> {
         {
             return Ok(());
         }
-        let d = self.space.discrete(speed, h, self.scheme);
+        match &mut self.discrete {
+            Some(d) => self.space.rebuild(d, speed, h, self.scheme),
+            None => self.discrete = Some(self.space.discrete(speed, h, self.scheme)),
+        }
+        let d = self.discrete.as_ref().expect("built above");
         if self.rebuilds == 0 && self.stationary_start && self.gain == Gain::TimeVarying {
             // The filter's covariance after a long run at this speed: the time-varying filter
             // then has no start-up transient to wait for (with the paper's model it lasts
             // minutes: P_0's 5 mm on the alignment is far below the stationary value).
-            match steady_state(&d, &self.r, &self.filter.p) {
+            match steady_state(d, &self.r, &self.filter.p) {
                 Ok(ss) => self.filter.p = ss.p_filt,
                 Err(e) => {
                     self.start_note =
@@ -305,22 +312,40 @@ impl<const N: usize> Engine<N> {
                 && self.steady_bin == Some(bin)
                 && fmi_abi::step::same(self.gains_h, d.h);
             if !kept {
-                let ss = self.scheduled_gain(&d, bin)?;
+                // A bin solved before is shared as it is (`scheduled_gain`'s own look-up,
+                // without lending it the matrices); a new one is solved from a copy of them.
+                let cached = (fmi_abi::step::same(self.gains_h, d.h)
+                    && self.gains.len() < GAIN_BINS_KEPT)
+                    .then(|| self.gains.get(&bin).cloned())
+                    .flatten();
+                let ss = match cached {
+                    Some(ss) => ss,
+                    None => {
+                        let d = d.clone();
+                        self.scheduled_gain(&d, bin).inspect_err(|_| {
+                            // Not kept as built: the next step rebuilds and solves again.
+                            self.discrete = None;
+                        })?
+                    }
+                };
                 self.filter.p = ss.p_filt;
                 self.steady = Some(ss);
                 self.steady_bin = Some(bin);
             }
         }
-        if let Some(hist) = &mut self.history {
+        if let (Some(hist), Some(d)) = (&mut self.history, &self.discrete) {
             hist.transitions.push(d.f);
         }
-        self.discrete = Some(d);
         self.rebuilds += 1;
         Ok(())
     }
 
     /// The steady-state filter of speed bin `bin` (`d`'s), solved at the bin's centre once.
-    fn scheduled_gain(&mut self, d: &Discrete<N>, bin: i64) -> Result<SteadyState<N>, GainError> {
+    fn scheduled_gain(
+        &mut self,
+        d: &Discrete<N>,
+        bin: i64,
+    ) -> Result<Arc<SteadyState<N>>, GainError> {
         if !fmi_abi::step::same(self.gains_h, d.h) || self.gains.len() >= GAIN_BINS_KEPT {
             self.gains.clear();
             self.gains_h = d.h;
@@ -333,7 +358,7 @@ impl<const N: usize> Engine<N> {
         let centre = (bin as f64 / GAIN_SPEED_BIN.recip().round()).max(0.5 * GAIN_SPEED_BIN);
         // Solved for the schedule's step, not this call's: a master's clock rounding (within
         // the tolerance of `step::same`) does not change a bin's gain.
-        let ss = if centre == d.speed && d.h == self.gains_h {
+        let ss = Arc::new(if centre == d.speed && d.h == self.gains_h {
             steady_state(d, &self.r, &self.filter.p)?
         } else {
             steady_state(
@@ -341,8 +366,8 @@ impl<const N: usize> Engine<N> {
                 &self.r,
                 &self.filter.p,
             )?
-        };
-        self.gains.insert(bin, ss.clone());
+        });
+        self.gains.insert(bin, Arc::clone(&ss));
         Ok(ss)
     }
 

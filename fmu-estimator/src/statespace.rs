@@ -206,14 +206,27 @@ impl<const N: usize> StateSpace<N> {
 
     /// Everything the filter needs for one (speed, step).
     pub fn discrete(&self, speed: f64, h: f64, scheme: Scheme) -> Discrete<N> {
-        let fc = self.fc(speed);
-        Discrete {
+        let mut d = Discrete {
             speed,
             h,
-            f: self.transition(&fc, h, scheme),
-            hm: self.measurement(&fc),
-            q: self.process_noise(speed, h),
-        }
+            f: SMatrix::zeros(),
+            hm: SMatrix::zeros(),
+            q: SMatrix::zeros(),
+        };
+        self.rebuild(&mut d, speed, h, scheme);
+        d
+    }
+
+    /// [`StateSpace::discrete`] written over `d`: under a measured speed the matrices are
+    /// rebuilt at almost every sample, and moving a new set of them into place cost more than
+    /// building them.
+    pub fn rebuild(&self, d: &mut Discrete<N>, speed: f64, h: f64, scheme: Scheme) {
+        let fc = self.fc(speed);
+        d.speed = speed;
+        d.h = h;
+        d.f = self.transition(&fc, h, scheme);
+        d.hm = self.measurement(&fc);
+        d.q = self.process_noise(speed, h);
     }
 }
 

@@ -141,8 +141,54 @@ impl Windows {
 }
 
 /// `sum a_i b_i` with four partial sums: lets the compiler vectorize, and fixes the summation
-/// order (the fit's estimates and the FMU's are the same arithmetic).
+/// order (the fit's estimates and the FMU's are the same arithmetic). Where the processor has
+/// AVX2 the four sums are one 256-bit register instead of two 128-bit ones: the same
+/// operations in the same order (no fused multiply-add: the product is rounded before the sum,
+/// as without AVX2), so the same result to the last bit, in half the instructions. The taps'
+/// products are the learned filter's largest cost per sample at a changing speed.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
+    debug_assert_eq!(a.len(), b.len(), "a window's taps and cells");
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked just above), all the function requires.
+        return unsafe { dot_avx2(a, b) };
+    }
+    dot_portable(a, b)
+}
+
+/// [`dot_portable`] with its four partial sums in the lanes of one AVX register (the compiler
+/// left to itself shuffles them between two).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn dot_avx2(a: &[f64], b: &[f64]) -> f64 {
+    use std::arch::x86_64::{
+        _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd, _mm256_setzero_pd, _mm256_storeu_pd,
+    };
+    let n = a.len().min(b.len());
+    let chunks = n / 4;
+    let mut sum = _mm256_setzero_pd();
+    for k in 0..chunks {
+        // SAFETY: `4 k + 3 < n`, within both slices; unaligned loads.
+        let (x, y) = unsafe {
+            (
+                _mm256_loadu_pd(a.as_ptr().add(4 * k)),
+                _mm256_loadu_pd(b.as_ptr().add(4 * k)),
+            )
+        };
+        sum = _mm256_add_pd(sum, _mm256_mul_pd(x, y));
+    }
+    let mut s = [0.0; 4];
+    // SAFETY: `s` holds four f64.
+    unsafe { _mm256_storeu_pd(s.as_mut_ptr(), sum) };
+    let mut r = (s[0] + s[1]) + (s[2] + s[3]);
+    for (x, y) in a[4 * chunks..n].iter().zip(&b[4 * chunks..n]) {
+        r += x * y;
+    }
+    r
+}
+
+/// The four-partial-sum dot product itself.
+fn dot_portable(a: &[f64], b: &[f64]) -> f64 {
     let mut s = [0.0; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
     let (ra, rb) = (ca.remainder(), cb.remainder());
@@ -228,5 +274,32 @@ mod tests {
         assert_eq!(longest_covered(&windows, 4).unwrap().past(), 2);
         assert_eq!(longest_covered(&windows, 6).unwrap().past(), 2);
         assert_eq!(longest_covered(&windows, 7).unwrap().past(), 5);
+    }
+
+    /// The AVX2 dot product is the portable one to the last bit (the fit's estimates and the
+    /// FMU's must not depend on the processor), at every length's remainder, on values spread
+    /// over twelve decades where the summation order shows.
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx2_dot_product_is_the_portable_one_bit_for_bit() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            eprintln!("no AVX2 here: nothing to compare");
+            return;
+        }
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
+            (u - 0.5) * 10f64.powi((seed % 13) as i32 - 6)
+        };
+        for n in (0..40).chain([1001, 1503]) {
+            let a: Vec<f64> = (0..n).map(|_| next()).collect();
+            let b: Vec<f64> = (0..n).map(|_| next()).collect();
+            // SAFETY: AVX2 checked above.
+            let fast = unsafe { dot_avx2(&a, &b) };
+            assert_eq!(fast.to_bits(), dot_portable(&a, &b).to_bits(), "length {n}");
+        }
     }
 }
