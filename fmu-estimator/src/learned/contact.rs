@@ -403,12 +403,18 @@ impl ContactModel {
             let at = x.map(|x| ln_taps.map_or(x, |[lo, hi]| x.clamp(lo, hi)));
             let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {
                 (Some(at), false) => {
-                    let ln: Vec<f64> = m
-                        .kalker_by_conicity
-                        .iter()
-                        .map(|n| n.conicity.ln())
-                        .collect();
-                    super::weights(&ln, at)
+                    let mut stack = [0.0; STACK_NODES];
+                    let mut heap = Vec::new();
+                    let ln: &mut [f64] = if m.kalker_by_conicity.len() <= STACK_NODES {
+                        &mut stack[..m.kalker_by_conicity.len()]
+                    } else {
+                        heap.resize(m.kalker_by_conicity.len(), 0.0);
+                        &mut heap
+                    };
+                    for (l, n) in ln.iter_mut().zip(&m.kalker_by_conicity) {
+                        *l = n.conicity.ln();
+                    }
+                    super::weights(ln, at)
                         .iter()
                         .fold((0.0, 0.0), |(k, r), (j, a)| {
                             let n = &m.kalker_by_conicity[*j];
@@ -479,6 +485,14 @@ impl ContactModel {
     }
 }
 
+/// The most bands whose filtered channels [`Moments::push`] keeps on the stack (the shipped
+/// banks have four); a bank with more takes an allocation per cell, nothing else.
+const STACK_BANDS: usize = 8;
+
+/// The most conicity nodes of a Kalker model whose logarithms [`ContactModel::estimate_told`]
+/// keeps on the stack (the shipped banks have seven).
+const STACK_NODES: usize = 16;
+
 /// The running moments of the band-passed channels, one set per speed of the contact model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
@@ -538,16 +552,22 @@ impl Moments {
     /// start dominate the lowest set).
     pub fn push(&mut self, cell: &[f64; 5], speed: f64) {
         let v = speed.max(MIN_SPEED);
-        let xs: Vec<[f64; 3]> = self
-            .filters
-            .iter_mut()
-            .map(|band| {
-                std::array::from_fn(|i| {
-                    let [hp, lp] = &mut band[i];
-                    lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(CONTACT_SPEED_POWER[i])
-                })
-            })
-            .collect();
+        // The bands' filtered channels, on the stack for any bank's band count up to
+        // `STACK_BANDS` (every cell closes here: no allocation per cell).
+        let mut stack = [[0.0; 3]; STACK_BANDS];
+        let mut heap = Vec::new();
+        let xs: &mut [[f64; 3]] = if self.filters.len() <= STACK_BANDS {
+            &mut stack[..self.filters.len()]
+        } else {
+            heap.resize(self.filters.len(), [0.0; 3]);
+            &mut heap
+        };
+        for (x, band) in xs.iter_mut().zip(&mut self.filters) {
+            *x = std::array::from_fn(|i| {
+                let [hp, lp] = &mut band[i];
+                lp.step(hp.step(cell[CHANNELS[i]])) / v.powi(CONTACT_SPEED_POWER[i])
+            });
+        }
         let (Some(lo), Some(hi)) = (self.speeds.first(), self.speeds.last()) else {
             return;
         };
@@ -563,19 +583,21 @@ impl Moments {
             set.n += w;
             set.recent += w;
             let a = w / set.n.min(self.memory_points);
-            for (m, x) in set.m.iter_mut().zip(&xs) {
+            for (m, x) in set.m.iter_mut().zip(xs.iter()) {
                 for (r, row) in m.iter_mut().enumerate() {
                     for (c, m) in row.iter_mut().enumerate() {
                         *m += a * (x[r] * x[c] - *m);
                     }
                 }
             }
-            set.features = set
+            // Written over the last features' buffer: none while a band has no variance yet.
+            let mut f = set.features.take().unwrap_or_default();
+            f.clear();
+            let complete = set
                 .m
                 .iter()
-                .map(features_of)
-                .collect::<Option<Vec<_>>>()
-                .map(|f| f.concat());
+                .all(|m| features_of(m).map(|b| f.extend_from_slice(&b)).is_some());
+            set.features = complete.then_some(f);
         }
     }
 
