@@ -289,6 +289,9 @@ impl<const N: usize> Engine<N> {
         {
             return Ok(());
         }
+        // The speed and step of the matrices overwritten: a gain that fails to solve puts them
+        // back (the step is refused as if never tried).
+        let previous = self.discrete.as_ref().map(|d| (d.speed, d.h));
         match &mut self.discrete {
             Some(d) => self.space.rebuild(d, speed, h, self.scheme),
             None => self.discrete = Some(self.space.discrete(speed, h, self.scheme)),
@@ -323,8 +326,10 @@ impl<const N: usize> Engine<N> {
                     None => {
                         let d = d.clone();
                         self.scheduled_gain(&d, bin).inspect_err(|_| {
-                            // Not kept as built: the next step rebuilds and solves again.
-                            self.discrete = None;
+                            match (previous, &mut self.discrete) {
+                                (Some((v, h)), Some(d)) => self.space.rebuild(d, v, h, self.scheme),
+                                _ => self.discrete = None,
+                            }
                         })?
                     }
                 };
@@ -523,6 +528,29 @@ mod tests {
             "{}",
             (gain - st.k).amax()
         );
+    }
+
+    /// A speed whose gain cannot be solved is refused as if never tried: the matrices stay
+    /// those of the last speed that ran (so a step back at it is no rebuild), and a later
+    /// step at the refused speed solves again.
+    #[test]
+    fn a_gain_that_fails_leaves_the_last_speeds_matrices() {
+        let (space, p0) = paper();
+        let mut e = Engine::new(space.clone(), Scheme::Taylor2, Gain::SteadyState, r(), p0);
+        e.step(20.0, 1e-3, &Vec4::zeros()).unwrap();
+        let before = (e.discrete.clone(), e.rebuilds);
+        e.r = Mat4::zeros();
+        assert!(matches!(
+            e.step(21.0, 1e-3, &Vec4::zeros()),
+            Err(StepError::Gain(_))
+        ));
+        assert_eq!((e.discrete.clone(), e.rebuilds), before);
+        e.r = r();
+        e.step(20.0, 1e-3, &Vec4::zeros()).unwrap();
+        assert_eq!(e.rebuilds, before.1, "back at the last speed: no rebuild");
+        e.step(21.0, 1e-3, &Vec4::zeros()).unwrap();
+        assert_eq!(e.discrete.as_ref().unwrap().speed, 21.0);
+        assert_eq!(e.rebuilds, before.1 + 1);
     }
 
     /// Under a speed changing every sample the steady-state gain is the DARE's at the speed's

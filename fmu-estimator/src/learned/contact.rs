@@ -486,7 +486,8 @@ impl ContactModel {
 }
 
 /// The most bands whose filtered channels [`Moments::push`] keeps on the stack (the shipped
-/// banks have four); a bank with more takes an allocation per cell, nothing else.
+/// banks with a contact model have seven: D1, its three octaves and three more); a bank with
+/// more takes one more allocation per cell, nothing else.
 const STACK_BANDS: usize = 8;
 
 /// The most conicity nodes of a Kalker model whose logarithms [`ContactModel::estimate_told`]
@@ -553,7 +554,7 @@ impl Moments {
     pub fn push(&mut self, cell: &[f64; 5], speed: f64) {
         let v = speed.max(MIN_SPEED);
         // The bands' filtered channels, on the stack for any bank's band count up to
-        // `STACK_BANDS` (every cell closes here: no allocation per cell).
+        // `STACK_BANDS` (every cell closes here).
         let mut stack = [[0.0; 3]; STACK_BANDS];
         let mut heap = Vec::new();
         let xs: &mut [[f64; 3]] = if self.filters.len() <= STACK_BANDS {

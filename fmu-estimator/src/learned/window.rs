@@ -144,8 +144,10 @@ impl Windows {
 /// order (the fit's estimates and the FMU's are the same arithmetic). Where the processor has
 /// AVX2 the four sums are one 256-bit register instead of two 128-bit ones: the same
 /// operations in the same order (no fused multiply-add: the product is rounded before the sum,
-/// as without AVX2), so the same result to the last bit, in half the instructions. The taps'
-/// products are the learned filter's largest cost per sample at a changing speed.
+/// as without AVX2), so the same result to the last bit (a NaN result may differ in its sign
+/// bit: x86 keeps the first operand's NaN, and the compiler may order the portable sum's
+/// operands either way), in a third of the instructions. The taps' products are the learned
+/// filter's largest cost per sample at a changing speed.
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len(), "a window's taps and cells");
     #[cfg(target_arch = "x86_64")]
@@ -277,8 +279,8 @@ mod tests {
     }
 
     /// The AVX2 dot product is the portable one to the last bit (the fit's estimates and the
-    /// FMU's must not depend on the processor), at every length's remainder, on values spread
-    /// over twelve decades where the summation order shows.
+    /// FMU's must not depend on the processor), at every length's remainder, on finite values
+    /// spread over twelve decades where the summation order shows.
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn the_avx2_dot_product_is_the_portable_one_bit_for_bit() {
