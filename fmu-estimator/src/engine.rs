@@ -315,17 +315,13 @@ impl<const N: usize> Engine<N> {
                 && self.steady_bin == Some(bin)
                 && fmi_abi::step::same(self.gains_h, d.h);
             if !kept {
-                // A bin solved before is shared as it is (`scheduled_gain`'s own look-up,
-                // without lending it the matrices); a new one is solved from a copy of them.
-                let cached = (fmi_abi::step::same(self.gains_h, d.h)
-                    && self.gains.len() < GAIN_BINS_KEPT)
-                    .then(|| self.gains.get(&bin).cloned())
-                    .flatten();
-                let ss = match cached {
+                // A bin solved before is shared as it is; a new one is solved from a copy of
+                // the matrices (the solve needs the engine mutably).
+                let ss = match self.cached_gain(d.h, bin) {
                     Some(ss) => ss,
                     None => {
                         let d = d.clone();
-                        self.scheduled_gain(&d, bin).inspect_err(|_| {
+                        self.solve_gain(&d, bin).inspect_err(|_| {
                             match (previous, &mut self.discrete) {
                                 (Some((v, h)), Some(d)) => self.space.rebuild(d, v, h, self.scheme),
                                 _ => self.discrete = None,
@@ -345,18 +341,25 @@ impl<const N: usize> Engine<N> {
         Ok(())
     }
 
-    /// The steady-state filter of speed bin `bin` (`d`'s), solved at the bin's centre once.
-    fn scheduled_gain(
-        &mut self,
-        d: &Discrete<N>,
-        bin: i64,
-    ) -> Result<Arc<SteadyState<N>>, GainError> {
-        if !fmi_abi::step::same(self.gains_h, d.h) || self.gains.len() >= GAIN_BINS_KEPT {
+    /// Whether the gains kept serve a step `h`: solved for it, and fewer than
+    /// [`GAIN_BINS_KEPT`] (a full cache is emptied before the next solve).
+    fn gains_serve(&self, h: f64) -> bool {
+        fmi_abi::step::same(self.gains_h, h) && self.gains.len() < GAIN_BINS_KEPT
+    }
+
+    /// The steady-state filter of speed bin `bin` at step `h`, if solved before and kept.
+    fn cached_gain(&self, h: f64, bin: i64) -> Option<Arc<SteadyState<N>>> {
+        self.gains_serve(h)
+            .then(|| self.gains.get(&bin).cloned())
+            .flatten()
+    }
+
+    /// The steady-state filter of speed bin `bin` (`d`'s), solved at the bin's centre and
+    /// kept; the gains kept are dropped first where they do not serve `d`'s step.
+    fn solve_gain(&mut self, d: &Discrete<N>, bin: i64) -> Result<Arc<SteadyState<N>>, GainError> {
+        if !self.gains_serve(d.h) {
             self.gains.clear();
             self.gains_h = d.h;
-        }
-        if let Some(ss) = self.gains.get(&bin) {
-            return Ok(ss.clone());
         }
         // k / 100 is the double nearest the bin's centre (k * 0.01 may not be); the lowest bin
         // is solved at its upper half's middle, not at standstill (the model has 1 / V terms).

@@ -403,14 +403,8 @@ impl ContactModel {
             let at = x.map(|x| ln_taps.map_or(x, |[lo, hi]| x.clamp(lo, hi)));
             let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {
                 (Some(at), false) => {
-                    let mut stack = [0.0; STACK_NODES];
-                    let mut heap = Vec::new();
-                    let ln: &mut [f64] = if m.kalker_by_conicity.len() <= STACK_NODES {
-                        &mut stack[..m.kalker_by_conicity.len()]
-                    } else {
-                        heap.resize(m.kalker_by_conicity.len(), 0.0);
-                        &mut heap
-                    };
+                    let (mut stack, mut heap) = ([0.0; STACK_NODES], Vec::new());
+                    let ln = scratch(&mut stack, &mut heap, m.kalker_by_conicity.len());
                     for (l, n) in ln.iter_mut().zip(&m.kalker_by_conicity) {
                         *l = n.conicity.ln();
                     }
@@ -494,6 +488,21 @@ const STACK_BANDS: usize = 8;
 /// keeps on the stack (the shipped banks have seven).
 const STACK_NODES: usize = 16;
 
+/// `n` zeroed values of scratch for work done at every cell: in `stack` where it holds them,
+/// else in `heap` (one allocation).
+fn scratch<'a, T: Copy + Default, const S: usize>(
+    stack: &'a mut [T; S],
+    heap: &'a mut Vec<T>,
+    n: usize,
+) -> &'a mut [T] {
+    if n <= S {
+        &mut stack[..n]
+    } else {
+        heap.resize(n, T::default());
+        heap
+    }
+}
+
 /// The running moments of the band-passed channels, one set per speed of the contact model.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Moments {
@@ -555,14 +564,8 @@ impl Moments {
         let v = speed.max(MIN_SPEED);
         // The bands' filtered channels, on the stack for any bank's band count up to
         // `STACK_BANDS` (every cell closes here).
-        let mut stack = [[0.0; 3]; STACK_BANDS];
-        let mut heap = Vec::new();
-        let xs: &mut [[f64; 3]] = if self.filters.len() <= STACK_BANDS {
-            &mut stack[..self.filters.len()]
-        } else {
-            heap.resize(self.filters.len(), [0.0; 3]);
-            &mut heap
-        };
+        let (mut stack, mut heap) = ([[0.0; 3]; STACK_BANDS], Vec::new());
+        let xs = scratch(&mut stack, &mut heap, self.filters.len());
         for (x, band) in xs.iter_mut().zip(&mut self.filters) {
             *x = std::array::from_fn(|i| {
                 let [hp, lp] = &mut band[i];

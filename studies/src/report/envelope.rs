@@ -176,7 +176,8 @@ fn table(
     let held = tap_conicities(bank);
     let (mut false_alarm, mut trained_runs, mut missed) = (0.0, 0, vec![]);
     for (i, c) in conditions.iter().enumerate() {
-        let trained = if c.trained(&held) { "yes" } else { "no" };
+        let is_trained = c.trained(&held);
+        let trained = if is_trained { "yes" } else { "no" };
         let f: Vec<&RunFigures> = figures[i * seeds..(i + 1) * seeds]
             .iter()
             .flatten()
@@ -206,7 +207,7 @@ fn table(
             };
             format!("{lo:.0}-{hi:.0}{all}")
         };
-        if c.trained(&held) {
+        if is_trained {
             false_alarm += f.iter().map(|r| r.flagged).sum::<f64>();
             trained_runs += f.len();
         }
