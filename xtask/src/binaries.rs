@@ -1,7 +1,7 @@
-//! The two release programs the tests and the demo run (the master and the studies on top of
+//! The two programs the tests and the demo run (the master and the studies on top of
 //! it), and the environment variables that tell the test suites where they and the FMUs are.
 
-use crate::workspace;
+use crate::workspace::{self, Profile};
 use anyhow::Result;
 use std::path::PathBuf;
 use std::process::Command;
@@ -29,20 +29,15 @@ impl Binaries {
     }
 }
 
-/// Builds the orchestrator and alignment-studies in release and returns the binaries' paths.
-pub fn build() -> Result<Binaries> {
-    workspace::run(workspace::cargo().args([
-        "build",
-        "--release",
-        "-p",
-        "orchestrator",
-        "-p",
-        "alignment-studies",
-    ]))?;
-    let release = workspace::target_dir()?.join("release");
+/// Builds the orchestrator and alignment-studies in `profile` and returns the binaries' paths.
+pub fn build(profile: Profile) -> Result<Binaries> {
+    let mut cmd = workspace::cargo();
+    cmd.arg("build").args(profile.flags());
+    workspace::run(cmd.args(["-p", "orchestrator", "-p", "alignment-studies"]))?;
+    let dir = workspace::target_dir()?.join(profile.dir());
     let b = Binaries {
-        orchestrator: release.join("orchestrator"),
-        studies: release.join("alignment-studies"),
+        orchestrator: dir.join("orchestrator"),
+        studies: dir.join("alignment-studies"),
     };
     for bin in [&b.orchestrator, &b.studies] {
         anyhow::ensure!(bin.exists(), "no binary at {}", bin.display());

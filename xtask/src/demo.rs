@@ -9,7 +9,8 @@
 //! The durations announced are those of a run on 2 cores with the release build up to date.
 
 use crate::progress::{self, logged};
-use crate::{binaries, headline, headline_curves, package, python, workspace};
+use crate::workspace::{self, Profile};
+use crate::{binaries, headline, headline_curves, package, python};
 use anyhow::{Context, Result};
 use std::path::Path;
 use std::process::Command;
@@ -20,7 +21,7 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
         "seconds when up to date, several minutes from a fresh clone; cargo shows its progress",
         None,
     );
-    let packaged = package::build_and_package()?;
+    let packaged = package::build_and_package(Profile::Release)?;
     let find = |id: &str| {
         packaged
             .iter()
@@ -29,7 +30,7 @@ pub fn demo(extra: Vec<String>) -> Result<()> {
             .with_context(|| format!("{id}.fmu was not packaged"))
     };
     let (vehicle, estimator) = (find("RailVehicle")?, find("AlignmentEstimator")?);
-    let studies = binaries::build()?.studies;
+    let studies = binaries::build(Profile::Release)?.studies;
     let out = workspace::target_dir()?.join("demo");
     let study_dir = out.join("study");
     create_dir(&study_dir)?;

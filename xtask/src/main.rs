@@ -29,7 +29,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match cli::parse(&args) {
-        Ok(Command::Fmu) => package::build_and_package().map(|_| true),
+        Ok(Command::Fmu) => package::build_and_package(workspace::Profile::Release).map(|_| true),
         Ok(Command::Test(o)) => test::test(o),
         Ok(Command::Demo(extra)) => demo::demo(extra).map(|_| true),
         Ok(Command::Help) => {

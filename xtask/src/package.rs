@@ -1,4 +1,5 @@
-//! `cargo xtask fmu`: build the FMU crates in release and pack each into `<target>/fmu/<id>.fmu`.
+//! `cargo xtask fmu`: build the FMU crates in release and pack each into `<target>/fmu/<id>.fmu`
+//! (the test suite: in the dev profile, into `<target>/fmu-dev/`; [`Profile`]).
 //!
 //! The archive (FMI 2.0 section 2.3, docs/references.md section 7.4): modelDescription.xml,
 //! `binaries/<platform>/<id>.<ext>`, resources/..., documentation/index.html. Deflate, forward
@@ -7,7 +8,7 @@
 //! same bytes, so the .fmu can be compared or cached by hash.
 
 use crate::fmus::{FMUS, FmuSpec};
-use crate::workspace::{cargo, root, run, target_dir};
+use crate::workspace::{Profile, cargo, root, run, target_dir};
 use anyhow::{Context, Result, bail};
 use std::collections::HashSet;
 use std::fs;
@@ -58,21 +59,21 @@ struct Entry {
     mode: u32,
 }
 
-/// Builds every FMU crate in release and packages each; prints the path and size of each .fmu.
-pub fn build_and_package() -> Result<Vec<Packaged>> {
+/// Builds every FMU crate in `profile` and packages each; prints the path and size of each .fmu.
+pub fn build_and_package(profile: Profile) -> Result<Vec<Packaged>> {
     let mut build = cargo();
-    build.args(["build", "--release"]);
+    build.arg("build").args(profile.flags());
     for spec in FMUS {
         build.args(["-p", spec.package]);
     }
     run(&mut build)?;
     let target = target_dir()?;
     let platform = platform()?;
-    let out_dir = target.join("fmu");
+    let out_dir = target.join(profile.fmu_dir());
     fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let mut packaged = Vec::new();
     for spec in FMUS {
-        let p = package(spec, &target.join("release"), &platform, &out_dir)
+        let p = package(spec, &target.join(profile.dir()), &platform, &out_dir)
             .with_context(|| format!("packaging {}", spec.model_identifier))?;
         println!("{} ({} bytes)", display_path(&p.path).display(), p.size);
         packaged.push(p);
@@ -89,7 +90,7 @@ pub fn display_path(path: &Path) -> PathBuf {
 
 fn package(
     spec: &FmuSpec,
-    release_dir: &Path,
+    build_dir: &Path,
     platform: &Platform,
     out_dir: &Path,
 ) -> Result<Packaged> {
@@ -116,7 +117,7 @@ fn package(
         );
     }
 
-    let library = release_dir.join(format!(
+    let library = build_dir.join(format!(
         "{}{}.{}",
         platform.prefix, spec.lib_name, platform.extension
     ));

@@ -3,7 +3,8 @@
 
 use crate::binaries::{self, Binaries, FMU_DIR_ENV};
 use crate::cli::TestOptions;
-use crate::{package, python, workspace};
+use crate::workspace::{self, Profile};
+use crate::{package, python};
 use anyhow::{Context, Result, bail};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -58,8 +59,8 @@ pub fn test(o: TestOptions) -> Result<bool> {
     // The FMUs and the orchestrator first: Rust integration tests and the Python harness both
     // load them (found through XTASK_FMU_DIR and ORCHESTRATOR).
     let mut fmu_dir: Option<PathBuf> = None;
-    stages.push(timed("package FMUs (release build)", || {
-        let packaged = package::build_and_package()?;
+    stages.push(timed("package FMUs (dev profile)", || {
+        let packaged = package::build_and_package(Profile::Dev)?;
         fmu_dir = packaged
             .first()
             .and_then(|p| p.path.parent())
@@ -68,9 +69,9 @@ pub fn test(o: TestOptions) -> Result<bool> {
     }));
     let mut binaries: Option<Binaries> = None;
     stages.push(timed(
-        "build the orchestrator and alignment-studies (release)",
+        "build the orchestrator and alignment-studies (dev profile)",
         || {
-            binaries = Some(binaries::build()?);
+            binaries = Some(binaries::build(Profile::Dev)?);
             Ok(())
         },
     ));

@@ -20,6 +20,48 @@ pub fn cargo() -> Command {
     cmd
 }
 
+/// The cargo profile a build uses.
+///
+/// Why two: the demo, `cargo xtask fmu` and the benchmarks build what ships, in release (thin LTO,
+/// one codegen unit: the fastest code, the slowest build). The test suite builds its FMUs and
+/// programs in the dev profile (every crate at opt-level 2, Cargo.toml), the one `cargo test`
+/// compiles the workspace in anyway, so the dependencies are compiled once, not twice (a cold
+/// suite spent about 5 of its 27 minutes on the release build). Neither profile lets LLVM
+/// reorder floating-point operations or contract them into FMAs, so both give the same numbers:
+/// the golden references (`tests/test_golden.py`, made with release FMUs) check that.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Profile {
+    Release,
+    Dev,
+}
+
+impl Profile {
+    /// The flag `cargo build` takes for it.
+    pub fn flags(self) -> &'static [&'static str] {
+        match self {
+            Profile::Release => &["--release"],
+            Profile::Dev => &[],
+        }
+    }
+
+    /// Its output directory under the target directory.
+    pub fn dir(self) -> &'static str {
+        match self {
+            Profile::Release => "release",
+            Profile::Dev => "debug",
+        }
+    }
+
+    /// Where its packaged FMUs go under the target directory: `fmu` for release (what users
+    /// and `tests/project.py` take by default), `fmu-dev` for the test suite's.
+    pub fn fmu_dir(self) -> &'static str {
+        match self {
+            Profile::Release => "fmu",
+            Profile::Dev => "fmu-dev",
+        }
+    }
+}
+
 /// Cargo's target directory, as cargo itself resolves it (CARGO_TARGET_DIR, `build.target-dir`
 /// in a config file, or `<workspace>/target`).
 pub fn target_dir() -> Result<PathBuf> {
