@@ -13,6 +13,9 @@
 //! version 3 bank has none, and is read as before. Version 5 adds `kalman_shelf`, the shelf
 //! after the Kalman channel's high-pass ([`super::grid`]), and its design in the contract; a
 //! bank of version 3 or 4 has none, and is read as before.
+//! The conicity models of young memories (`young`, 2026-11-27) are optional within version 5:
+//! a bank without them applies the full memory's model from a run's first cell, as before, and
+//! a reader without them ignores them and does the same.
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds
 //! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`

@@ -48,6 +48,12 @@
 //! give: banks before 2026-11-27 read D1's five), blended at the conicity. The `novelty` checks
 //! all of them against a model of what the training runs showed ([`ConicityModel`]).
 //!
+//! A memory not yet full has its own conicity models ([`YoungModel`], fitted on memories of 5 to
+//! 150 m started along the training runs, each half its own least squares and half the full
+//! memory's model), interpolated by the track the memory holds: a run's first 150 m read the
+//! conicity from the features of so short a memory, whose scatter and bias the full memory's
+//! model was not fitted for.
+//!
 //! # Estimate
 //! At each model speed the Kalker-coefficient scale is a linear function of the features,
 //! fitted by least squares on the training runs of every trained condition at that constant
@@ -182,6 +188,31 @@ pub struct ConicityModel {
     pub precision: Vec<f64>,
     /// The squared Mahalanobis distance exceeded on [`LEVEL_SHARE`] of the validation cells.
     pub level: f64,
+    /// Estimators of `ln(conicity)` for a memory not yet full, by how much track it holds
+    /// (ascending, each short of the memory). Empty in banks made before them (2026-11-27),
+    /// which apply [`Self::coefficients`] from the first cell.
+    #[serde(default)]
+    pub young: Vec<YoungModel>,
+}
+
+/// An estimator of `ln(conicity)` fitted on the features of memories holding `fill` metres
+/// ([`ConicityModel::young`]).
+///
+/// Why: the features of a young memory are ratios and correlations of a few wavelengths'
+/// moments, noisier and biased against a full memory's (a log of a ratio of sums, a
+/// correlation of band-passed signals with the filters' start in them). The full memory's
+/// model, applied to them, read `ln(conicity)` 0.16-0.35 rms off at 50-100 m into a run
+/// (0.05-0.1 after 200 m), and most of the bank's loss told nothing against told the conicity
+/// was there (docs/learned-filter.md). Fitted on young memories' own features, a model
+/// weighs each feature by what it is worth at that fill.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct YoungModel {
+    /// The track the memory holds \[m\].
+    pub fill: f64,
+    /// One coefficient per feature, then the constant.
+    pub coefficients: Vec<f64>,
+    /// Root-mean-square error of `ln(conicity)` on the validation runs' memories at that fill.
+    pub rms_error: f64,
 }
 
 impl ConicityModel {
@@ -203,9 +234,48 @@ impl ConicityModel {
         d2 / self.level
     }
 
-    fn check(&self, speed: f64, features: usize) -> Result<(), ContactProblem> {
+    /// `ln(conicity)` from features `f` of a memory holding `fill` metres of its `memory`, and
+    /// the model's rms error there: the young models around `fill` (and the full memory's at
+    /// `memory`) interpolated linearly in the fill, the first young model below its own fill.
+    pub fn ln_conicity(&self, f: &[f64], fill: f64, memory: f64) -> (f64, f64) {
+        // The nodes: the young models, then the full memory's model at `memory`.
+        let node = |i: usize| match self.young.get(i) {
+            Some(y) => (y.fill, &y.coefficients, y.rms_error),
+            None => (memory, &self.coefficients, self.rms_error),
+        };
+        let next = self
+            .young
+            .iter()
+            .position(|y| y.fill > fill)
+            .unwrap_or(self.young.len());
+        let (f1, c1, r1) = node(next);
+        let Some(prev) = next.checked_sub(1) else {
+            return (linear(c1, f), r1);
+        };
+        let (f0, c0, r0) = node(prev);
+        if fill >= f1 {
+            return (linear(c1, f), r1);
+        }
+        let a = ((fill - f0) / (f1 - f0)).clamp(0.0, 1.0);
+        let (x0, x1) = (linear(c0, f), linear(c1, f));
+        (x0 + a * (x1 - x0), r0 + a * (r1 - r0))
+    }
+
+    fn check(&self, speed: f64, features: usize, memory: f64) -> Result<(), ContactProblem> {
         let bad = || ContactProblem::Conicity { speed };
         let finite = |v: &[f64]| v.iter().all(|c| c.is_finite());
+        let sound = |y: &YoungModel| {
+            y.coefficients.len() == features + 1
+                && finite(&y.coefficients)
+                && y.fill > 0.0
+                && y.fill < memory
+                && y.rms_error.is_finite()
+                && y.rms_error >= 0.0
+        };
+        if !self.young.iter().all(sound) || self.young.windows(2).any(|w| !(w[1].fill > w[0].fill))
+        {
+            return Err(bad());
+        }
         if self.coefficients.len() != features + 1
             || !finite(&self.coefficients)
             || self.forward.len() != features
@@ -335,7 +405,7 @@ impl ContactModel {
                 s.conicity
                     .as_ref()
                     .ok_or(ContactProblem::Conicity { speed: s.speed })?
-                    .check(s.speed, features)?;
+                    .check(s.speed, features, self.memory)?;
             }
         } else if let Some(s) = self.speeds.iter().find(|s| s.conicity.is_some()) {
             return Err(ContactProblem::Conicity { speed: s.speed });
@@ -391,14 +461,21 @@ impl ContactModel {
             let Some(f) = moments.features(i) else {
                 continue;
             };
-            // This set's conicity (told, or estimated), where the bank has conicities.
+            let set = &moments.sets[i];
+            let full = set.n.min(moments.memory_points) / moments.memory_points;
+            // This set's conicity (told, or estimated, with its model's error at this fill),
+            // where the bank has conicities.
             let x = match (&m.conicity, ln_range) {
                 (Some(cm), Some([lo, hi])) => Some(match told {
-                    Some(c) => c.ln().clamp(lo, hi),
-                    None => linear(&cm.coefficients, f).clamp(lo, hi),
+                    Some(c) => (c.ln().clamp(lo, hi), cm.rms_error),
+                    None => {
+                        let (x, rms) = cm.ln_conicity(f, full * self.memory, self.memory);
+                        (x.clamp(lo, hi), rms)
+                    }
                 }),
                 _ => None,
             };
+            let (x, x_rms) = (x.map(|x| x.0), x.map(|x| x.1));
             // The conicity the Kalker scale is read at: the taps' where they cover less.
             let at = x.map(|x| ln_taps.map_or(x, |[lo, hi]| x.clamp(lo, hi)));
             let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {
@@ -431,16 +508,14 @@ impl ContactModel {
             let k = k.clamp(self.range[0], self.range[1]);
             // A young set's features are far noisier than the model's error (fitted after a
             // full memory): its weight grows with its cells until the memory is full.
-            let set = &moments.sets[i];
-            let full = set.n.min(moments.memory_points) / moments.memory_points;
             let w = set.recent * full;
             let wk = w / rms.max(MIN_MODEL_ERROR).powi(2);
             k_sum += wk * k;
             k_weight += wk;
-            if let (Some(cm), Some(x)) = (&m.conicity, x)
+            if let (Some(cm), Some(x), Some(x_rms)) = (&m.conicity, x, x_rms)
                 && x.is_finite()
             {
-                let wc = w / cm.rms_error.max(MIN_MODEL_ERROR).powi(2);
+                let wc = w / x_rms.max(MIN_MODEL_ERROR).powi(2);
                 c_sum += wc * x;
                 c_weight += wc;
                 // Sets holding less than a cell of the recent track hardly count: their
@@ -768,6 +843,7 @@ mod tests {
                 .map(|i| f64::from(u8::from(i % (n + 1) == 0)))
                 .collect(),
             level: 1.0,
+            young: vec![],
         };
         let mut m = ContactModel {
             band: [3.0, 25.0],
@@ -835,5 +911,87 @@ mod tests {
         }
         m.speeds[0].kalker_by_conicity[0].coefficients.clear();
         assert!(m.check().is_err(), "no coefficients");
+    }
+
+    /// The young memories' conicity models: each applies at its own fill, linear in the fill
+    /// between them and up to the full memory's model at the memory, the first one below its
+    /// fill; in a run, a memory's estimate follows them as it fills.
+    #[test]
+    fn young_conicity_models_take_over_by_the_memory_s_fill() {
+        let n = FEATURES;
+        // Models that say one conicity whatever the features: constants only.
+        let constant = |ln: f64| (0..n).map(|_| 0.0).chain([ln]).collect::<Vec<f64>>();
+        let young = |fill: f64, ln: f64, rms: f64| YoungModel {
+            fill,
+            coefficients: constant(ln),
+            rms_error: rms,
+        };
+        let mut cm = ConicityModel {
+            coefficients: constant(-2.0),
+            rms_error: 0.1,
+            forward: vec![vec![0.0; FORWARD_TERMS]; n],
+            precision: (0..n * n)
+                .map(|i| f64::from(u8::from(i % (n + 1) == 0)))
+                .collect(),
+            level: 1.0,
+            young: vec![young(10.0, -1.0, 0.5), young(50.0, -3.0, 0.3)],
+        };
+        let f = [0.3; FEATURES];
+        let at = |cm: &ConicityModel, fill: f64| cm.ln_conicity(&f, fill, 200.0);
+        let close = |(x, r): (f64, f64), (wx, wr): (f64, f64)| {
+            assert!((x - wx).abs() < 1e-12 && (r - wr).abs() < 1e-12, "{x} {r}");
+        };
+        close(at(&cm, 2.0), (-1.0, 0.5));
+        close(at(&cm, 10.0), (-1.0, 0.5));
+        close(at(&cm, 20.0), (-1.5, 0.45));
+        close(at(&cm, 50.0), (-3.0, 0.3));
+        close(at(&cm, 125.0), (-2.5, 0.2));
+        close(at(&cm, 200.0), (-2.0, 0.1));
+        close(at(&cm, 1e6), (-2.0, 0.1));
+        // Without young models (banks before them), the full memory's from the first cell.
+        let old = ConicityModel {
+            young: vec![],
+            ..cm.clone()
+        };
+        close(at(&old, 2.0), (-2.0, 0.1));
+        // Fills out of order, or not short of the memory: refused.
+        cm.young.swap(0, 1);
+        assert!(cm.check(20.0, n, 200.0).is_err());
+        cm.young = vec![young(200.0, -1.0, 0.5)];
+        assert!(cm.check(20.0, n, 200.0).is_err());
+        cm.young = vec![young(10.0, -1.0, 0.5)];
+        cm.check(20.0, n, 200.0).unwrap();
+        // In a run at one speed: the estimate is the young model's while the memory is young.
+        let model = ContactModel {
+            band: [3.0, 25.0],
+            extra_bands: vec![],
+            memory: 200.0,
+            range: [0.5, 1.0],
+            speeds: vec![SpeedModel {
+                speed: 20.0,
+                coefficients: constant(0.75),
+                rms_error: 0.1,
+                conicity: Some(cm),
+                kalker_by_conicity: vec![],
+            }],
+            conicity_range: Some([0.05, 0.4]),
+        };
+        model.check().unwrap();
+        let mut moments = model.moments(0.2);
+        let mut noise = uniform(5);
+        let mut run = |cells: usize| {
+            for _ in 0..cells {
+                let (u, w, z) = (noise(), noise(), noise());
+                moments.push(&[u, u + w, z, 0.0, 0.0], 20.0);
+            }
+            model.estimate(&moments, None).unwrap().conicity.unwrap()
+        };
+        // 10 m of cells (0.2 m each): the first young model's ln -1.
+        assert!((run(50) - (-1.0f64).exp()).abs() < 1e-12);
+        // At 105 m: half way from -1 (10 m) to -2 (200 m).
+        let want = (-1.5f64).exp();
+        assert!((run(475) - want).abs() < 1e-12);
+        // A full memory: the full model's -2.
+        assert!((run(1000) - (-2.0f64).exp()).abs() < 1e-12);
     }
 }

@@ -235,6 +235,7 @@ fn coned_bank() -> Bank {
                 forward: vec![vec![0.0; 6]; FEATURES],
                 precision: identity,
                 level: 2.0,
+                young: vec![],
             }),
             kalker_by_conicity: vec![],
         }],
