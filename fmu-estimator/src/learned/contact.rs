@@ -475,7 +475,7 @@ impl ContactModel {
                 }),
                 _ => None,
             };
-            let (x, x_rms) = (x.map(|x| x.0), x.map(|x| x.1));
+            let (x, x_rms) = x.unzip();
             // The conicity the Kalker scale is read at: the taps' where they cover less.
             let at = x.map(|x| ln_taps.map_or(x, |[lo, hi]| x.clamp(lo, hi)));
             let (k, rms) = match (at, m.kalker_by_conicity.is_empty()) {

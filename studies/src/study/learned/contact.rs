@@ -88,6 +88,17 @@ fn young_labelled(runs: &[(Condition, GridRun)], speed: f64, bands: &[[f64; 2]])
     out
 }
 
+/// A least-squares row: the features, then 1 for the constant (the models' layout,
+/// [`linear`]).
+fn row(f: &[f64]) -> Vec<f64> {
+    f.iter().copied().chain([1.0]).collect()
+}
+
+/// `ln(conicity)` of a run's condition, in a bank over conicities.
+fn ln_conicity(c: &Condition) -> f64 {
+    c.conicity.expect("a bank over conicities").ln()
+}
+
 /// Least squares of `y` on the rows `a`; `what` names the quantity in the error.
 fn least_squares(rows: &[Vec<f64>], y: &[f64], speed: f64, what: &str) -> Result<Vec<f64>, Error> {
     let n = rows[0].len();
@@ -146,10 +157,7 @@ pub(super) fn fit(
 ) -> Result<SpeedModel, Error> {
     let train = labelled(training, speed, bands);
     let valid = labelled(validation, speed, bands);
-    let rows: Vec<Vec<f64>> = train
-        .iter()
-        .map(|(_, f)| f.iter().copied().chain([1.0]).collect())
-        .collect();
+    let rows: Vec<Vec<f64>> = train.iter().map(|(_, f)| row(f)).collect();
     let k: Vec<f64> = train.iter().map(|(c, _)| c.kalker).collect();
     let coefficients = least_squares(&rows, &k, speed, "conditions")?;
     let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), |c| c.kalker);
@@ -205,7 +213,7 @@ fn by_conicity(
         )));
     }
     let read = FEATURES * kalker;
-    let first = |f: &[f64]| -> Vec<f64> { f[..read].iter().copied().chain([1.0]).collect() };
+    let first = |f: &[f64]| row(&f[..read]);
     nodes
         .into_iter()
         .map(|n| {
@@ -256,7 +264,6 @@ fn young_models(
     train: &[Labelled],
     valid: &[Labelled],
 ) -> Result<Vec<YoungModel>, Error> {
-    let ln = |c: &Condition| c.conicity.expect("a bank over conicities").ln();
     YOUNG_FILLS
         .iter()
         .zip(train.iter().zip(valid))
@@ -266,18 +273,15 @@ fn young_models(
                     "at {speed} m/s no training run is {fill} m long"
                 )));
             }
-            let rows: Vec<Vec<f64>> = train
-                .iter()
-                .map(|(_, f)| f.iter().copied().chain([1.0]).collect())
-                .collect();
-            let x: Vec<f64> = train.iter().map(|(c, _)| ln(c)).collect();
+            let rows: Vec<Vec<f64>> = train.iter().map(|(_, f)| row(f)).collect();
+            let x: Vec<f64> = train.iter().map(|(c, _)| ln_conicity(c)).collect();
             let own = least_squares(&rows, &x, speed, "conicities")?;
             let coefficients: Vec<f64> = own
                 .iter()
                 .zip(full)
                 .map(|(y, f)| YOUNG_SHARE * y + (1.0 - YOUNG_SHARE) * f)
                 .collect();
-            let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), ln);
+            let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), ln_conicity);
             Ok(YoungModel {
                 fill: *fill,
                 coefficients,
@@ -297,15 +301,14 @@ fn conicity_model(
     rows: &[Vec<f64>],
     kalker: &[f64],
 ) -> Result<ConicityModel, Error> {
-    let ln = |c: &Condition| c.conicity.expect("a bank over conicities").ln();
-    let x: Vec<f64> = train.iter().map(|(c, _)| ln(c)).collect();
+    let x: Vec<f64> = train.iter().map(|(c, _)| ln_conicity(c)).collect();
     let coefficients = least_squares(rows, &x, speed, "conicities")?;
-    let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), ln);
+    let rms_error = rms_error(valid.iter(), |f| linear(&coefficients, f), ln_conicity);
     let young = young_models(speed, &coefficients, &young[0], &young[1])?;
     // The forward model at the runs' own conditions, one feature at a time.
     let terms: Vec<Vec<f64>> = train
         .iter()
-        .map(|(c, _)| forward_terms(ln(c), c.kalker).to_vec())
+        .map(|(c, _)| forward_terms(ln_conicity(c), c.kalker).to_vec())
         .collect();
     let n = train[0].1.len();
     let forward: Vec<Vec<f64>> = (0..n)
@@ -323,7 +326,7 @@ fn conicity_model(
     };
     let mut cov = DMatrix::<f64>::zeros(n, n);
     for (c, f) in train {
-        let p = predict(ln(c), c.kalker);
+        let p = predict(ln_conicity(c), c.kalker);
         let r = DVector::from_iterator(n, f.iter().zip(&p).map(|(a, b)| a - b));
         cov += &r * r.transpose();
     }
@@ -374,7 +377,7 @@ fn conditions_range(train: &[(Condition, Vec<f64>)]) -> (f64, f64, f64, f64) {
             f64::NEG_INFINITY,
         ),
         |(a, b, c, d), (k, _)| {
-            let x = k.conicity.expect("a bank over conicities").ln();
+            let x = ln_conicity(k);
             (a.min(x), b.max(x), c.min(k.kalker), d.max(k.kalker))
         },
     )
