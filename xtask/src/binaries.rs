@@ -29,11 +29,18 @@ impl Binaries {
     }
 }
 
+/// The cargo command that builds the two programs in `profile`.
+pub fn build_command(profile: Profile) -> Command {
+    let mut cmd = workspace::cargo();
+    cmd.arg("build")
+        .args(profile.flags())
+        .args(["-p", "orchestrator", "-p", "alignment-studies"]);
+    cmd
+}
+
 /// Builds the orchestrator and alignment-studies in `profile` and returns the binaries' paths.
 pub fn build(profile: Profile) -> Result<Binaries> {
-    let mut cmd = workspace::cargo();
-    cmd.arg("build").args(profile.flags());
-    workspace::run(cmd.args(["-p", "orchestrator", "-p", "alignment-studies"]))?;
+    workspace::run(&mut build_command(profile))?;
     let dir = workspace::target_dir()?.join(profile.dir());
     let b = Binaries {
         orchestrator: dir.join("orchestrator"),

@@ -17,6 +17,7 @@ mod demo;
 mod fmus;
 mod headline;
 mod headline_curves;
+mod lints;
 mod package;
 mod progress;
 mod python;

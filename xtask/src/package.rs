@@ -59,14 +59,19 @@ struct Entry {
     mode: u32,
 }
 
-/// Builds every FMU crate in `profile` and packages each; prints the path and size of each .fmu.
-pub fn build_and_package(profile: Profile) -> Result<Vec<Packaged>> {
+/// The cargo command that builds every FMU crate in `profile`.
+pub fn build_command(profile: Profile) -> std::process::Command {
     let mut build = cargo();
     build.arg("build").args(profile.flags());
     for spec in FMUS {
         build.args(["-p", spec.package]);
     }
-    run(&mut build)?;
+    build
+}
+
+/// Builds every FMU crate in `profile` and packages each; prints the path and size of each .fmu.
+pub fn build_and_package(profile: Profile) -> Result<Vec<Packaged>> {
+    run(&mut build_command(profile))?;
     let target = target_dir()?;
     let platform = platform()?;
     let out_dir = target.join(profile.fmu_dir());

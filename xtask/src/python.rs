@@ -5,7 +5,8 @@
 use crate::workspace::{command_line, root, run};
 use anyhow::{Context, Result, bail};
 use std::fs;
-use std::path::PathBuf;
+use std::io::Write;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 const STAMP: &str = ".xtask-requirements-hash";
@@ -28,42 +29,97 @@ pub fn python() -> PathBuf {
 
 /// Makes sure `.venv` exists and holds the pinned requirements; returns its interpreter.
 pub fn ensure_venv() -> Result<PathBuf> {
+    ensure_venv_into(None)
+}
+
+/// [`ensure_venv`] with every output in `log` (created anew) and nothing on screen: the suite
+/// makes the venv while cargo compiles (pip mostly waits on the network and the disk), and its
+/// output would cut into cargo's.
+pub fn ensure_venv_logged(log: &Path) -> Result<PathBuf> {
+    ensure_venv_into(Some(log))
+}
+
+fn ensure_venv_into(log: Option<&Path>) -> Result<PathBuf> {
     let requirements = root().join("tests").join("requirements.txt");
     let text =
         fs::read(&requirements).with_context(|| format!("reading {}", requirements.display()))?;
     let hash = format!("{:016x}", fnv1a64(&text));
     let venv = venv_dir();
     let stamp = venv.join(STAMP);
+    let mut out = Output::new(log)?;
 
     if !runs(&python()) {
-        create_venv()?;
+        create_venv(&mut out)?;
     } else if fs::read_to_string(&stamp).is_ok_and(|s| s.trim() == hash) {
         return Ok(python());
     }
-    // pip is quiet for minutes on a first install: the heartbeat shows it works.
-    crate::progress::announce(
-        "installing tests/requirements.txt into .venv",
-        "pip, about 1 min on a first install",
-        None,
-    );
-    crate::progress::watched(
-        Command::new(python())
-            .current_dir(root())
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--disable-pip-version-check",
-                "--quiet",
-                "-r",
-            ])
-            .arg(&requirements),
-        None,
-    )
-    .context("installing the Python test requirements (is the package index reachable?)")?;
+    let mut pip = Command::new(python());
+    pip.current_dir(root())
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--disable-pip-version-check",
+            "--quiet",
+            "-r",
+        ])
+        .arg(&requirements);
+    let why = "installing the Python test requirements (is the package index reachable?)";
+    match &mut out {
+        Output::Screen => {
+            // pip is quiet for minutes on a first install: the heartbeat shows it works.
+            crate::progress::announce(
+                "installing tests/requirements.txt into .venv",
+                "pip, about 1 min on a first install",
+                None,
+            );
+            crate::progress::watched(&mut pip, None).context(why)?;
+        }
+        Output::Log(..) => out.run(&mut pip).context(why)?,
+    }
     fs::write(&stamp, format!("{hash}\n"))
         .with_context(|| format!("writing {}", stamp.display()))?;
     Ok(python())
+}
+
+/// Where the venv's steps write: the screen, or a log file.
+enum Output {
+    Screen,
+    Log(PathBuf, fs::File),
+}
+
+impl Output {
+    fn new(log: Option<&Path>) -> Result<Self> {
+        Ok(match log {
+            None => Output::Screen,
+            Some(p) => Output::Log(
+                p.to_path_buf(),
+                fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
+            ),
+        })
+    }
+
+    fn say(&mut self, text: &str) -> Result<()> {
+        match self {
+            Output::Screen => println!("{text}"),
+            Output::Log(p, f) => {
+                writeln!(f, "{text}").with_context(|| format!("writing {}", p.display()))?
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs `cmd` to its end, its output here; fails with the command line (and the log's
+    /// path) if it does not succeed.
+    fn run(&mut self, cmd: &mut Command) -> Result<()> {
+        match self {
+            Output::Screen => run(cmd),
+            Output::Log(p, f) => {
+                cmd.stdout(f.try_clone()?).stderr(f.try_clone()?);
+                run(cmd).with_context(|| format!("its output is in {}", p.display()))
+            }
+        }
+    }
 }
 
 /// Builds the Python bindings (`bindings/`, PyO3) and installs them into `.venv` as the package
@@ -85,6 +141,8 @@ pub fn bindings_command() -> Command {
         .env("VIRTUAL_ENV", venv_dir())
         .args(["develop", "--manifest-path"])
         .arg(root().join("bindings").join("Cargo.toml"));
+    // The same compiler as the suite's other builds, so the workspace's crates are reused.
+    crate::workspace::with_lints(&mut cmd);
     cmd
 }
 
@@ -98,7 +156,7 @@ fn runs(python: &std::path::Path) -> bool {
 
 /// `python3 -m venv .venv`, with clear messages for the usual reasons it fails. The base
 /// interpreter is `$PYTHON` if set, else `python3`.
-fn create_venv() -> Result<()> {
+fn create_venv(out: &mut Output) -> Result<()> {
     let base = std::env::var_os("PYTHON").unwrap_or_else(|| "python3".into());
     let shown = base.to_string_lossy().into_owned();
     let version = Command::new(&base)
@@ -131,14 +189,14 @@ fn create_venv() -> Result<()> {
             parsed[1]
         );
     }
-    println!(
+    out.say(&format!(
         "creating .venv with {shown} (Python {}.{})",
         parsed[0], parsed[1]
-    );
+    ))?;
     let mut cmd = Command::new(&base);
     cmd.current_dir(root()).args(["-m", "venv"]).arg(venv_dir());
     let line = command_line(&cmd);
-    run(&mut cmd).with_context(|| {
+    out.run(&mut cmd).with_context(|| {
         format!(
             "`{line}` could not create the virtual environment (if the output above mentions ensurepip, \
              install python{}.{}-venv or python3-venv and rerun)",

@@ -56,6 +56,16 @@ fn cargo(args: &[&str]) -> Command {
 /// returns whether everything passed.
 pub fn test(o: TestOptions) -> Result<bool> {
     let mut stages = Vec::new();
+    // Every build below compiles the workspace's crates with clippy's lints (the lint stage at
+    // the end reads what they found); without clippy the builds go on and that stage fails.
+    let lints = workspace::lint_builds();
+    // pip waits mostly on the network and the disk: it works while cargo compiles.
+    let venv = o.python.then(|| {
+        let log = workspace::target_dir()
+            .unwrap_or_else(|_| workspace::root().join("target"))
+            .join("xtask-venv.log");
+        std::thread::spawn(move || python::ensure_venv_logged(&log))
+    });
     // The FMUs and the orchestrator first: Rust integration tests and the Python harness both
     // load them (found through XTASK_FMU_DIR and ORCHESTRATOR).
     let mut fmu_dir: Option<PathBuf> = None;
@@ -76,42 +86,13 @@ pub fn test(o: TestOptions) -> Result<bool> {
         },
     ));
     if o.rust {
-        // Style and lints are part of the suite: a change that breaks them fails CI.
+        // Style is part of the suite: a change that breaks it fails CI.
         stages.push(timed("cargo fmt --all -- --check", || {
             workspace::run(&mut cargo(&["fmt", "--all", "--", "--check"]))
         }));
-        stages.push(timed(
-            "cargo clippy --workspace --all-targets -- -D warnings",
-            || {
-                let args = [
-                    "clippy",
-                    "--workspace",
-                    "--all-targets",
-                    "--",
-                    "-D",
-                    "warnings",
-                ];
-                workspace::run(&mut cargo(&args))
-            },
-        ));
-        // The FMU's library builds fmu-estimator without its default features (no banks built
-        // in); the workspace lint above sees them on (the studies ask for them).
-        stages.push(timed(
-            "cargo clippy -p fmu-estimator --no-default-features --lib -- -D warnings",
-            || {
-                let args = [
-                    "clippy",
-                    "-p",
-                    "fmu-estimator",
-                    "--no-default-features",
-                    "--lib",
-                    "--",
-                    "-D",
-                    "warnings",
-                ];
-                workspace::run(&mut cargo(&args))
-            },
-        ));
+        stages.push(timed("build the Rust tests (cargo test --no-run)", || {
+            workspace::run(&mut test_build())
+        }));
         // The crate docs hold the derivations: a broken link or a malformed doc comment fails.
         stages.push(timed(
             "cargo doc --workspace --no-deps (RUSTDOCFLAGS=-D warnings)",
@@ -131,8 +112,33 @@ pub fn test(o: TestOptions) -> Result<bool> {
             workspace::run(&mut cmd)
         }));
     }
-    if o.python {
-        python_stages(&mut stages, fmu_dir.as_deref(), binaries.as_ref(), &o);
+    let mut bindings_built = false;
+    if let Some(venv) = venv {
+        bindings_built =
+            python_stages(&mut stages, venv, fmu_dir.as_deref(), binaries.as_ref(), &o);
+    }
+    if o.rust {
+        // The builds above, run again (nothing to compile), print the warnings cargo kept: the
+        // FMUs' build is the one that lints fmu-estimator without its default features, and
+        // maturin's the one that lints the bindings. The benches are compiled here, last: built
+        // with the tests, they changed how cargo compiled some libraries for the test run
+        // (`--all-targets` made `cargo test` compile the workspace's crates again, 2 min).
+        stages.push(timed(
+            "lints: clippy and rustc warnings of every build (-D warnings)",
+            || {
+                lints?;
+                let mut builds = vec![
+                    package::build_command(Profile::Dev),
+                    binaries::build_command(Profile::Dev),
+                    test_build(),
+                    cargo(&["test", "--workspace", "--benches", "--no-run"]),
+                ];
+                if bindings_built {
+                    builds.push(python::bindings_command());
+                }
+                crate::lints::check(builds)
+            },
+        ));
     }
     println!("\n==> summary");
     let (lines, all_passed) = summary(&stages);
@@ -140,25 +146,36 @@ pub fn test(o: TestOptions) -> Result<bool> {
     Ok(all_passed)
 }
 
-/// The venv, the bindings and pytest; pytest is skipped (and counts as a failure) without
-/// the FMUs or the venv.
+/// Compiles what `cargo test --workspace` runs (libraries, programs, tests, examples), so
+/// that its build's warnings can be read again by the lint stage.
+fn test_build() -> Command {
+    cargo(&["test", "--workspace", "--no-run"])
+}
+
+/// The venv (made in the background since the start), the bindings and pytest; pytest is
+/// skipped (and counts as a failure) without the FMUs or the venv. Returns whether the bindings
+/// were built.
 fn python_stages(
     stages: &mut Vec<Stage>,
+    venv: std::thread::JoinHandle<Result<PathBuf>>,
     fmu_dir: Option<&Path>,
     binaries: Option<&Binaries>,
     o: &TestOptions,
-) {
+) -> bool {
     let mut venv_ok = false;
     stages.push(timed("python venv (.venv, tests/requirements.txt)", || {
-        python::ensure_venv()?;
+        venv.join()
+            .map_err(|_| anyhow::anyhow!("the thread making the venv panicked"))??;
         venv_ok = true;
         Ok(())
     }));
+    let mut built = false;
     if venv_ok {
         stages.push(timed("python bindings (maturin develop)", || {
             venv_ok = false;
             python::install_bindings()?;
             venv_ok = true;
+            built = true;
             Ok(())
         }));
     }
@@ -173,6 +190,7 @@ fn python_stages(
         (None, _) => skipped("no FMU was packaged"),
         (_, false) => skipped("no Python environment"),
     });
+    built
 }
 
 /// One line per stage (ok, FAILED or SKIPPED, its time, why), then the verdict; and whether
