@@ -29,18 +29,17 @@ impl Binaries {
     }
 }
 
-/// The cargo command that builds the two programs in `profile`.
-pub fn build_command(profile: Profile) -> Command {
-    let mut cmd = workspace::cargo();
-    cmd.arg("build")
-        .args(profile.flags())
-        .args(["-p", "orchestrator", "-p", "alignment-studies"]);
-    cmd
-}
-
 /// Builds the orchestrator and alignment-studies in `profile` and returns the binaries' paths.
 pub fn build(profile: Profile) -> Result<Binaries> {
-    workspace::run(&mut build_command(profile))?;
+    let mut cmd = workspace::cargo();
+    cmd.arg("build").args(profile.flags());
+    workspace::run(cmd.args(["-p", "orchestrator", "-p", "alignment-studies"]))?;
+    built(profile)
+}
+
+/// The two programs a build in `profile` made (`cargo test --no-run` makes them too, in the
+/// dev profile's directory, for the crates' integration tests), checked to exist.
+pub fn built(profile: Profile) -> Result<Binaries> {
     let dir = workspace::target_dir()?.join(profile.dir());
     let b = Binaries {
         orchestrator: dir.join("orchestrator"),

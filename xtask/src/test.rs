@@ -66,8 +66,8 @@ pub fn test(o: TestOptions) -> Result<bool> {
             .join("xtask-venv.log");
         std::thread::spawn(move || python::ensure_venv_logged(&log))
     });
-    // The FMUs and the orchestrator first: Rust integration tests and the Python harness both
-    // load them (found through XTASK_FMU_DIR and ORCHESTRATOR).
+    // The FMUs and the two programs first: Rust integration tests and the Python harness both
+    // load them (found through XTASK_FMU_DIR, ORCHESTRATOR and ALIGNMENT_STUDIES).
     let mut fmu_dir: Option<PathBuf> = None;
     stages.push(timed("package FMUs (dev profile)", || {
         let packaged = package::build_and_package(Profile::Dev)?;
@@ -77,11 +77,15 @@ pub fn test(o: TestOptions) -> Result<bool> {
             .map(PathBuf::from);
         Ok(())
     }));
+    // `cargo test --no-run` also builds the two programs (the crates' integration tests run
+    // them), in the dev profile's directory: a `cargo build` of them would compile the
+    // workspace's crates a second time (cargo's units for a test build are not a plain build's).
     let mut binaries: Option<Binaries> = None;
     stages.push(timed(
-        "build the orchestrator and alignment-studies (dev profile)",
+        "build the Rust tests and the two programs (cargo test --no-run)",
         || {
-            binaries = Some(binaries::build(Profile::Dev)?);
+            workspace::run(&mut test_build())?;
+            binaries = Some(binaries::built(Profile::Dev)?);
             Ok(())
         },
     ));
@@ -89,9 +93,6 @@ pub fn test(o: TestOptions) -> Result<bool> {
         // Style is part of the suite: a change that breaks it fails CI.
         stages.push(timed("cargo fmt --all -- --check", || {
             workspace::run(&mut cargo(&["fmt", "--all", "--", "--check"]))
-        }));
-        stages.push(timed("build the Rust tests (cargo test --no-run)", || {
-            workspace::run(&mut test_build())
         }));
         // The crate docs hold the derivations: a broken link or a malformed doc comment fails.
         stages.push(timed(
@@ -129,7 +130,6 @@ pub fn test(o: TestOptions) -> Result<bool> {
                 lints?;
                 let mut builds = vec![
                     package::build_command(Profile::Dev),
-                    binaries::build_command(Profile::Dev),
                     test_build(),
                     cargo(&["test", "--workspace", "--benches", "--no-run"]),
                 ];
@@ -146,8 +146,8 @@ pub fn test(o: TestOptions) -> Result<bool> {
     Ok(all_passed)
 }
 
-/// Compiles what `cargo test --workspace` runs (libraries, programs, tests, examples), so
-/// that its build's warnings can be read again by the lint stage.
+/// Compiles what `cargo test --workspace` runs (libraries, programs, tests, examples), the
+/// programs the tests and the Python harness run among them.
 fn test_build() -> Command {
     cargo(&["test", "--workspace", "--no-run"])
 }
