@@ -9,7 +9,7 @@ usage: cargo xtask <command>
 commands:
   fmu                          build (release) and package target/fmu/<id>.fmu
   test [--rust-only | --python-only] [-- <pytest args>]
-                               cargo fmt --check, clippy and doc -D warnings, cargo test --workspace, packaging, pytest tests/ in .venv
+                               packaging, cargo fmt --check, doc -D warnings, cargo test --workspace, pytest tests/ in .venv, clippy -D warnings
   demo [-- <study args>]       package the FMUs, run the standard case and the studies (alignment-studies)
   help                         this text";
 

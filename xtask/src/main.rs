@@ -1,9 +1,10 @@
 //! Project automation, run as `cargo xtask <command>` (an alias in .cargo/config.toml):
 //!
 //! - `fmu`: build the FMU crates in release and package `<target>/fmu/<modelIdentifier>.fmu`;
-//! - `test [--rust-only | --python-only] [-- <pytest args>]`: cargo fmt --check, cargo clippy
-//!   and cargo doc with warnings denied, cargo test, packaging, the Python harness (tests/, run
-//!   with pytest in `.venv`, created on demand), and a summary;
+//! - `test [--rust-only | --python-only] [-- <pytest args>]`: packaging, cargo fmt --check,
+//!   cargo doc with warnings denied, cargo test, the Python harness (tests/, run with pytest in
+//!   `.venv`, created on demand), clippy's and rustc's warnings of every build denied (the builds
+//!   run clippy's driver: `lints.rs`), and a summary;
 //! - `demo [-- <study args>]`: package the FMUs, run the standard case, the paper's studies and
 //!   the estimator variants with `alignment-studies` (the studies on top of the orchestrator),
 //!   then the fleet, and print the headline table.
