@@ -6,12 +6,13 @@ use crate::Error;
 use crate::study::learned::taps::Options;
 use fmu_estimator::learned::bank::Encoding;
 
-/// `--encoding`: `i16` or `f32`.
+/// `--encoding`: `i12`, `i16` or `f32`.
 fn encoding(s: &str) -> Result<Encoding, String> {
     match s {
+        "i12" => Ok(Encoding::I12),
         "i16" => Ok(Encoding::I16),
         "f32" => Ok(Encoding::F32),
-        _ => Err(format!("expected i16 or f32, got '{s}'")),
+        _ => Err(format!("expected i12, i16 or f32, got '{s}'")),
     }
 }
 use clap::Args;
@@ -53,9 +54,9 @@ pub struct TapsArgs {
     /// Fit only the three-sensor taps (the vehicle has no ws_roll_rate).
     #[arg(long)]
     pub no_roll_rate: bool,
-    /// How the bank stores its taps: i16 (per channel a scale and 16-bit multiples of it, half
-    /// the size) or f32.
-    #[arg(long, default_value = "i16", value_parser = encoding)]
+    /// How the bank stores its taps: i12 (per channel a scale and 12-bit multiples of it, 0.4
+    /// times the size of f32; as precise as the estimates need), i16 (16-bit multiples) or f32.
+    #[arg(long, default_value = "i12", value_parser = encoding)]
     pub encoding: Encoding,
     /// Keep this tap bank's taps and refit only its contact model (same runs, no tap solves).
     #[arg(long, value_name = "BANK")]
