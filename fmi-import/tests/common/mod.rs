@@ -32,23 +32,31 @@ pub fn workspace_root() -> PathBuf {
         .to_path_buf()
 }
 
-/// Where `cargo xtask fmu` puts the FMUs (its default target dir), unless FMI_IMPORT_FMU_DIR
-/// says otherwise.
+/// The directory of the packaged FMUs: `$XTASK_FMU_DIR` (set by `cargo xtask test` to the FMUs it
+/// packaged, as for every other crate's tests), else `<target>/fmu` where `cargo xtask fmu` puts
+/// them.
 pub fn fmu_dir() -> PathBuf {
-    std::env::var_os("FMI_IMPORT_FMU_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("target").join("fmu"))
+    if let Some(d) = std::env::var_os("XTASK_FMU_DIR") {
+        return PathBuf::from(d);
+    }
+    // CARGO_TARGET_TMPDIR is <target>/tmp, whatever CARGO_TARGET_DIR says.
+    Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .parent()
+        .unwrap()
+        .join("fmu")
 }
 
-/// One of our packaged FMUs ("AlignmentEstimator", "RailVehicle"); runs `cargo xtask fmu` once
-/// per test binary when they are missing.
+/// One of our packaged FMUs ("AlignmentEstimator", "RailVehicle"). Without `$XTASK_FMU_DIR`, runs
+/// `cargo xtask fmu` once per test binary when they are missing; with it (`cargo xtask test`),
+/// they must be there.
 pub fn our_fmu(model_identifier: &str) -> PathBuf {
     static BUILT: OnceLock<()> = OnceLock::new();
     let path = |id: &str| fmu_dir().join(format!("{id}.fmu"));
     BUILT.get_or_init(|| {
-        if ["AlignmentEstimator", "RailVehicle"]
-            .iter()
-            .all(|id| path(id).is_file())
+        if std::env::var_os("XTASK_FMU_DIR").is_some()
+            || ["AlignmentEstimator", "RailVehicle"]
+                .iter()
+                .all(|id| path(id).is_file())
         {
             return;
         }
@@ -56,7 +64,6 @@ pub fn our_fmu(model_identifier: &str) -> PathBuf {
         let status = Command::new(cargo)
             .args(["xtask", "fmu"])
             .current_dir(workspace_root())
-            .env_remove("CARGO_TARGET_DIR")
             .status()
             .expect("cannot run `cargo xtask fmu`");
         assert!(status.success(), "`cargo xtask fmu` failed ({status})");
@@ -64,7 +71,8 @@ pub fn our_fmu(model_identifier: &str) -> PathBuf {
     let p = path(model_identifier);
     assert!(
         p.is_file(),
-        "{} missing after `cargo xtask fmu`",
+        "{} not found (packaged by `cargo xtask fmu`, or by `cargo xtask test` into \
+         $XTASK_FMU_DIR)",
         p.display()
     );
     p
