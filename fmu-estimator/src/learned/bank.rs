@@ -663,11 +663,11 @@ pub(crate) mod tests {
         assert_eq!(back.to_bytes(), bytes);
     }
 
-    #[test]
-    fn an_i16_bank_keeps_every_tap_within_its_channel_s_step() {
+    /// The sample bank in `encoding`, with a channel of zeros and one with a tap far larger
+    /// than the rest; its bytes; and the bank read back from them.
+    fn quantized_sample(encoding: Encoding) -> (Bank, Vec<u8>, Bank) {
         let mut b = sample_bank();
-        b.encoding = Encoding::I16;
-        // A channel of zeros, and one with a tap far larger than the rest.
+        b.encoding = encoding;
         b.entries[0].windows[0]
             .taps
             .iter_mut()
@@ -676,7 +676,32 @@ pub(crate) mod tests {
         b.entries[1].windows[1].taps[0] = 40.0;
         let bytes = b.to_bytes();
         let back = Bank::parse(&bytes, Path::new("t.taps")).unwrap();
-        assert_eq!(back.encoding, Encoding::I16);
+        assert_eq!(back.encoding, encoding);
+        (b, bytes, back)
+    }
+
+    /// Every tap of `read` within `share` of its channel's largest tap in `written`, plus the
+    /// `f32` rounding before the codes.
+    fn assert_taps_within(written: &Bank, read: &Bank, share: f64) {
+        for (e, f) in written.entries.iter().zip(&read.entries) {
+            for (w, v) in e.windows.iter().zip(&f.windows) {
+                let len = w.past + w.future + 1;
+                for (ch, (a, b)) in w.taps.chunks(len).zip(v.taps.chunks(len)).enumerate() {
+                    let largest = a.iter().fold(0.0f64, |m, t| m.max(t.abs()));
+                    for (x, y) in a.iter().zip(b) {
+                        assert!(
+                            (x - y).abs() <= share * largest * (1.0 + 1e-6) + 1e-7 * x.abs(),
+                            "channel {ch}: {x} read back as {y}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn an_i16_bank_keeps_every_tap_within_its_channel_s_step() {
+        let (b, bytes, back) = quantized_sample(Encoding::I16);
         let mut f32_bank = b.clone();
         f32_bank.encoding = Encoding::F32;
         // The data block's size, from the first line: smaller than the f32 one's (about half
@@ -688,22 +713,8 @@ pub(crate) mod tests {
             first.split(' ').nth(3).unwrap().parse().unwrap()
         };
         assert!(data(&bytes) < data(&f32_bank.to_bytes()) * 9 / 10);
-        for (e, f) in b.entries.iter().zip(&back.entries) {
-            for (w, v) in e.windows.iter().zip(&f.windows) {
-                let len = w.past + w.future + 1;
-                for (ch, (a, b)) in w.taps.chunks(len).zip(v.taps.chunks(len)).enumerate() {
-                    let largest = a.iter().fold(0.0f64, |m, t| m.max(t.abs()));
-                    for (x, y) in a.iter().zip(b) {
-                        // Half a step of the channel's scale, and the f32 rounding before it.
-                        let step = largest / 32767.0;
-                        assert!(
-                            (x - y).abs() <= 0.5 * step * (1.0 + 1e-6) + 1e-7 * x.abs(),
-                            "channel {ch}: {x} read back as {y}"
-                        );
-                    }
-                }
-            }
-        }
+        // Half a step of the channel's scale.
+        assert_taps_within(&b, &back, 0.5 / 32767.0);
         // Written again, byte for byte; and re-encoding an f32 bank gives the same bytes.
         assert_eq!(back.to_bytes(), bytes);
         let mut via_f32 = Bank::parse(&f32_bank.to_bytes(), Path::new("t.taps")).unwrap();
@@ -752,38 +763,9 @@ pub(crate) mod tests {
 
     #[test]
     fn an_i12_bank_keeps_every_tap_within_its_channel_s_step_and_equals_one_via_i16() {
-        let mut b = sample_bank();
-        b.entries[0].windows[0]
-            .taps
-            .iter_mut()
-            .take(3)
-            .for_each(|t| *t = 0.0);
-        b.entries[1].windows[1].taps[0] = 40.0;
-        b.encoding = Encoding::I12;
-        let bytes = b.to_bytes();
-        let back = Bank::parse(&bytes, Path::new("t.taps")).unwrap();
-        assert_eq!(back.encoding, Encoding::I12);
-        for (e, f) in b.entries.iter().zip(&back.entries) {
-            for (w, v) in e.windows.iter().zip(&f.windows) {
-                let len = w.past + w.future + 1;
-                for (ch, (a, b)) in w.taps.chunks(len).zip(v.taps.chunks(len)).enumerate() {
-                    let largest = a.iter().fold(0.0f64, |m, t| m.max(t.abs()));
-                    // Half an i12 step, half an i16 step before it (its codes come from those),
-                    // and the f32 rounding first; the largest tap, clamped to 2047 steps, within
-                    // one step.
-                    let step = 16.0 * largest / 32767.0;
-                    for (x, y) in a.iter().zip(b) {
-                        assert!(
-                            (x - y).abs()
-                                <= (0.5 + 0.5 / 16.0) * step * (1.0 + 1e-6) + 1e-7 * x.abs()
-                                || ((x.abs() - largest).abs() < 1e-12
-                                    && (x - y).abs() <= step * (1.0 + 1e-6)),
-                            "channel {ch}: {x} read back as {y}"
-                        );
-                    }
-                }
-            }
-        }
+        let (b, bytes, back) = quantized_sample(Encoding::I12);
+        // Half an i12 step, after the i16 rounding's half step (`i12_codes`).
+        assert_taps_within(&b, &back, 0.5 / 2047.0 + 0.5 / 32767.0);
         // Written again, byte for byte; re-encoded from an i16 or an f32 bank, the same bytes.
         assert_eq!(back.to_bytes(), bytes);
         for from in [Encoding::I16, Encoding::F32] {
