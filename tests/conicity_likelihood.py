@@ -103,19 +103,49 @@ def bound(ta, vehicle, seeds, c: float, k: float, duration: float) -> list[str]:
     df = f[1] - f[0]
     rows = []
     for lo, hi in ((0.5, 200.0), WAVES):
-        info = []  # per bin: the 3 x 3 information of (ln c, ln K, level)
-        for m in np.where((lam >= lo) & (lam <= hi))[0]:
-            si = np.linalg.inv(runs["0"][:, :, m] + np.diag(NOISE))
-            g = [si @ dc[:, :, m], si @ dk[:, :, m], si @ runs["0"][:, :, m]]
-            info.append([[np.trace(a @ b).real for b in g] for a in g])
-        info = np.array(info)
-        known = info[:, :2, :2].sum(0)
-        free = sum(a[:2, :2] - np.outer(a[:2, 2], a[2, :2]) / a[2, 2] for a in info)
+        m = np.where((lam >= lo) & (lam <= hi))[0]
+        info = information(runs["0"][:, :, m], [dc[:, :, m], dk[:, :, m]], NOISE)
         for length in (100.0, 200.0, 400.0):
-            t = length / SPEED * df
-            sd = [np.sqrt(np.linalg.inv(fi * t)[0, 0]) for fi in (known, free)]
+            sd = [cramer_rao(info, length / SPEED * df, level) for level in ("known", "free")]
             rows.append(f"| {c} | {k} | {length:g} m | {lo:g}-{hi:g} m | {sd[0]:.3f} | {sd[1]:.3f} |")
     return rows
+
+
+def information(s: np.ndarray, derivatives: list[np.ndarray], noise: np.ndarray) -> np.ndarray:
+    """Whittle's Fisher information per frequency bin, `[bin, a, b] = tr(C^-1 dC/da C^-1 dC/db)`
+    with `C = s + diag(noise)` (`s[i, j, bin]`: the noise-free cross-spectra), for the parameters
+    whose `dC` are `derivatives` and, last, the level of `s` (`dC = s`: the track spectrum's level
+    as a nuisance parameter)."""
+    out = []
+    for m in range(s.shape[-1]):
+        si = np.linalg.inv(s[:, :, m] + np.diag(noise))
+        g = [si @ d[:, :, m] for d in derivatives] + [si @ s[:, :, m]]
+        out.append([[np.trace(a @ b).real for b in g] for a in g])
+    return np.array(out)
+
+
+def cramer_rao(info: np.ndarray, seconds_hz: float, level: str) -> float:
+    """The bound on the first parameter's standard deviation from [`information`] summed over the
+    bins, times `seconds_hz` (the record's duration times the bins' spacing: the number of
+    independent bins per bin); the level `known`, or `free` in every bin (its Schur
+    complement per bin)."""
+    if level == "known":
+        total = info[:, :-1, :-1].sum(0)
+    else:
+        total = sum(a[:-1, :-1] - np.outer(a[:-1, -1], a[-1, :-1]) / a[-1, -1] for a in info)
+    return float(np.sqrt(np.linalg.inv(total * seconds_hz)[0, 0]))
+
+
+def whittle_nll(p: np.ndarray, model: np.ndarray, noise: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """Whittle's negative log-likelihood of periodogram matrices `p[bin, i, j]` (one-sided
+    densities, `X_i* X_j`) under each model `model[..., bin, i, j]` times a level, plus the white
+    noise: `sum_bins ln det C + tr(C^-1 p)`, `C = a model + diag(noise)`, minimised over the
+    `levels` `a` (one level for all the bins given)."""
+    per_level = []
+    for a in levels:
+        c = a * model + np.diag(noise)
+        per_level.append((np.linalg.slogdet(c)[1] + np.einsum("...nij,nji->...n", np.linalg.inv(c), p).real).sum(-1))
+    return np.min(per_level, axis=0)
 
 
 class Likelihood:
@@ -140,14 +170,7 @@ class Likelihood:
     def ln_conicity(self, x: np.ndarray) -> float:
         spec = np.fft.rfft((x - x.mean(1, keepdims=True)) * self.window, axis=1)[:, self.bins]
         p = np.einsum("if,jf->fij", spec.conj(), spec) * self.scale
-        nll = np.zeros((len(self.lnc), len(self.kalker)))
-        for o in self.octaves:
-            per_level = []
-            for a in self.levels:
-                sigma = a * self.model[:, :, o] + np.diag(NOISE)
-                per_level.append((np.linalg.slogdet(sigma)[1]
-                                  + np.einsum("cknij,nji->ckn", np.linalg.inv(sigma), p[o]).real).sum(-1))
-            nll += np.min(per_level, axis=0)
+        nll = sum(whittle_nll(p[o], self.model[:, :, o], NOISE, self.levels) for o in self.octaves)
         i, j = np.unravel_index(np.argmin(nll), nll.shape)
         if 0 < i < len(self.lnc) - 1:
             y0, y1, y2 = nll[i - 1, j], nll[i, j], nll[i + 1, j]
