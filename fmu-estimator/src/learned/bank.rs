@@ -229,25 +229,21 @@ impl Encoding {
                 .chunks_exact(4)
                 .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64)
                 .collect(),
-            Encoding::I16 => {
+            Encoding::I16 | Encoding::I12 => {
                 let mut taps = Vec::with_capacity(channels * len);
-                for channel in data.chunks_exact(4 + 2 * len) {
+                for channel in data.chunks_exact(self.bytes(1, len)) {
                     let scale =
                         f32::from_le_bytes([channel[0], channel[1], channel[2], channel[3]]) as f64;
-                    taps.extend(
-                        channel[4..]
-                            .chunks_exact(2)
-                            .map(|c| i16::from_le_bytes([c[0], c[1]]) as f64 * scale),
-                    );
-                }
-                taps
-            }
-            Encoding::I12 => {
-                let mut taps = Vec::with_capacity(channels * len);
-                for channel in data.chunks_exact(4 + i12_bytes(len)) {
-                    let scale =
-                        f32::from_le_bytes([channel[0], channel[1], channel[2], channel[3]]) as f64;
-                    taps.extend(unpack_i12(&channel[4..], len).map(|q| q as f64 * scale));
+                    let codes = &channel[4..];
+                    if self == Encoding::I16 {
+                        taps.extend(
+                            codes
+                                .chunks_exact(2)
+                                .map(|c| i16::from_le_bytes([c[0], c[1]]) as f64 * scale),
+                        );
+                    } else {
+                        taps.extend(unpack_i12(codes, len).map(|q| q as f64 * scale));
+                    }
                 }
                 taps
             }
