@@ -23,14 +23,16 @@ import argparse
 
 import numpy as np
 
+from wiener_bound import GRADES, noise_parameters
+
 STEPS = (0.0005, 0.001, 0.002, 0.005, 0.01)
 REFERENCE = 0.001
 DURATION = 20.0
 BANDS = ("whole", "D1", "D2", "D3")
 CHANNELS = ("ws_acc_y", "ws_yaw_rate", "frame_acc_y")
-# The paper's per-sample sigmas at 1 kHz as one-sided densities (sigma^2 / Nyquist).
-DENSITY = {"ws_acc_y_noise_psd": 1e-4 / 500.0, "frame_acc_y_noise_psd": 1e-4 / 500.0,
-           "ws_yaw_rate_noise_psd": 2.5e-7 / 500.0}
+# The paper's per-sample sigmas at 1 kHz as one-sided densities (sigma^2 / Nyquist), for the
+# three sensors (wiener_bound's channels: the yaw gyro and the two accelerometers first).
+DENSITY = noise_parameters(GRADES["paper's sensors"][:3])
 
 
 def jrel(ta, vehicle, step: float, seed: int, parameters: dict) -> list[float]:
