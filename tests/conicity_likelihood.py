@@ -42,13 +42,14 @@ import os
 import numpy as np
 from scipy import signal
 
-SPEED = 20.0
-STEP = 1e-3
-DECIMATION = (4, 5)
+from wiener_bound import CHANNELS as WIENER_CHANNELS
+from wiener_bound import DECIMATION, GRADES, SPEED, STEP, decimate, noisy_record
+
 FS = 1.0 / (STEP * np.prod(DECIMATION))  # 50 Hz
+# In the order `track_alignment.estimate` takes them.
 CHANNELS = ("ws_acc_y", "ws_yaw_rate", "frame_acc_y")
-# The paper's sensors as one-sided white-noise densities (sigma^2 / 500 Hz), CHANNELS' order.
-NOISE = np.array([2e-7, 5e-10, 2e-7])
+# The paper's sensors as one-sided white-noise densities, CHANNELS' order.
+NOISE = np.array([dict(zip(WIENER_CHANNELS, GRADES["paper's sensors"]))[c] for c in CHANNELS])
 # The bank's conditions (taps.rs: SHIPPED_CONICITIES and the Kalker scales).
 CONICITIES = (0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4)
 KALKER = (1.0, 0.75, 0.5)
@@ -63,17 +64,15 @@ GRID_STEP = 0.02  # the emulation's grid of told conicities, in ln c
 TAPS = "learned-conicity.taps"
 
 
-def decimated(out: dict) -> np.ndarray:
-    x = np.array([np.asarray(out[c][1:], float) for c in CHANNELS])
-    for q in DECIMATION:
-        x = signal.decimate(x, q, ftype="fir", axis=-1)
-    return x
+def decimated(r: dict) -> np.ndarray:
+    """The three sensors of a record (its first sample, at time 0, already left out) at 50 Hz."""
+    return decimate(np.array([np.asarray(r[c], float) for c in CHANNELS]))
 
 
 def clean_run(ta, vehicle, seed: int, c: float, k: float, duration: float) -> np.ndarray:
     out = ta.simulate(vehicle, duration, step=STEP, variables=list(CHANNELS),
                       parameters={"track_seed": seed, "sensor_noise": False, "conicity": c, "kalker_scale": k})
-    return decimated(out)[:, int(RUN_IN * FS):]
+    return decimated({ch: out[ch][1:] for ch in CHANNELS})[:, int(RUN_IN * FS):]
 
 
 def welch(x: np.ndarray, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
@@ -260,9 +259,7 @@ def main() -> None:
     for c, k in RECORDS:
         per = {name: [] for name in scores}
         for seed in a.seeds:
-            out = ta.simulate(vehicle, 20.0, step=STEP, variables=[*CHANNELS, "alignment", "distance", "forward_speed"],
-                              parameters={"track_seed": seed, "noise_seed": seed + 1000, "conicity": c, "kalker_scale": k})
-            r = {key: np.ascontiguousarray(v[1:]) for key, v in out.items()}
+            r = noisy_record(ta, vehicle, seed, 20.0, {"conicity": c, "kalker_scale": k}, seed + 1000)
             x = decimated(r)
             at, lnc = track(likelihoods, x, r["distance"][:: int(np.prod(DECIMATION))][: x.shape[1]])
             nothing = ta.estimate(r["forward_speed"], *(r[ch] for ch in CHANNELS), step=STEP, settings={"tap_file": tap})
