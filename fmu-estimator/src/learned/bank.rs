@@ -477,7 +477,7 @@ impl Header {
             return Err(BankProblem::HeaderFormat(self.format));
         }
         if let Some(c) = &self.contact {
-            c.check()?;
+            c.check(self.grid)?;
         }
         let conditional = self
             .entries

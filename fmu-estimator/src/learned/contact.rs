@@ -313,6 +313,12 @@ pub struct SpeedModel {
     /// [`Self::coefficients`].
     #[serde(default)]
     pub kalker_by_conicity: Vec<NodeModel>,
+    /// In a bank fitted over conicities (since 2026-11-28): the model cross-spectra of the
+    /// trained conditions, from which the conicity is estimated by Whittle's likelihood
+    /// ([`super::spectral`]) in place of [`Self::conicity`]'s linear model once a window is
+    /// full enough. Absent in older banks: the linear model alone, as before.
+    #[serde(default)]
+    pub spectra: Option<super::spectral::Spectra>,
 }
 
 /// The Kalker-scale estimator at one bank conicity ([`SpeedModel::kalker_by_conicity`]).
@@ -352,7 +358,29 @@ impl ContactModel {
     }
 
     /// The consistency the runtime relies on.
-    pub fn check(&self) -> Result<(), ContactProblem> {
+    pub fn check(&self, grid: f64) -> Result<(), ContactProblem> {
+        for s in &self.speeds {
+            if let Some(sp) = &s.spectra {
+                sp.check(grid).map_err(|problem| ContactProblem::Spectra {
+                    speed: s.speed,
+                    problem,
+                })?;
+                if self.conicity_range.is_none() {
+                    return Err(ContactProblem::Spectra {
+                        speed: s.speed,
+                        problem: "spectra without a conicity range".into(),
+                    });
+                }
+            }
+        }
+        if self.speeds.iter().any(|s| s.spectra.is_some())
+            && self.speeds.iter().any(|s| s.spectra.is_none())
+        {
+            return Err(ContactProblem::Spectra {
+                speed: self.speeds[0].speed,
+                problem: "spectra at some speeds only".into(),
+            });
+        }
         for [short, long] in self.bands() {
             if !(short.is_finite() && short > 0.0 && long > short && long.is_finite()) {
                 return Err(ContactProblem::Band { short, long });
@@ -754,6 +782,7 @@ mod tests {
                     rms_error: 0.1,
                     conicity: None,
                     kalker_by_conicity: vec![],
+                    spectra: None,
                 },
                 SpeedModel {
                     speed: 20.0,
@@ -761,6 +790,7 @@ mod tests {
                     rms_error: 0.1,
                     conicity: None,
                     kalker_by_conicity: vec![],
+                    spectra: None,
                 },
             ],
             conicity_range: None,
@@ -770,7 +800,7 @@ mod tests {
     #[test]
     fn each_speed_judges_its_own_cells_and_the_estimates_are_weighted_by_recent_track() {
         let m = model();
-        m.check().unwrap();
+        m.check(0.2).unwrap();
         let mut moments = m.moments(0.2);
         assert_eq!(m.estimate(&moments, None).map(|c| c.kalker), None);
         // Outside the model's speeds (and at no speed) the cells are not counted.
@@ -812,7 +842,7 @@ mod tests {
         let mut bad = m.clone();
         bad.speeds[0].coefficients.pop();
         assert!(
-            bad.check()
+            bad.check(0.2)
                 .unwrap_err()
                 .to_string()
                 .contains("coefficients")
@@ -857,10 +887,11 @@ mod tests {
                 conicity: Some(conicity),
                 // Told 0.1: the first node alone decides.
                 kalker_by_conicity: vec![node(0.1, n, 0.01), node(0.2, FEATURES, 0.0)],
+                spectra: None,
             }],
             conicity_range: Some([0.1, 0.2]),
         };
-        m.check().unwrap();
+        m.check(0.2).unwrap();
         let mut moments = m.moments(0.2);
         let mut noise = uniform(3);
         for _ in 0..3000 {
@@ -907,10 +938,10 @@ mod tests {
         // No feature, part of a band, or more features than the bands hold: refused.
         for read in [0, FEATURES + 2, n + FEATURES] {
             m.speeds[0].kalker_by_conicity[0] = node(0.1, read, 0.01);
-            assert!(m.check().is_err(), "{read} features read");
+            assert!(m.check(0.2).is_err(), "{read} features read");
         }
         m.speeds[0].kalker_by_conicity[0].coefficients.clear();
-        assert!(m.check().is_err(), "no coefficients");
+        assert!(m.check(0.2).is_err(), "no coefficients");
     }
 
     /// The young memories' conicity models: each applies at its own fill, linear in the fill
@@ -973,10 +1004,11 @@ mod tests {
                 rms_error: 0.1,
                 conicity: Some(cm),
                 kalker_by_conicity: vec![],
+                spectra: None,
             }],
             conicity_range: Some([0.05, 0.4]),
         };
-        model.check().unwrap();
+        model.check(0.2).unwrap();
         let mut moments = model.moments(0.2);
         let mut noise = uniform(5);
         let mut run = |cells: usize| {

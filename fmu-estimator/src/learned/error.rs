@@ -239,6 +239,15 @@ pub enum ContactProblem {
         /// The model's speed \[m/s\].
         speed: f64,
     },
+    /// A speed's model spectra ([`super::spectral::Spectra`]) are malformed, or present at some
+    /// speeds only, or in a bank without conicities.
+    #[error("contact model at {speed} m/s: spectra: {problem}")]
+    Spectra {
+        /// The model's speed \[m/s\].
+        speed: f64,
+        /// What is wrong.
+        problem: String,
+    },
 }
 
 /// A valid bank that holds no taps for the sensor set or lag the FMU's parameters choose

@@ -26,6 +26,7 @@ pub mod error;
 pub mod grid;
 mod history;
 mod selection;
+pub mod spectral;
 pub mod stream;
 mod track;
 pub mod window;

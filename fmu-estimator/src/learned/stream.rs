@@ -43,6 +43,7 @@ use super::grid::{Grid, KALMAN};
 use super::history::History;
 pub use super::selection::Choice;
 use super::selection::Selection;
+use super::spectral::Spectral;
 use super::track::{Point, Track};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -132,6 +133,11 @@ pub struct Learned {
     judged_from: f64,
     /// Closed cells until the novelty is judged again ([`super::contact::NOVELTY_EVERY`]).
     to_novelty: usize,
+    /// The conicity by Whittle's likelihood, in a bank whose contact model has spectra and
+    /// when no conicity is told ([`super::spectral`]).
+    spectral: Option<Spectral>,
+    /// The grid step \[m\].
+    ds: f64,
 }
 
 impl Learned {
@@ -139,10 +145,18 @@ impl Learned {
     /// start of a run.
     pub fn new(bank: &Bank, choice: Choice) -> Result<Learned, super::error::LearnedError> {
         let selection = Selection::new(bank, choice)?;
+        let told_conicity = choice.conicity.filter(|c| *c > 0.0);
+        let spectral = selection
+            .contact
+            .as_ref()
+            .filter(|c| told_conicity.is_none() && c.speeds.iter().all(|s| s.spectra.is_some()))
+            .map(|_| Spectral::new(bank.grid));
         Ok(Learned {
+            spectral,
+            ds: bank.grid,
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
-            told_conicity: choice.conicity.filter(|c| *c > 0.0),
+            told_conicity,
             told_kalker: choice.kalker.filter(|k| *k > 0.0),
             conicity: 0.0,
             novelty: 0.0,
@@ -259,12 +273,19 @@ impl Learned {
         };
         // Inside the bank's range these are also the gain the estimate multiplies back by.
         let factors = speed_factors(speed.max(self.selection.speeds[0]));
+        let mut due = false;
         for cell in &closed.cells {
             self.history
                 .push(&std::array::from_fn(|c| cell[c] / factors[c]));
             if let Some(m) = self.moments.as_mut() {
                 m.push(cell, speed);
             }
+            if let Some(s) = self.spectral.as_mut() {
+                due |= s.push(cell, speed, self.ds);
+            }
+        }
+        if due {
+            self.update_spectral(speed);
         }
         let first = *self.started.get_or_insert(closed.distance);
         if let (Some(model), Some(m)) = (&self.selection.contact, &self.moments) {
@@ -274,7 +295,14 @@ impl Learned {
             if judge {
                 self.to_novelty = super::contact::NOVELTY_EVERY;
             }
-            match model.estimate_told(m, self.told_conicity, self.told_kalker, taps, judge) {
+            // The likelihood's conicity, once it has one, stands for the features' estimate.
+            let told = self.told_conicity.or_else(|| {
+                self.spectral
+                    .as_ref()
+                    .and_then(Spectral::ln_conicity)
+                    .map(f64::exp)
+            });
+            match model.estimate_told(m, told, self.told_kalker, taps, judge) {
                 Some(c) => {
                     self.contact_scale = c.kalker;
                     self.conicity = c.conicity.unwrap_or(0.0);
@@ -344,6 +372,50 @@ impl Learned {
                 distance: d,
             });
         }
+    }
+
+    /// A new estimate of the conicity at `speed`: the likelihood's, averaged with the features'
+    /// ([`super::spectral::share`]); the output moves to it from the conicity the filter has
+    /// now (the features' estimate before the first).
+    fn update_spectral(&mut self, speed: f64) {
+        let (Some(model), Some(s), Some(m)) = (
+            &self.selection.contact,
+            self.spectral.as_mut(),
+            self.moments.as_ref(),
+        ) else {
+            return;
+        };
+        let models: Vec<(f64, &super::spectral::Spectra)> = model
+            .speeds
+            .iter()
+            .filter_map(|m| Some((m.speed, m.spectra.as_ref()?)))
+            .collect();
+        let before = if self.conicity > 0.0 {
+            self.conicity.ln()
+        } else {
+            model
+                .conicity_range
+                .map_or(0.0, |[lo, hi]| 0.5 * (lo.ln() + hi.ln()))
+        };
+        let Some((x, n)) = s.update(speed, self.ds, &models) else {
+            return;
+        };
+        let features = model
+            .estimate_told(
+                m,
+                None,
+                self.told_kalker,
+                self.selection.conicity_range(),
+                false,
+            )
+            .and_then(|c| c.conicity)
+            .map(f64::ln);
+        let w = super::spectral::share(n);
+        let target = match features {
+            Some(f) => w * x + (1.0 - w) * f,
+            None => x,
+        };
+        s.aim(target, before);
     }
 
     /// Adds the conicity of `cells` closed cells ending at `distance` to the judged one: the

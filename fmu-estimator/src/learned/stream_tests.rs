@@ -113,6 +113,7 @@ fn per_condition_taps_are_blended_by_the_estimated_or_told_contact() {
             rms_error: 0.1,
             conicity: None,
             kalker_by_conicity: vec![],
+            spectra: None,
         }],
         conicity_range: None,
     });
@@ -238,6 +239,7 @@ fn coned_bank() -> Bank {
                 young: vec![],
             }),
             kalker_by_conicity: vec![],
+            spectra: None,
         }],
         conicity_range: Some([0.05, 0.4]),
     });

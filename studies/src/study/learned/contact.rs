@@ -14,9 +14,10 @@ use super::taps::CONTACT_BAND;
 use super::taps::{BANK_GRID, CONTACT_MEMORY, Condition, GridRun, KALKER_BANDS};
 use crate::Error;
 use fmu_estimator::learned::contact::{
-    ConicityModel, FEATURES, LEVEL_SHARE, Moments, NodeModel, SpeedModel, YoungModel,
-    forward_terms, linear,
+    CHANNELS, CONTACT_SPEED_POWER, ConicityModel, FEATURES, LEVEL_SHARE, Moments, NodeModel,
+    SpeedModel, YoungModel, forward_terms, linear,
 };
+use fmu_estimator::learned::spectral::{self, Spectra};
 use nalgebra::{DMatrix, DVector};
 
 /// Start of each run left out \[m\].
@@ -182,13 +183,77 @@ pub(super) fn fit(
     } else {
         vec![]
     };
+    let spectra = if coned {
+        Some(spectra(speed, training)?)
+    } else {
+        None
+    };
     Ok(SpeedModel {
         speed,
         coefficients,
         rms_error,
         conicity,
         kalker_by_conicity,
+        spectra,
     })
+}
+
+/// The model cross-spectra of the training runs at `speed` ([`spectral`]): per condition, Welch's
+/// estimate over the run past its [`WARM_UP`] (the start transient), of the channels divided by
+/// the speed's powers as the runtime divides them; a condition with several runs (a vehicle
+/// family) the mean of theirs.
+fn spectra(speed: f64, training: &[(Condition, GridRun)]) -> Result<Spectra, Error> {
+    let bins = spectral::stored_bins(BANK_GRID);
+    let skip = (WARM_UP / BANK_GRID).round() as usize;
+    let mut conditions: Vec<[f64; 2]> = vec![];
+    let mut sums: Vec<(Vec<[f64; spectral::PACKED]>, f64)> = vec![];
+    for (c, run) in training {
+        let Some(conicity) = c.conicity else {
+            continue;
+        };
+        let x: Vec<[f64; 3]> = run
+            .cells
+            .cells
+            .iter()
+            .skip(skip)
+            .map(|cell| {
+                std::array::from_fn(|i| cell[CHANNELS[i]] / speed.powi(CONTACT_SPEED_POWER[i]))
+            })
+            .collect();
+        let w = spectral::welch(&x, spectral::WINDOW, BANK_GRID, bins).ok_or_else(|| {
+            Error::input(format!(
+                "at {speed} m/s, {c}: the training run is shorter than the spectra's window"
+            ))
+        })?;
+        let key = [conicity, c.kalker];
+        match conditions.iter().position(|k| *k == key) {
+            Some(i) => {
+                for (a, b) in sums[i].0.iter_mut().zip(&w) {
+                    for (a, b) in a.iter_mut().zip(b) {
+                        *a += b;
+                    }
+                }
+                sums[i].1 += 1.0;
+            }
+            None => {
+                conditions.push(key);
+                sums.push((w, 1.0));
+            }
+        }
+    }
+    let values = sums
+        .iter()
+        .flat_map(|(w, n)| w.iter().flatten().map(move |v| (v / n) as f32))
+        .collect();
+    let s = Spectra {
+        window: spectral::WINDOW,
+        first_bin: bins[0],
+        conditions,
+        values,
+    };
+    s.check(BANK_GRID)
+        .map_err(|e| Error::input(format!("at {speed} m/s, the model spectra: {e}")))?;
+    Ok(s)
 }
 
 /// Per conicity of the runs, the Kalker scale from the features of D1 and its octaves (the first
