@@ -410,9 +410,11 @@ impl Learned {
             )
             .and_then(|c| c.conicity)
             .map(f64::ln);
-        let w = super::spectral::share(n);
         let target = match features {
-            Some(f) => w * x + (1.0 - w) * f,
+            Some(f) => {
+                let w = super::spectral::share(n, x - f);
+                w * x + (1.0 - w) * f
+            }
             None => x,
         };
         s.aim(target, before);
