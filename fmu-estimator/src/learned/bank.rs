@@ -15,7 +15,10 @@
 //! bank of version 3 or 4 has none, and is read as before.
 //! The conicity models of young memories (`young`, 2026-11-27) are optional within version 5:
 //! a bank without them applies the full memory's model from a run's first cell, as before, and
-//! a reader without them ignores them and does the same.
+//! a reader without them ignores them and does the same. So are the model spectra of the
+//! conicity's likelihood (each speed's `spectra`, 2026-11-28, [`super::spectral::Spectra`]:
+//! their layout in TOML, their values as little-endian `f32` in one base64 string): a bank
+//! without them estimates the conicity from the contact features alone.
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds
 //! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`

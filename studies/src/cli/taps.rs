@@ -58,7 +58,8 @@ pub struct TapsArgs {
     /// times the size of f32; as precise as the estimates need), i16 (16-bit multiples) or f32.
     #[arg(long, default_value = "i12", value_parser = encoding)]
     pub encoding: Encoding,
-    /// Keep this tap bank's taps and refit only its contact model (same runs, no tap solves).
+    /// Keep this tap bank's taps and refit only its contact model and model spectra (same runs,
+    /// no tap solves).
     #[arg(long, value_name = "BANK")]
     pub taps_from: Option<PathBuf>,
     /// With --taps-from and one --conicities (the one those taps were fitted at): take this
