@@ -1,9 +1,13 @@
 """What the sensors tell of the wheels' conicity, and how far the bank's estimate is from it.
 
 The bank over conicities (`learned-conicity.taps`) told nothing loses most of its accuracy to
-its conicity estimate (docs/learned-filter.md, "Conicity"): a linear model of 35 scale-free
-moments of the band-passed sensors, `ln(conicity)` rms 0.07-0.09 after 200 m. This probe asks
-what the sensors allow, by a second formulation that shares nothing with that estimate:
+its conicity estimate (docs/learned-filter.md, "Conicity"). Until 2026-11-28 that was a linear
+model of 35 scale-free moments of the band-passed sensors, `ln(conicity)` rms 0.07-0.09 after
+200 m; this probe asked what the sensors allow, by a second formulation that shares nothing
+with it, and its answer is now in the estimator (fmu-estimator/src/learned/spectral.rs, the
+same likelihood in Rust, its model spectra from the bank's training runs). Against the bank of
+today the printed `conicity_estimate` column is that estimator's; the docs' column is the
+linear model's (the bank of commit 40f735e).
 
 1. **Bound.** The sensors (`ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`) at constant speed are a
    stationary Gaussian vector process whose cross-spectral matrix `S(f; c, K)` depends on the
