@@ -6,7 +6,7 @@
 //! |---|---|
 //! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
 //! | header | TOML, UTF-8: [`Header`] (grid, high-pass, provenance, the contract, the contact model, and every entry's windows without their taps) |
-//! | data | the taps, entry after entry, window after window in header order, as the header's `encoding` says (below) |
+//! | data | the contact model's model spectra if it has them (below), then the taps, entry after entry, window after window in header order, as the header's `encoding` says (below) |
 //!
 //! Version 4 adds the conicity conditions: each entry's `conicity`, the contact model's
 //! `conicity_range`, `extra_bands` and per-speed conicity models ([`super::contact`]). A
@@ -16,9 +16,10 @@
 //! The conicity models of young memories (`young`, 2026-11-27) are optional within version 5:
 //! a bank without them applies the full memory's model from a run's first cell, as before, and
 //! a reader without them ignores them and does the same. So are the model spectra of the
-//! conicity's likelihood (each speed's `spectra`, 2026-11-28, [`super::spectral::Spectra`]:
-//! their layout in TOML, their values as little-endian `f32` in one base64 string): a bank
-//! without them estimates the conicity from the contact features alone.
+//! conicity's likelihood (each speed's `spectra`, 2026-11-28, [`super::spectral::Spectra`]):
+//! their layout in the header, their values as little-endian `f32` at the data block's start,
+//! speed after speed, before the taps (a bank without them estimates the conicity from the
+//! contact features alone).
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds
 //! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
@@ -368,6 +369,9 @@ impl Header {
     pub fn to_bytes(&self) -> Vec<u8> {
         let header = toml::to_string(self).expect("plain numbers, strings and arrays");
         let mut data = Vec::new();
+        for s in self.spectra() {
+            data.extend(s.values.iter().flat_map(|v| v.to_le_bytes()));
+        }
         for e in &self.entries {
             for w in &e.windows {
                 self.encoding
@@ -437,6 +441,8 @@ impl Header {
                 header: bank.format,
             }));
         }
+        let spectra = bank.read_spectra(data).map_err(bad)?;
+        let data = &data[spectra..];
         bank.check().map_err(bad)?;
         let encoding = bank.encoding;
         let needed: usize = bank
@@ -448,8 +454,11 @@ impl Header {
                     .map(|w| encoding.bytes(e.channels.len(), w.past + w.future + 1))
             })
             .sum();
-        if needed != dlen {
-            return Err(bad(BankProblem::TapCount { needed, held: dlen }));
+        if needed != data.len() {
+            return Err(bad(BankProblem::TapCount {
+                needed: needed + spectra,
+                held: dlen,
+            }));
         }
         let mut at = 0;
         for (i, e) in bank.entries.iter_mut().enumerate() {
@@ -465,6 +474,43 @@ impl Header {
             }
         }
         Ok(bank)
+    }
+
+    /// The contact model's model spectra, speed after speed: the data block's order.
+    fn spectra(&self) -> impl Iterator<Item = &super::spectral::Spectra> {
+        self.contact
+            .iter()
+            .flat_map(|c| &c.speeds)
+            .filter_map(|s| s.spectra.as_ref())
+    }
+
+    /// Fills the model spectra whose header holds no values from the data block's start (where
+    /// [`Self::to_bytes`] writes them); the bytes they took. Spectra whose header holds values
+    /// (base64, as written on 2026-11-28 before the data block held them) keep them.
+    fn read_spectra(&mut self, data: &[u8]) -> Result<usize, BankProblem> {
+        let grid = self.grid;
+        let mut at = 0usize;
+        for s in self
+            .contact
+            .iter_mut()
+            .flat_map(|c| &mut c.speeds)
+            .filter_map(|s| s.spectra.as_mut())
+            .filter(|s| s.values.is_empty())
+        {
+            let n = s.stored_values(grid).and_then(|n| n.checked_mul(4));
+            let Some(bytes) = n.and_then(|n| data.get(at..at.checked_add(n)?)) else {
+                return Err(BankProblem::TapCount {
+                    needed: n.map_or(usize::MAX, |n| at.saturating_add(n)),
+                    held: data.len(),
+                });
+            };
+            s.values = bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            at += bytes.len();
+        }
+        Ok(at)
     }
 
     /// Reads the tap bank at `path`.
@@ -792,6 +838,60 @@ pub(crate) mod tests {
         b.format = FORMAT;
         let read = Bank::parse(&b.to_bytes(), p).unwrap();
         assert_eq!(read.kalman_shelf, Some(1.0));
+    }
+
+    #[test]
+    fn model_spectra_are_read_from_the_data_block_or_from_base64_in_the_header() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/learned.taps");
+        let bank = Bank::load(&path).unwrap();
+        let spectra: Vec<&Vec<f32>> = bank.spectra().map(|s| &s.values).collect();
+        assert_eq!(spectra.len(), 11);
+        let bytes = bank.to_bytes();
+        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
+        let first: Vec<&str> = std::str::from_utf8(&bytes[..nl])
+            .unwrap()
+            .split(' ')
+            .collect();
+        let hlen: usize = first[2].parse().unwrap();
+        let header = std::str::from_utf8(&bytes[nl + 1..nl + 1 + hlen]).unwrap();
+        let data = &bytes[nl + 1 + hlen..];
+        let held: usize = spectra.iter().map(|v| 4 * v.len()).sum();
+        // Spectra cut short: refused, naming the bytes.
+        let cut = [&bytes[..nl + 1 + hlen], &data[..held / 2]].concat();
+        let cut = [
+            format!(
+                "{MAGIC} {FORMAT} {hlen} {} {:016x}\n",
+                held / 2,
+                fnv1a(&data[..held / 2])
+            )
+            .as_bytes(),
+            &cut[nl + 1..],
+        ]
+        .concat();
+        let e = Bank::parse(&cut, &path).unwrap_err().to_string();
+        assert!(e.contains("need") && e.contains("bytes"), "{e}");
+        // The layout written before the data block held them: base64 in the header.
+        let mut inline = header.to_string();
+        for v in &spectra {
+            let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+            let coded = super::super::spectral::base64_for_tests(&raw);
+            inline = inline.replacen("values = \"\"", &format!("values = \"{coded}\""), 1);
+        }
+        assert!(!inline.contains("values = \"\""));
+        let taps = &data[held..];
+        let old = [
+            format!(
+                "{MAGIC} {FORMAT} {} {} {:016x}\n",
+                inline.len(),
+                taps.len(),
+                fnv1a(taps)
+            )
+            .as_bytes(),
+            inline.as_bytes(),
+            taps,
+        ]
+        .concat();
+        assert_eq!(Bank::parse(&old, &path).unwrap(), bank);
     }
 
     #[test]

@@ -136,8 +136,10 @@ pub struct Spectra {
     /// The conditions, `[conicity, Kalker scale]`, in the order of `values`.
     pub conditions: Vec<[f64; 2]>,
     /// Per condition, per bin from `first_bin`, [`PACKED`] numbers: the speed-quotient channels'
-    /// cross-spectral densities. Written as `f32` (7 digits: the likelihood's own noise is far
-    /// larger), as base64 in the bank's TOML.
+    /// cross-spectral densities, as `f32` (7 digits: the likelihood's own noise is far larger).
+    /// A bank keeps them in its data block ([`super::bank`]): its TOML header holds an empty
+    /// string here (a bank written on 2026-11-28 before that, base64, is read too); the FMU's
+    /// state, their bytes.
     #[serde(with = "packed_f32")]
     pub values: Vec<f32>,
 }
@@ -146,6 +148,19 @@ impl Spectra {
     /// Bins per condition.
     pub fn bins(&self) -> usize {
         self.values.len() / (PACKED * self.conditions.len()).max(1)
+    }
+
+    /// How many values a bank on a grid of `ds` metres stores ([`stored_bins`]); `None` if
+    /// that does not fit a `usize` (a damaged header).
+    pub fn stored_values(&self, ds: f64) -> Option<usize> {
+        if !(ds.is_finite() && ds > 0.0) {
+            return None;
+        }
+        let [lo, hi] = stored_bins(ds);
+        (hi + 1)
+            .checked_sub(lo)?
+            .checked_mul(PACKED)?
+            .checked_mul(self.conditions.len())
     }
 
     /// Whether the layout is whole and every number usable; `Err` names what is not.
@@ -824,20 +839,27 @@ fn expect(s: &Spectra, cond: usize, kernel: &[Vec<(i64, f64)>]) -> Option<Vec<[f
         .collect()
 }
 
-/// `f32` values as their little-endian bytes, base64 in a human-readable format (the bank's
-/// TOML), plain bytes otherwise (the FMU state's postcard).
+/// Base64 of `bytes`, as banks written on 2026-11-28 before the data block held the spectra
+/// had them: for the tests that read that layout.
+#[cfg(test)]
+pub(crate) fn base64_for_tests(bytes: &[u8]) -> String {
+    packed_f32::encode(bytes)
+}
+
+/// `f32` values as their little-endian bytes in a binary format (the FMU state's postcard); in a
+/// human-readable one (the bank's TOML header) an empty string, the values being in the bank's
+/// data block, and read back from base64 where a string holds some.
 mod packed_f32 {
     use serde::{Deserialize, Deserializer, Serializer, de::Error};
 
     const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
     pub fn serialize<S: Serializer>(v: &[f32], s: S) -> Result<S::Ok, S::Error> {
-        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
         if s.is_human_readable() {
-            s.serialize_str(&encode(&bytes))
-        } else {
-            s.serialize_bytes(&bytes)
+            return s.serialize_str("");
         }
+        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+        s.serialize_bytes(&bytes)
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::Error> {
@@ -872,6 +894,7 @@ mod packed_f32 {
         d.deserialize_byte_buf(V)
     }
 
+    #[cfg(test)]
     pub fn encode(bytes: &[u8]) -> String {
         let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
         for chunk in bytes.chunks(3) {
