@@ -48,6 +48,10 @@
 //! give: banks before 2026-11-27 read D1's five), blended at the conicity. The `novelty` checks
 //! all of them against a model of what the training runs showed ([`ConicityModel`]).
 //!
+//! From 30 m into a run the runtime averages this linear model's `ln(conicity)` with the
+//! maximum of Whittle's likelihood of the sensors' cross-spectra ([`super::spectral`], where
+//! the bank holds model spectra: both shipped banks), which reads it about twice as well.
+//!
 //! A memory not yet full has its own conicity models ([`YoungModel`], fitted on memories of 5 to
 //! 150 m started along the training runs, each half its own least squares and half the full
 //! memory's model), interpolated by the track the memory holds: a run's first 150 m read the
