@@ -42,8 +42,9 @@
 //! `E` between the bank's conditions is interpolated linearly in `ln c` (between the trained
 //! conicities at one Kalker scale), in `K` and in speed. The likelihood is evaluated at every
 //! trained condition; around the best, a golden-section search in `ln c` between that
-//! condition's neighbouring conicities, at its Kalker scale, then at the Kalker scales halfway
-//! to its neighbours, the better kept. About 50 evaluations of 62 bins every 10 m.
+//! condition's neighbouring conicities at its Kalker scale, and again at a Kalker scale halfway
+//! to a neighbour's where that fits better at the conicity found: some 40-50 evaluations of
+//! 62 bins per estimate.
 //!
 //! # Running
 //! The cells enter a ring of [`WINDOW`] cells. For the full window a sliding DFT keeps `X_k`
