@@ -484,9 +484,8 @@ impl Header {
             .filter_map(|s| s.spectra.as_ref())
     }
 
-    /// Fills the model spectra whose header holds no values from the data block's start (where
-    /// [`Self::to_bytes`] writes them); the bytes they took. Spectra whose header holds values
-    /// (base64, as written on 2026-11-28 before the data block held them) keep them.
+    /// Fills the model spectra from the data block's start (where [`Self::to_bytes`] writes
+    /// them); the bytes they took.
     fn read_spectra(&mut self, data: &[u8]) -> Result<usize, BankProblem> {
         let grid = self.grid;
         let mut at = 0usize;
@@ -495,7 +494,6 @@ impl Header {
             .iter_mut()
             .flat_map(|c| &mut c.speeds)
             .filter_map(|s| s.spectra.as_mut())
-            .filter(|s| s.values.is_empty())
         {
             let n = s.stored_values(grid).and_then(|n| n.checked_mul(4));
             let Some(bytes) = n.and_then(|n| data.get(at..at.checked_add(n)?)) else {
@@ -841,7 +839,7 @@ pub(crate) mod tests {
     }
 
     #[test]
-    fn model_spectra_are_read_from_the_data_block_or_from_base64_in_the_header() {
+    fn model_spectra_are_read_from_the_data_block_and_nowhere_else() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/learned.taps");
         let bank = Bank::load(&path).unwrap();
         let spectra: Vec<&Vec<f32>> = bank.spectra().map(|s| &s.values).collect();
@@ -870,28 +868,26 @@ pub(crate) mod tests {
         .concat();
         let e = Bank::parse(&cut, &path).unwrap_err().to_string();
         assert!(e.contains("need") && e.contains("bytes"), "{e}");
-        // The layout written before the data block held them: base64 in the header.
-        let mut inline = header.to_string();
-        for v in &spectra {
-            let raw: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-            let coded = super::super::spectral::base64_for_tests(&raw);
-            inline = inline.replacen("values = \"\"", &format!("values = \"{coded}\""), 1);
-        }
-        assert!(!inline.contains("values = \"\""));
-        let taps = &data[held..];
-        let old = [
-            format!(
-                "{MAGIC} {FORMAT} {} {} {:016x}\n",
-                inline.len(),
-                taps.len(),
-                fnv1a(taps)
-            )
-            .as_bytes(),
-            inline.as_bytes(),
-            taps,
-        ]
-        .concat();
-        assert_eq!(Bank::parse(&old, &path).unwrap(), bank);
+        // Values in the header instead are refused.
+        let inline = header.replacen("values = \"\"", "values = \"AACAPw==\"", 1);
+        let e = Bank::parse(
+            &[
+                format!(
+                    "{MAGIC} {FORMAT} {} {} {:016x}\n",
+                    inline.len(),
+                    data.len(),
+                    fnv1a(data)
+                )
+                .as_bytes(),
+                inline.as_bytes(),
+                data,
+            ]
+            .concat(),
+            &path,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("data block"), "{e}");
     }
 
     #[test]

@@ -737,11 +737,12 @@ fn features_of(m: &[[f64; 3]; 3]) -> Option<[f64; FEATURES]> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// Uniform noise in [-0.5, 0.5) from a 64-bit linear congruential generator.
-    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+    /// Uniform noise in [-0.5, 0.5) from a 64-bit linear congruential generator (the learned
+    /// filter's tests' repeatable noise).
+    pub(crate) fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
         move || {
             seed = seed
                 .wrapping_mul(6364136223846793005)

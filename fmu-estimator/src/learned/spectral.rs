@@ -139,8 +139,7 @@ pub struct Spectra {
     /// Per condition, per bin from `first_bin`, [`PACKED`] numbers: the speed-quotient channels'
     /// cross-spectral densities, as `f32` (7 digits: the likelihood's own noise is far larger).
     /// A bank keeps them in its data block ([`super::bank`]): its TOML header holds an empty
-    /// string here (a bank written on 2026-11-28 before that, base64, is read too); the FMU's
-    /// state, their bytes.
+    /// string here; the FMU's state, their bytes.
     #[serde(with = "packed_f32")]
     pub values: Vec<f32>,
 }
@@ -242,17 +241,22 @@ fn mul(a: C, b: C) -> C {
     [a[0] * b[0] - a[1] * b[1], a[0] * b[1] + a[1] * b[0]]
 }
 
+/// `e^(-2 pi i m / n)` for `m` in `0..n`: a DFT of length `n` reads bin `k` at `(k m) % n`.
+fn twiddles(n: usize) -> Vec<C> {
+    (0..n)
+        .map(|m| {
+            let (sin, cos) = (-2.0 * std::f64::consts::PI * m as f64 / n as f64).sin_cos();
+            [cos, sin]
+        })
+        .collect()
+}
+
 /// The Hann-windowed DFT of the three channels `x[m]` (`m` = 0 the oldest; their mean taken
 /// out) at bins `k` of `bins`: `X_k` per channel.
 fn hann_dft(x: &[[f64; 3]], bins: [usize; 2]) -> Vec<[C; 3]> {
     let n = x.len();
     let mean: [f64; 3] = std::array::from_fn(|c| x.iter().map(|v| v[c]).sum::<f64>() / n as f64);
-    let table: Vec<C> = (0..n)
-        .map(|m| {
-            let a = -2.0 * std::f64::consts::PI * m as f64 / n as f64;
-            [a.cos(), a.sin()]
-        })
-        .collect();
+    let table = twiddles(n);
     let w: Vec<f64> = (0..n).map(|m| 0.5 - 0.5 * table[m][0]).collect();
     (bins[0]..=bins[1])
         .map(|k| {
@@ -409,6 +413,8 @@ impl Lattice {
 /// The running likelihood: the ring of cells, the sliding DFT, the estimate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Spectral {
+    /// The grid step \[m\].
+    ds: f64,
     /// The last [`WINDOW`] cells (speed quotients), oldest at `head`.
     ring: Vec<[f64; 3]>,
     head: usize,
@@ -443,6 +449,7 @@ impl Spectral {
     pub fn new(ds: f64) -> Spectral {
         let [lo, hi] = band_bins(WINDOW, ds);
         Spectral {
+            ds,
             ring: vec![[0.0; 3]; WINDOW],
             head: 0,
             filled: 0,
@@ -459,7 +466,7 @@ impl Spectral {
     /// One closed cell of the channels ([`super::grid::CHANNELS`] order) at `speed`; `true`
     /// when an estimate is due ([`Self::update`]): every [`EVERY`] cells from the first
     /// window on. A cell that is not finite is left out.
-    pub fn push(&mut self, cell: &[f64; 5], speed: f64, ds: f64) -> bool {
+    pub fn push(&mut self, cell: &[f64; 5], speed: f64) -> bool {
         let v = speed.max(super::contact::MIN_SPEED);
         let x: [f64; 3] = std::array::from_fn(|i| {
             cell[super::contact::CHANNELS[i]] / v.powi(CONTACT_SPEED_POWER[i])
@@ -473,11 +480,11 @@ impl Spectral {
         self.filled = (self.filled + 1).min(WINDOW);
         self.since_exact += 1;
         if self.since_exact >= WINDOW {
-            self.exact(ds);
+            self.exact();
         } else {
             // The twiddles e^(2 pi i k / N) by recurrence from the first bin's: two sines per
             // cell instead of one per bin (their rounding, 1e-14, is reset by `exact`).
-            let lo = band_bins(WINDOW, ds)[0] - 1;
+            let lo = band_bins(WINDOW, self.ds)[0] - 1;
             let angle = |k: usize| {
                 let (sin, cos) = (2.0 * std::f64::consts::PI * k as f64 / WINDOW as f64).sin_cos();
                 [cos, sin]
@@ -501,14 +508,9 @@ impl Spectral {
 
     /// A new estimate at `speed` with the `models` (per bank speed, ascending, with their
     /// speeds): `ln c` and the window's length in cells; `None` if the models give none.
-    pub fn update(
-        &mut self,
-        speed: f64,
-        ds: f64,
-        models: &[(f64, &Spectra)],
-    ) -> Option<(f64, usize)> {
+    pub fn update(&mut self, speed: f64, models: &[(f64, &Spectra)]) -> Option<(f64, usize)> {
         self.since_estimate = 0;
-        self.estimate(speed, ds, models)
+        self.estimate(speed, models)
     }
 
     /// Moves the output to `target` over the next [`EVERY`] cells, from where it is, or from
@@ -520,15 +522,10 @@ impl Spectral {
     }
 
     /// The ring's DFT at the sliding bins, from its cells.
-    fn exact(&mut self, ds: f64) {
+    fn exact(&mut self) {
         self.since_exact = 0;
-        let lo = band_bins(WINDOW, ds)[0] - 1;
-        let table: Vec<C> = (0..WINDOW)
-            .map(|m| {
-                let (sin, cos) = (-2.0 * std::f64::consts::PI * m as f64 / WINDOW as f64).sin_cos();
-                [cos, sin]
-            })
-            .collect();
+        let lo = band_bins(WINDOW, self.ds)[0] - 1;
+        let table = twiddles(WINDOW);
         for (j, s) in self.sliding.iter_mut().enumerate() {
             let k = lo + j;
             *s = [[0.0; 2]; 3];
@@ -544,8 +541,8 @@ impl Spectral {
     }
 
     /// The window's `y = sqrt(s) conj(X_k)` at its band's bins.
-    fn periodogram(&self, n: usize, ds: f64) -> Vec<[C; 3]> {
-        let root = scale(n, ds).sqrt();
+    fn periodogram(&self, n: usize) -> Vec<[C; 3]> {
+        let root = scale(n, self.ds).sqrt();
         let conj = |x: [C; 3]| x.map(|c| [root * c[0], -root * c[1]]);
         if n == WINDOW {
             self.sliding
@@ -563,7 +560,7 @@ impl Spectral {
             let cells: Vec<[f64; 3]> = (WINDOW - n..WINDOW)
                 .map(|m| self.ring[(self.head + m) % WINDOW])
                 .collect();
-            hann_dft(&cells, band_bins(n, ds))
+            hann_dft(&cells, band_bins(n, self.ds))
                 .into_iter()
                 .map(conj)
                 .collect()
@@ -572,24 +569,19 @@ impl Spectral {
 
     /// The likelihood's `ln c` from the longest window the ring holds; `None` if the models
     /// give none (a flat record, a model not positive definite).
-    fn estimate(
-        &mut self,
-        speed: f64,
-        ds: f64,
-        models: &[(f64, &Spectra)],
-    ) -> Option<(f64, usize)> {
+    fn estimate(&mut self, speed: f64, models: &[(f64, &Spectra)]) -> Option<(f64, usize)> {
         let n = *LENGTHS.iter().rev().find(|&&n| n <= self.filled)?;
-        let y = self.periodogram(n, ds);
+        let y = self.periodogram(n);
         let lattice = match &self.cache {
             Some((v, m, l)) if *v == speed && *m == n => l.clone(),
             _ => {
-                let l = std::sync::Arc::new(lattice(models, speed, n, ds)?);
+                let l = std::sync::Arc::new(lattice(models, speed, n, self.ds)?);
                 self.cache = Some((speed, n, l.clone()));
                 l
             }
         };
-        let length = n as f64 * ds;
-        let [lo, _] = band_bins(n, ds);
+        let length = n as f64 * self.ds;
+        let [lo, _] = band_bins(n, self.ds);
         let octaves: Vec<usize> = (0..y.len()).map(|i| octave(lo + i, length)).collect();
         let mut scratch = vec![[0.0; PACKED]; y.len()];
         let mut kalker_pair = vec![[0.0; PACKED]; y.len()];
@@ -840,20 +832,11 @@ fn expect(s: &Spectra, cond: usize, kernel: &[Vec<(i64, f64)>]) -> Option<Vec<[f
         .collect()
 }
 
-/// Base64 of `bytes`, as banks written on 2026-11-28 before the data block held the spectra
-/// had them: for the tests that read that layout.
-#[cfg(test)]
-pub(crate) fn base64_for_tests(bytes: &[u8]) -> String {
-    packed_f32::encode(bytes)
-}
-
 /// `f32` values as their little-endian bytes in a binary format (the FMU state's postcard); in a
 /// human-readable one (the bank's TOML header) an empty string, the values being in the bank's
-/// data block, and read back from base64 where a string holds some.
+/// data block ([`super::bank`] reads them into place).
 mod packed_f32 {
     use serde::{Deserialize, Deserializer, Serializer, de::Error};
-
-    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
     pub fn serialize<S: Serializer>(v: &[f32], s: S) -> Result<S::Ok, S::Error> {
         if s.is_human_readable() {
@@ -864,11 +847,15 @@ mod packed_f32 {
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f32>, D::Error> {
-        let bytes = if d.is_human_readable() {
-            decode(&String::deserialize(d)?).ok_or_else(|| D::Error::custom("not base64"))?
-        } else {
-            serde_bytes_vec(d)?
-        };
+        if d.is_human_readable() {
+            return match String::deserialize(d)?.as_str() {
+                "" => Ok(vec![]),
+                _ => Err(D::Error::custom(
+                    "the model spectra's values belong in the bank's data block, not its header",
+                )),
+            };
+        }
+        let bytes = serde_bytes_vec(d)?;
         if !bytes.len().is_multiple_of(4) {
             return Err(D::Error::custom("not whole f32 values"));
         }
@@ -894,67 +881,12 @@ mod packed_f32 {
         }
         d.deserialize_byte_buf(V)
     }
-
-    #[cfg(test)]
-    pub fn encode(bytes: &[u8]) -> String {
-        let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-        for chunk in bytes.chunks(3) {
-            let b = [
-                chunk[0],
-                *chunk.get(1).unwrap_or(&0),
-                *chunk.get(2).unwrap_or(&0),
-            ];
-            let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-            for i in 0..4 {
-                if i <= chunk.len() {
-                    out.push(ALPHABET[(n >> (18 - 6 * i) & 63) as usize] as char);
-                } else {
-                    out.push('=');
-                }
-            }
-        }
-        out
-    }
-
-    pub fn decode(s: &str) -> Option<Vec<u8>> {
-        let s = s.as_bytes();
-        if !s.len().is_multiple_of(4) {
-            return None;
-        }
-        // Each character's value by table: a bank holds a million of them, read at every
-        // initialization.
-        let mut value = [u8::MAX; 256];
-        for (i, c) in ALPHABET.iter().enumerate() {
-            value[*c as usize] = i as u8;
-        }
-        let mut out = Vec::with_capacity(s.len() / 4 * 3);
-        for chunk in s.chunks(4) {
-            let pad = chunk.iter().rev().take_while(|c| **c == b'=').count();
-            if pad > 2 {
-                return None;
-            }
-            let mut n = 0u32;
-            for (i, c) in chunk.iter().enumerate() {
-                let v = if i >= 4 - pad {
-                    0
-                } else {
-                    match value[*c as usize] {
-                        u8::MAX => return None,
-                        v => v as u32,
-                    }
-                };
-                n = n << 6 | v;
-            }
-            let b = [(n >> 16) as u8, (n >> 8) as u8, n as u8];
-            out.extend_from_slice(&b[..3 - pad]);
-        }
-        Some(out)
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::learned::contact::tests::uniform;
 
     const DS: f64 = 0.2;
 
@@ -969,35 +901,6 @@ mod tests {
         assert!((share(WINDOW, 2.5 * sigma) - 0.5 * SHARE[1]).abs() < 1e-12);
         assert_eq!(share(WINDOW, 3.0 * sigma), 0.0);
         assert_eq!(share(WINDOW, 10.0), 0.0);
-    }
-
-    #[test]
-    fn base64_round_trips_and_matches_the_standard() {
-        // RFC 4648's test vectors.
-        for (plain, coded) in [
-            ("", ""),
-            ("f", "Zg=="),
-            ("fo", "Zm8="),
-            ("foo", "Zm9v"),
-            ("foob", "Zm9vYg=="),
-            ("fooba", "Zm9vYmE="),
-            ("foobar", "Zm9vYmFy"),
-        ] {
-            assert_eq!(packed_f32::encode(plain.as_bytes()), coded);
-            assert_eq!(packed_f32::decode(coded).unwrap(), plain.as_bytes());
-        }
-        assert!(packed_f32::decode("Zm9").is_none());
-        assert!(packed_f32::decode("Zm9$").is_none());
-    }
-
-    /// A deterministic uniform generator (xorshift), for noise the tests can repeat.
-    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
     }
 
     #[test]
@@ -1095,10 +998,10 @@ mod tests {
         let mut s = Spectral::new(DS);
         let mut u = uniform(3);
         for _ in 0..1234 {
-            s.push(&[u(), u(), u(), 0.0, 0.0], 1.0, DS);
+            s.push(&[u(), u(), u(), 0.0, 0.0], 1.0);
         }
         let mut exact = s.clone();
-        exact.exact(DS);
+        exact.exact();
         for (a, b) in s.sliding.iter().zip(&exact.sliding) {
             for c in 0..3 {
                 assert!((a[c][0] - b[c][0]).abs() < 1e-9 && (a[c][1] - b[c][1]).abs() < 1e-9);
@@ -1109,7 +1012,7 @@ mod tests {
         let direct: Vec<[f64; 3]> = (0..WINDOW).map(|m| s.ring[(s.head + m) % WINDOW]).collect();
         let want = hann_dft(&direct, band_bins(WINDOW, DS));
         let root = scale(WINDOW, DS).sqrt();
-        for (y, x) in s.periodogram(WINDOW, DS).iter().zip(&want) {
+        for (y, x) in s.periodogram(WINDOW).iter().zip(&want) {
             for c in 0..3 {
                 assert!((y[c][0] - root * x[c][0]).abs() < 1e-9);
                 assert!((y[c][1] + root * x[c][1]).abs() < 1e-9);
@@ -1171,11 +1074,8 @@ mod tests {
                 let mut s = Spectral::new(DS);
                 for x in toy(truth, cells, 100 + seed) {
                     // The quotient by the speed (20 m/s, powers 2, 1, 2) undone.
-                    if s.push(
-                        &[x[0] * 400.0, x[1] * 20.0, x[2] * 400.0, 0.0, 0.0],
-                        20.0,
-                        DS,
-                    ) && let Some((t, _)) = s.update(20.0, DS, &models)
+                    if s.push(&[x[0] * 400.0, x[1] * 20.0, x[2] * 400.0, 0.0, 0.0], 20.0)
+                        && let Some((t, _)) = s.update(20.0, &models)
                     {
                         s.aim(t, 0.0);
                     }

@@ -136,8 +136,6 @@ pub struct Learned {
     /// The conicity by Whittle's likelihood, in a bank whose contact model has spectra and
     /// when no conicity is told ([`super::spectral`]).
     spectral: Option<Spectral>,
-    /// The grid step \[m\].
-    ds: f64,
 }
 
 impl Learned {
@@ -153,7 +151,6 @@ impl Learned {
             .map(|_| Spectral::new(bank.grid));
         Ok(Learned {
             spectral,
-            ds: bank.grid,
             moments: selection.contact.as_ref().map(|c| c.moments(bank.grid)),
             contact_scale: 0.0,
             told_conicity,
@@ -281,7 +278,7 @@ impl Learned {
                 m.push(cell, speed);
             }
             if let Some(s) = self.spectral.as_mut() {
-                due |= s.push(cell, speed, self.ds);
+                due |= s.push(cell, speed);
             }
         }
         if due {
@@ -397,7 +394,7 @@ impl Learned {
                 .conicity_range
                 .map_or(0.0, |[lo, hi]| 0.5 * (lo.ln() + hi.ln()))
         };
-        let Some((x, n)) = s.update(speed, self.ds, &models) else {
+        let Some((x, n)) = s.update(speed, &models) else {
             return;
         };
         let features = model
