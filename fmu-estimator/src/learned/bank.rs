@@ -1,12 +1,12 @@
 //! The tap bank file (`resources/learned.taps`): the learned filter's taps for every speed,
 //! sensor set and lag, with where they came from and what they require of the runtime.
 //!
-//! # Format (version 5; versions 3 and 4 are read too)
+//! # Format (version 6; versions 3 to 5 are read too)
 //! | part | content |
 //! |---|---|
 //! | first line | `learned-taps <version> <header bytes> <data bytes> <FNV-1a 64 of the data, hex>` |
 //! | header | TOML, UTF-8: [`Header`] (grid, high-pass, provenance, the contract, the contact model, and every entry's windows without their taps) |
-//! | data | the contact model's model spectra if it has them (below), then the taps, entry after entry, window after window in header order, as the header's `encoding` says (below) |
+//! | data | the contact model's model spectra if it has them (below), then its conicity models' precision matrices (format 6, below), then the taps, entry after entry, window after window in header order, as the header's `encoding` says (below) |
 //!
 //! Version 4 adds the conicity conditions: each entry's `conicity`, the contact model's
 //! `conicity_range`, `extra_bands` and per-speed conicity models ([`super::contact`]). A
@@ -20,6 +20,12 @@
 //! their layout in the header, their values as little-endian `f32` at the data block's start,
 //! speed after speed, before the taps (a bank without them estimates the conicity from the
 //! contact features alone).
+//! Version 6 moves each conicity model's `precision` (the novelty's inverse covariance of the
+//! features, [`super::contact::ConicityModel`]) out of the header: its upper triangle, row
+//! after row, as little-endian `f64`, speed after speed, after the spectra (the header holds
+//! `precision = []`). The matrix is symmetric, so the triangle is all of it, and binary `f64`
+//! keeps every bit: in the header it took 20 characters a number and a third of the header
+//! (268 kB of the bank over conicities' 824 kB), in the data block 5 kB a speed.
 //!
 //! A window of `past` points behind and `future` ahead over `C` channels holds
 //! `C (past + future + 1)` taps, channel after channel (the entry's `channels` order); within a channel, tap `j`
@@ -47,7 +53,7 @@
 //! with its own at initialization. Formats 1 and 2 (before 2026-11-25) had no contract and are
 //! refused: without one, a bank fitted by another build or with another Kalman channel would
 //! run silently wrong, which is what the contract is for; `alignment-studies taps` makes a
-//! format 5 bank.
+//! format 6 bank.
 
 use super::error::{BankError, BankProblem, EntryProblem};
 use serde::{Deserialize, Serialize};
@@ -61,9 +67,14 @@ pub const MAGIC: &str = "learned-taps";
 /// format 3 would take such a bank's entries of one speed for duplicates. Format 5 added the
 /// Kalman channel's shelf: a reader of format 4 would leave it out and feed the taps another
 /// channel than they were fitted on.
-pub const FORMAT: u32 = 5;
-/// The formats this reader takes (3: no conicity conditions; 3 and 4: no shelf).
-pub const READS: [u32; 3] = [3, 4, 5];
+/// Format 6 moved the conicity models' precision matrices into the data block: a reader of
+/// format 5 would find them empty.
+pub const FORMAT: u32 = 6;
+/// The formats this reader takes (3: no conicity conditions; 3 and 4: no shelf; 3 to 5: the
+/// precision matrices in the header).
+pub const READS: [u32; 4] = [3, 4, 5, 6];
+/// The first format that keeps the precision matrices in the data block.
+const PRECISION_IN_DATA: u32 = 6;
 
 /// Where the taps came from: enough to regenerate them and to judge where they hold.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -367,11 +378,26 @@ fn is_f32(e: &Encoding) -> bool {
 impl Header {
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let header = toml::to_string(self).expect("plain numbers, strings and arrays");
         let mut data = Vec::new();
         for s in self.spectra() {
             data.extend(s.values.iter().flat_map(|v| v.to_le_bytes()));
         }
+        let mut head = std::borrow::Cow::Borrowed(self);
+        if self.format >= PRECISION_IN_DATA {
+            for m in head.to_mut().conicity_models_mut() {
+                let p = std::mem::take(&mut m.precision);
+                let n = p.len().isqrt();
+                // The upper triangle, row after row; a reader mirrors it.
+                for i in 0..n {
+                    data.extend(
+                        p[i * n + i..(i + 1) * n]
+                            .iter()
+                            .flat_map(|v| v.to_le_bytes()),
+                    );
+                }
+            }
+        }
+        let header = toml::to_string(&*head).expect("plain numbers, strings and arrays");
         for e in &self.entries {
             for w in &e.windows {
                 self.encoding
@@ -441,7 +467,12 @@ impl Header {
                 header: bank.format,
             }));
         }
-        let spectra = bank.read_spectra(data).map_err(bad)?;
+        let mut spectra = bank.read_spectra(data).map_err(bad)?;
+        if bank.format >= PRECISION_IN_DATA {
+            spectra += bank
+                .read_precisions(&data[spectra..], spectra)
+                .map_err(bad)?;
+        }
         let data = &data[spectra..];
         bank.check().map_err(bad)?;
         let encoding = bank.encoding;
@@ -506,6 +537,49 @@ impl Header {
                 .chunks_exact(4)
                 .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
                 .collect();
+            at += bytes.len();
+        }
+        Ok(at)
+    }
+
+    /// The contact model's conicity models, speed after speed: the data block's order.
+    fn conicity_models_mut(&mut self) -> impl Iterator<Item = &mut super::contact::ConicityModel> {
+        self.contact
+            .iter_mut()
+            .flat_map(|c| &mut c.speeds)
+            .filter_map(|s| s.conicity.as_mut())
+    }
+
+    /// Fills the conicity models' precision matrices from `data` (the data block after its
+    /// first `before` bytes, the spectra: [`Self::to_bytes`] writes them there); the bytes they
+    /// took. A matrix in the header as well is refused: which one holds is not known.
+    fn read_precisions(&mut self, data: &[u8], before: usize) -> Result<usize, BankProblem> {
+        let mut at = 0usize;
+        for m in self.conicity_models_mut() {
+            if !m.precision.is_empty() {
+                return Err(super::error::ContactProblem::PrecisionInHeader.into());
+            }
+            // The features: one coefficient each, then the constant.
+            let n = m.coefficients.len().saturating_sub(1);
+            let bytes = (n * (n + 1) / 2).checked_mul(8);
+            let Some(bytes) = bytes.and_then(|b| data.get(at..at.checked_add(b)?)) else {
+                return Err(BankProblem::TapCount {
+                    needed: bytes
+                        .map_or(usize::MAX, |b| before.saturating_add(at).saturating_add(b)),
+                    held: before.saturating_add(data.len()),
+                });
+            };
+            let mut triangle = bytes
+                .chunks_exact(8)
+                .map(|b| f64::from_le_bytes(b.try_into().expect("chunks of 8")));
+            m.precision = vec![0.0; n * n];
+            for i in 0..n {
+                for j in i..n {
+                    let v = triangle.next().expect("n (n + 1) / 2 values");
+                    m.precision[i * n + j] = v;
+                    m.precision[j * n + i] = v;
+                }
+            }
             at += bytes.len();
         }
         Ok(at)
@@ -841,7 +915,8 @@ pub(crate) mod tests {
     #[test]
     fn model_spectra_are_read_from_the_data_block_and_nowhere_else() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/learned.taps");
-        let bank = Bank::load(&path).unwrap();
+        let mut bank = Bank::load(&path).unwrap();
+        bank.format = FORMAT;
         let spectra: Vec<&Vec<f32>> = bank.spectra().map(|s| &s.values).collect();
         assert_eq!(spectra.len(), 11);
         let bytes = bank.to_bytes();
@@ -888,6 +963,77 @@ pub(crate) mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("data block"), "{e}");
+    }
+
+    /// Format 6 keeps each conicity model's precision matrix as its upper triangle in the data
+    /// block, every bit of it; format 5 kept the whole matrix in the header, and is still read.
+    #[test]
+    fn precision_matrices_are_kept_whole_in_the_data_block_and_once() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/learned.taps");
+        let mut bank = Bank::load(&path).unwrap();
+        bank.format = FORMAT;
+        let models: Vec<_> = bank.conicity_models_mut().map(|m| m.clone()).collect();
+        assert_eq!(models.len(), 11);
+        let bytes = bank.to_bytes();
+        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
+        let hlen: usize = std::str::from_utf8(&bytes[..nl])
+            .unwrap()
+            .split(' ')
+            .nth(2)
+            .unwrap()
+            .parse()
+            .unwrap();
+        let header = std::str::from_utf8(&bytes[nl + 1..nl + 1 + hlen]).unwrap();
+        assert_eq!(header.matches("precision = []").count(), 11);
+        let mut read = Bank::parse(&bytes, &path).unwrap();
+        for (m, r) in models.iter().zip(read.conicity_models_mut()) {
+            let n = m.coefficients.len() - 1;
+            assert_eq!(r.precision.len(), n * n);
+            for i in 0..n {
+                for j in 0..n {
+                    // The upper triangle as written, mirrored below the diagonal.
+                    assert_eq!(r.precision[i * n + j], m.precision[i.min(j) * n + i.max(j)]);
+                }
+            }
+        }
+        // Written again, the same bytes.
+        assert_eq!(read.to_bytes(), bytes);
+        // Format 5 keeps the matrix in the header, and reads back the same.
+        let mut five = read.clone();
+        five.format = 5;
+        let old = five.to_bytes();
+        assert!(old.len() > bytes.len() + 11 * 8 * 35 * 36 / 2);
+        assert_eq!(Bank::parse(&old, &path).unwrap(), five);
+        // A format 6 header with a matrix in it is refused.
+        let nl5 = old.iter().position(|b| *b == b'\n').unwrap();
+        let first = std::str::from_utf8(&old[..nl5]).unwrap().replacen(
+            "learned-taps 5",
+            "learned-taps 6",
+            1,
+        );
+        let rest = std::str::from_utf8(&old[nl5..nl5 + 1 + 100])
+            .unwrap()
+            .replacen("format = 5", "format = 6", 1);
+        let edited = [first.as_bytes(), rest.as_bytes(), &old[nl5 + 1 + 100..]].concat();
+        let e = Bank::parse(&edited, &path).unwrap_err().to_string();
+        assert!(e.contains("precision in the header"), "{e}");
+        // Cut short: refused, naming the bytes.
+        let spectra: usize = read.spectra().map(|s| 4 * s.values.len()).sum();
+        let data = &bytes[nl + 1 + hlen..];
+        let cut = &data[..spectra + 100];
+        let short = [
+            format!(
+                "{MAGIC} {FORMAT} {hlen} {} {:016x}\n",
+                cut.len(),
+                fnv1a(cut)
+            )
+            .as_bytes(),
+            header.as_bytes(),
+            cut,
+        ]
+        .concat();
+        let e = Bank::parse(&short, &path).unwrap_err().to_string();
+        assert!(e.contains("need") && e.contains("bytes"), "{e}");
     }
 
     #[test]

@@ -239,6 +239,12 @@ pub enum ContactProblem {
         /// The model's speed \[m/s\].
         speed: f64,
     },
+    /// A conicity model's precision matrix is in the header of a bank whose format keeps it in
+    /// the data block (format 6 on).
+    #[error(
+        "a conicity model's precision in the header: from format 6 it belongs in the data block"
+    )]
+    PrecisionInHeader,
     /// A speed's model spectra ([`super::spectral::Spectra`]) are malformed, or present at some
     /// speeds only, or in a bank without conicities.
     #[error("contact model at {speed} m/s: spectra: {problem}")]
@@ -345,11 +351,11 @@ mod tests {
         };
         assert_eq!(
             format("7"),
-            "x.taps: tap bank format 7 (this estimator reads formats [3, 4, 5])"
+            "x.taps: tap bank format 7 (this estimator reads formats [3, 4, 5, 6])"
         );
         assert_eq!(
             format("2"),
-            "x.taps: tap bank format 2 (this estimator reads formats [3, 4, 5]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
+            "x.taps: tap bank format 2 (this estimator reads formats [3, 4, 5, 6]): it has no contract (the runtime constants and Kalman channel it was fitted with), so whether this estimator applies it as it was fitted cannot be checked; fit it again with `alignment-studies taps`"
         );
         let invalid = |problem: BankProblem| {
             BankError::Invalid {

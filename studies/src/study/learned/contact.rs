@@ -401,7 +401,14 @@ fn conicity_model(
             "at {speed} m/s the contact features' residuals are degenerate"
         ))
     })?;
-    let precision: Vec<f64> = (0..n * n).map(|i| precision[(i / n, i % n)]).collect();
+    // The upper triangle mirrored: the inverse is symmetric to rounding, and a bank keeps the
+    // triangle alone, so the level below is measured with the matrix the runtime reads.
+    let precision: Vec<f64> = (0..n * n)
+        .map(|i| {
+            let (r, c) = (i / n, i % n);
+            precision[(r.min(c), r.max(c))]
+        })
+        .collect();
     let model = ConicityModel {
         coefficients,
         rms_error,
