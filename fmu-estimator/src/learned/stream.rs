@@ -136,6 +136,9 @@ pub struct Learned {
     /// The conicity by Whittle's likelihood, in a bank whose contact model has spectra and
     /// when no conicity is told ([`super::spectral`]).
     spectral: Option<Spectral>,
+    /// The Kalman filter's estimates over the last `lag` metres: its share of the fixed-lag
+    /// output ([`super::fallback_share`]) is its estimate made at that output's position.
+    kalman_delay: Delay,
 }
 
 impl Learned {
@@ -167,6 +170,7 @@ impl Learned {
             causal: Track::default(),
             lagged: Track::default(),
             delay: Delay::new(selection.lag),
+            kalman_delay: Delay::new(selection.lag),
             in_range: false,
             selection: Arc::new(selection),
         })
@@ -332,6 +336,7 @@ impl Learned {
             std: kalman_std,
             distance: closed.distance,
         };
+        self.kalman_delay.push(kalman);
         if !self.in_range {
             self.causal.clear();
             self.lagged.clear();
@@ -450,6 +455,12 @@ impl Learned {
     /// none (start of the run, speed outside the taps' range).
     pub fn causal(&self, distance: f64) -> Option<(f64, f64)> {
         self.causal.at(distance)
+    }
+
+    /// The Kalman filter's estimate made at the fixed-lag output's position, `lag` metres
+    /// behind `distance`; `None` before the first closed cell and without a fixed-lag output.
+    pub fn kalman_lagged(&self, distance: f64) -> Option<(f64, f64)> {
+        self.kalman_delay.at(distance - self.lag())
     }
 
     /// The fixed-lag estimate for the position `lag` metres behind `distance` (the causal
