@@ -135,7 +135,9 @@ pub enum BankProblem {
     },
     /// The data block holds another number of bytes than the header's windows need in its
     /// encoding.
-    #[error("the header's windows (and model spectra) need {needed} bytes, the data holds {held}")]
+    #[error(
+        "the header's windows (and the contact model's spectra and precision matrices) need {needed} bytes, the data holds {held}"
+    )]
     TapCount {
         /// Bytes the windows need.
         needed: usize,
