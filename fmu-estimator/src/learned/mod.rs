@@ -162,24 +162,27 @@ pub fn fallback_share(novelty: f64) -> f64 {
     share * ((novelty - from) / (full - from)).clamp(0.0, 1.0)
 }
 
-/// `learned` and `kalman` (estimate, standard deviation) averaged with the Kalman filter's
-/// share `w`. The standard deviations are averaged alike: the deviation of the average if
-/// the two errors were fully correlated, an upper bound (they are not).
-fn mix(learned: (f64, f64), kalman: (f64, f64), w: f64) -> (f64, f64) {
+/// The learned estimate `learned` averaged with the Kalman filter's `kalman` at its share `w`.
+///
+/// The standard deviation stays the learned one (grown outside the training): the Kalman
+/// filter's own `sqrt(P[7,7])` is its model's variance of the alignment state, not its error,
+/// and would swamp it (on the Manchester vehicle, held-out seeds 1-5, rms over each record past
+/// 100 m: the paper's filter's deviation 59 mm against its error of 3.3 mm; the average's error
+/// 3.1 mm, the learned deviation grown by the novelty 24 mm). The average's error is at most the
+/// larger of the two errors.
+fn mix(learned: f64, kalman: f64, w: f64) -> f64 {
     // No share: the learned estimate itself, bit for bit.
     if w == 0.0 {
         return learned;
     }
-    (
-        learned.0 + w * (kalman.0 - learned.0),
-        learned.1 + w * (kalman.1 - learned.1),
-    )
+    learned + w * (kalman - learned)
 }
 
 impl Learned {
     /// The outputs at `distance`: the learned estimates where they exist, averaged with the
     /// Kalman filter's (`kalman`: its alignment and standard deviation) by the novelty
-    /// ([`FALLBACK`]), else the Kalman filter's alone, flagged by `active`.
+    /// ([`FALLBACK`]; the standard deviations stay the learned ones, why in `mix`), else the
+    /// Kalman filter's alone, flagged by `active`.
     pub fn estimate(&self, distance: f64, kalman: (f64, f64)) -> Estimate {
         // Outside the training the validation rms errors understate the error: grown with the
         // Mahalanobis distance (the novelty's square root, above 1), or with the judged
@@ -187,20 +190,14 @@ impl Learned {
         let grow = self.novelty().max(1.0).sqrt().max(self.conicity_growth());
         let w = fallback_share(self.novelty());
         let (alignment, std, active) = match self.causal(distance) {
-            Some((a, s)) => {
-                let (a, s) = mix((a, s * grow), kalman, w);
-                (a, s, ACTIVE_LEARNED)
-            }
+            Some((a, s)) => (mix(a, kalman.0, w), s * grow, ACTIVE_LEARNED),
             None => (kalman.0, kalman.1, ACTIVE_PAPER),
         };
         let (lagged, lagged_std) = self
             .lagged(distance)
             .map(|(a, s)| {
-                mix(
-                    (a, s * grow),
-                    self.kalman_lagged(distance).unwrap_or(kalman),
-                    w,
-                )
+                let k = self.kalman_lagged(distance).unwrap_or(kalman).0;
+                (mix(a, k, w), s * grow)
             })
             .unwrap_or((alignment, std));
         Estimate {
@@ -225,8 +222,8 @@ mod tests {
         for (novelty, share) in [(0.0, 0.0), (0.5, 0.0), (0.75, 0.2), (1.0, 0.4), (9.0, 0.4)] {
             assert!((fallback_share(novelty) - share).abs() < 1e-15, "{novelty}");
         }
-        assert_eq!(mix((1.0, 2.0), (f64::NAN, 1.0), 0.0), (1.0, 2.0));
-        assert_eq!(mix((1.0, 2.0), (3.0, 1.0), 0.25), (1.5, 1.75));
+        assert_eq!(mix(1.0, f64::NAN, 0.0), 1.0);
+        assert_eq!(mix(1.0, 3.0, 0.25), 1.5);
     }
 
     #[test]
