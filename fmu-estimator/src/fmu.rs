@@ -496,11 +496,10 @@ pub fn learned_from_values(
         conicity: (conicity > 0.0).then_some(conicity),
         kalker: (kalker > 0.0).then_some(kalker),
     };
-    let mut learned = Learned::new(&bank, choice).map_err(|source| Error::TapFile {
+    let learned = Learned::new(&bank, choice).map_err(|source| Error::TapFile {
         tap_file: name.clone(),
         source,
     })?;
-    learned.set_kalman_conicity(config.params.alpha);
     let (lo, hi) = learned.speed_range();
     log.info(&format!(
         "learned filter from {name}: {} sensors, {lo}-{hi} m/s, lag {} m",

@@ -188,7 +188,7 @@ impl Learned {
         // Mahalanobis distance (the novelty's square root, above 1), or with the judged
         // conicity's distance from the taps' (`CONICITY_ERROR_SCALE`), whichever says more.
         let grow = self.novelty().max(1.0).sqrt().max(self.conicity_growth());
-        let w = fallback_share(self.novelty()) * self.kalman_reach();
+        let w = fallback_share(self.novelty());
         let (alignment, std, active) = match self.causal(distance) {
             Some((a, s)) => (mix(a, kalman.0, w), s * grow, ACTIVE_LEARNED),
             None => (kalman.0, kalman.1, ACTIVE_PAPER),

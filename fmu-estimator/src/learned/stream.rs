@@ -89,20 +89,6 @@ pub const CONICITY_MEMORY: f64 = 500.0;
 /// Kalker 50 % and at 0.3), what `alignment_std` is grown by.
 pub const CONICITY_ERROR_SCALE: f64 = 0.1;
 
-/// How far the wheels' conicity may lie from the Kalman filter's `alpha`, beyond the selected
-/// taps' own distance from it, as ratios: the full share ([`super::FALLBACK`]) up to the first,
-/// none from the second. Why: the fallback averages in a filter whose model reads `alpha`, and
-/// its error grows with the wheels' distance from it (the ML95, validation seeds 102-104, 400 m,
-/// `alpha` 0.1: whole Jrel 0.39 at conicity 0.1, 0.45 at 0.15, 0.47 at 0.075, 0.77 at 0.3,
-/// 0.56-1.16 at 0.45-0.6), while the bank over conicities' taps follow the wheels to 0.4: at
-/// conicity 0.6 (12.5 m/s, beyond the bank) its novelty passes 1 and the average with a filter
-/// reading 0.1 cost it 0.24 -> 0.45 (10 km, seeds 1-2). The taps' distance is subtracted because
-/// taps fitted at 0.1 alone (the default) are as far off as the Kalman filter: there the share
-/// stays. The ratios: within 1.5 times the filter's error is within 1.2 times its nominal one,
-/// from 3 times about twice. The random ML95 variants the share was chosen on read 0.08-0.134
-/// (validation seeds 102-104): all inside the first ratio.
-pub const KALMAN_REACH: [f64; 2] = [1.5, 3.0];
-
 /// `V^TAP_SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
     let v15 = v * v.sqrt();
@@ -153,9 +139,6 @@ pub struct Learned {
     /// The Kalman filter's estimates over the last `lag` metres: its share of the fixed-lag
     /// output ([`super::fallback_share`]) is its estimate made at that output's position.
     kalman_delay: Delay,
-    /// The conicity the Kalman filter's model reads (its `alpha`), when the caller gives it:
-    /// how far the wheels lie from it limits the filter's share ([`Self::kalman_reach`]).
-    kalman_conicity: Option<f64>,
 }
 
 impl Learned {
@@ -188,7 +171,6 @@ impl Learned {
             lagged: Track::default(),
             delay: Delay::new(selection.lag),
             kalman_delay: Delay::new(selection.lag),
-            kalman_conicity: None,
             in_range: false,
             selection: Arc::new(selection),
         })
@@ -247,30 +229,6 @@ impl Learned {
     /// from theirs ([`CONICITY_ERROR_SCALE`]).
     pub fn conicity_growth(&self) -> f64 {
         (1.0 + (self.conicity_distance() / CONICITY_ERROR_SCALE).powi(2)).sqrt()
-    }
-
-    /// Sets the conicity the Kalman filter's model reads (`alpha`), which limits its share of
-    /// the outputs ([`Self::kalman_reach`]); without it the share is the novelty's alone.
-    pub fn set_kalman_conicity(&mut self, alpha: f64) {
-        self.kalman_conicity = (alpha > 0.0 && alpha.is_finite()).then_some(alpha);
-    }
-
-    /// How much of the novelty's share the Kalman filter may take ([`KALMAN_REACH`]): 1 while
-    /// the wheels' conicity (as the filter reads it now) lies no further from the Kalman
-    /// filter's `alpha` than the selected taps' conicities do, times the first ratio; 0 from
-    /// the second; linear in `ln(conicity)` between. 1 without a conicity model or an `alpha`.
-    pub fn kalman_reach(&self) -> f64 {
-        let (Some(alpha), true) = (self.kalman_conicity, self.conicity > 0.0) else {
-            return 1.0;
-        };
-        let x = self.conicity.ln();
-        let kalman = (x - alpha.ln()).abs();
-        let taps = self
-            .selection
-            .conicity_range()
-            .map_or(0.0, |[lo, hi]| (lo.ln() - x).max(x - hi.ln()).max(0.0));
-        let [near, far] = KALMAN_REACH.map(f64::ln);
-        1.0 - ((kalman - taps - near) / (far - near)).clamp(0.0, 1.0)
     }
 
     /// The conicities of the selected taps (empty without conicity conditions).

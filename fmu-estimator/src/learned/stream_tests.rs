@@ -329,25 +329,6 @@ fn taps_are_blended_in_the_logarithm_of_the_conicity_estimated_or_told() {
             "{} {got} {w}",
             e.alignment
         );
-        // The Kalman filter's reach: whole without its alpha, or near it; told 0.3 against the
-        // taps' 0.05-0.2 and alpha 0.1, the filter lies ln 3 off, the taps ln 1.5, the excess
-        // ln 2: 1 - ln(2 / 1.5) / ln(3 / 1.5); alpha 0.02 lies ln 5 from 0.1, beyond ln 3: none.
-        let mut k = l.clone();
-        assert_eq!(k.kalman_reach(), 1.0);
-        k.set_kalman_conicity(0.1);
-        let want = match told {
-            Some(0.3) => 1.0 - (2.0f64 / 1.5).ln() / 2f64.ln(),
-            _ => 1.0,
-        };
-        assert!(
-            (k.kalman_reach() - want).abs() < 1e-12,
-            "{}",
-            k.kalman_reach()
-        );
-        k.set_kalman_conicity(0.02);
-        if told == Some(0.1) {
-            assert_eq!(k.kalman_reach(), 0.0);
-        }
     }
     assert_eq!(
         three_sensors(&bank, 0.0).selected_conicities(),
