@@ -287,6 +287,15 @@ def per_draw(ta, vehicle, s: np.ndarray, f: np.ndarray, fs: float, nperseg: int,
           f"D3 {lo[2]:.3f}-{hi[2]:.3f} ({mean[2]:.3f}), whole ({mean[3]:.3f}) |")
 
 
+def check_runs(ap: argparse.ArgumentParser, a: argparse.Namespace) -> None:
+    """Before any run: training and held-out seeds disjoint, and training runs long enough for
+    two Welch segments after the run-in."""
+    if set(a.train_seeds) & set(a.seeds):
+        ap.error(f"training and held-out seeds overlap: {sorted(set(a.train_seeds) & set(a.seeds))}")
+    if a.duration < 2 * a.segment / SPEED + 20:
+        ap.error(f"--duration {a.duration} s holds fewer than two --segment {a.segment} m windows")
+
+
 def main() -> None:
     import track_alignment as ta
     from project import packaged_fmus, seed_list
@@ -299,12 +308,9 @@ def main() -> None:
     ap.add_argument("--memory", type=float, default=600.0, help="the D3 FIR's window [m]")
     ap.add_argument("--draws", type=int, default=3, help="noise draws per held-out seed in the per-record table")
     a = ap.parse_args()
-    if set(a.train_seeds) & set(a.seeds):
-        ap.error(f"training and held-out seeds overlap: {sorted(set(a.train_seeds) & set(a.seeds))}")
+    check_runs(ap, a)
     if a.draws < 1:
         ap.error(f"--draws {a.draws}: at least one noise draw")
-    if a.duration < 2 * a.segment / SPEED + 20:
-        ap.error(f"--duration {a.duration} s holds fewer than two --segment {a.segment} m windows")
     vehicle = packaged_fmus()["RailVehicle"]
     fs = 1.0 / (STEP * np.prod(DECIMATION))
     nperseg = int(round(a.segment / SPEED * fs))

@@ -23,8 +23,8 @@ import os
 import numpy as np
 
 from project import packaged_fmus, seed_list
-from wiener_bound import (BANDS, CHANNELS, DECIMATION, GRADES, SHAPE, SPEED, STEP, back_to_target, bound, decimate,
-                          noise_parameters, noisy_record, shape, spectra, wiener_fir, wiener_metrics)
+from wiener_bound import (BANDS, CHANNELS, DECIMATION, GRADES, SHAPE, SPEED, STEP, back_to_target, bound, check_runs,
+                          decimate, noise_parameters, noisy_record, shape, spectra, wiener_fir, wiener_metrics)
 
 SENSORS = (0, 1, 2)
 PAPER = GRADES["paper's sensors"]
@@ -52,10 +52,7 @@ def main() -> None:
     ap.add_argument("--duration", type=float, default=300.0, help="each training run [s]")
     ap.add_argument("--segment", type=float, default=1638.4, help="Welch segment [m]")
     a = ap.parse_args()
-    if set(a.train_seeds) & set(a.seeds):
-        ap.error(f"training and held-out seeds overlap: {sorted(set(a.train_seeds) & set(a.seeds))}")
-    if a.duration < 2 * a.segment / SPEED + 20:
-        ap.error(f"--duration {a.duration} s holds fewer than two --segment {a.segment} m windows")
+    check_runs(ap, a)
     vehicle = packaged_fmus()["RailVehicle"]
     fs = 1.0 / (STEP * np.prod(DECIMATION))
     nperseg = int(round(a.segment / SPEED * fs))
