@@ -405,17 +405,7 @@ impl Header {
             }
         }
         // The header's own format: a bank re-encoded from an older one keeps its format on both.
-        let mut out = format!(
-            "{MAGIC} {} {} {} {:016x}\n",
-            self.format,
-            header.len(),
-            data.len(),
-            fnv1a(&data)
-        )
-        .into_bytes();
-        out.extend_from_slice(header.as_bytes());
-        out.extend_from_slice(&data);
-        out
+        assemble(self.format, &header, &data)
     }
 
     /// Reads a tap bank, checking everything the runtime relies on; errors name `file`.
@@ -691,6 +681,21 @@ impl Entry {
     }
 }
 
+/// A bank's bytes from its parts: the first line (`format`, the parts' sizes, the data's hash),
+/// the header, the data.
+fn assemble(format: u32, header: &str, data: &[u8]) -> Vec<u8> {
+    let mut out = format!(
+        "{MAGIC} {format} {} {} {:016x}\n",
+        header.len(),
+        data.len(),
+        fnv1a(data)
+    )
+    .into_bytes();
+    out.extend_from_slice(header.as_bytes());
+    out.extend_from_slice(data);
+    out
+}
+
 /// FNV-1a, 64 bits: detects a damaged or edited data block.
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf29ce484222325, |h, b| {
@@ -912,6 +917,15 @@ pub(crate) mod tests {
         assert_eq!(read.kalman_shelf, Some(1.0));
     }
 
+    /// A bank's header and data block, as [`assemble`] joined them.
+    fn split(bytes: &[u8]) -> (&str, &[u8]) {
+        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
+        let first = std::str::from_utf8(&bytes[..nl]).unwrap();
+        let hlen: usize = first.split(' ').nth(2).unwrap().parse().unwrap();
+        let (header, data) = bytes[nl + 1..].split_at(hlen);
+        (std::str::from_utf8(header).unwrap(), data)
+    }
+
     #[test]
     fn model_spectra_are_read_from_the_data_block_and_nowhere_else() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("resources/learned.taps");
@@ -920,48 +934,17 @@ pub(crate) mod tests {
         let spectra: Vec<&Vec<f32>> = bank.spectra().map(|s| &s.values).collect();
         assert_eq!(spectra.len(), 11);
         let bytes = bank.to_bytes();
-        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
-        let first: Vec<&str> = std::str::from_utf8(&bytes[..nl])
-            .unwrap()
-            .split(' ')
-            .collect();
-        let hlen: usize = first[2].parse().unwrap();
-        let header = std::str::from_utf8(&bytes[nl + 1..nl + 1 + hlen]).unwrap();
-        let data = &bytes[nl + 1 + hlen..];
+        let (header, data) = split(&bytes);
         let held: usize = spectra.iter().map(|v| 4 * v.len()).sum();
         // Spectra cut short: refused, naming the bytes.
-        let cut = [&bytes[..nl + 1 + hlen], &data[..held / 2]].concat();
-        let cut = [
-            format!(
-                "{MAGIC} {FORMAT} {hlen} {} {:016x}\n",
-                held / 2,
-                fnv1a(&data[..held / 2])
-            )
-            .as_bytes(),
-            &cut[nl + 1..],
-        ]
-        .concat();
+        let cut = assemble(FORMAT, header, &data[..held / 2]);
         let e = Bank::parse(&cut, &path).unwrap_err().to_string();
         assert!(e.contains("need") && e.contains("bytes"), "{e}");
         // Values in the header instead are refused.
         let inline = header.replacen("values = \"\"", "values = \"AACAPw==\"", 1);
-        let e = Bank::parse(
-            &[
-                format!(
-                    "{MAGIC} {FORMAT} {} {} {:016x}\n",
-                    inline.len(),
-                    data.len(),
-                    fnv1a(data)
-                )
-                .as_bytes(),
-                inline.as_bytes(),
-                data,
-            ]
-            .concat(),
-            &path,
-        )
-        .unwrap_err()
-        .to_string();
+        let e = Bank::parse(&assemble(FORMAT, &inline, data), &path)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("data block"), "{e}");
     }
 
@@ -975,15 +958,7 @@ pub(crate) mod tests {
         let models: Vec<_> = bank.conicity_models_mut().map(|m| m.clone()).collect();
         assert_eq!(models.len(), 11);
         let bytes = bank.to_bytes();
-        let nl = bytes.iter().position(|b| *b == b'\n').unwrap();
-        let hlen: usize = std::str::from_utf8(&bytes[..nl])
-            .unwrap()
-            .split(' ')
-            .nth(2)
-            .unwrap()
-            .parse()
-            .unwrap();
-        let header = std::str::from_utf8(&bytes[nl + 1..nl + 1 + hlen]).unwrap();
+        let (header, data) = split(&bytes);
         assert_eq!(header.matches("precision = []").count(), 11);
         let mut read = Bank::parse(&bytes, &path).unwrap();
         for (m, r) in models.iter().zip(read.conicity_models_mut()) {
@@ -1005,33 +980,13 @@ pub(crate) mod tests {
         assert!(old.len() > bytes.len() + 11 * 8 * 35 * 36 / 2);
         assert_eq!(Bank::parse(&old, &path).unwrap(), five);
         // A format 6 header with a matrix in it is refused.
-        let nl5 = old.iter().position(|b| *b == b'\n').unwrap();
-        let first = std::str::from_utf8(&old[..nl5]).unwrap().replacen(
-            "learned-taps 5",
-            "learned-taps 6",
-            1,
-        );
-        let rest = std::str::from_utf8(&old[nl5..nl5 + 1 + 100])
-            .unwrap()
-            .replacen("format = 5", "format = 6", 1);
-        let edited = [first.as_bytes(), rest.as_bytes(), &old[nl5 + 1 + 100..]].concat();
+        let (header5, data5) = split(&old);
+        let edited = assemble(6, &header5.replacen("format = 5", "format = 6", 1), data5);
         let e = Bank::parse(&edited, &path).unwrap_err().to_string();
         assert!(e.contains("precision in the header"), "{e}");
         // Cut short: refused, naming the bytes.
         let spectra: usize = read.spectra().map(|s| 4 * s.values.len()).sum();
-        let data = &bytes[nl + 1 + hlen..];
-        let cut = &data[..spectra + 100];
-        let short = [
-            format!(
-                "{MAGIC} {FORMAT} {hlen} {} {:016x}\n",
-                cut.len(),
-                fnv1a(cut)
-            )
-            .as_bytes(),
-            header.as_bytes(),
-            cut,
-        ]
-        .concat();
+        let short = assemble(FORMAT, header, &data[..spectra + 100]);
         let e = Bank::parse(&short, &path).unwrap_err().to_string();
         assert!(e.contains("need") && e.contains("bytes"), "{e}");
     }
