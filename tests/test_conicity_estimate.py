@@ -13,25 +13,21 @@ import numpy as np
 import pytest
 
 from project import packaged_fmus
+from wiener_bound import STEP, noisy_record
 
 track_alignment = pytest.importorskip(
     "track_alignment", reason="the bindings are built into .venv by `cargo xtask test`"
 )
 
 SENSORS = ("ws_acc_y", "ws_yaw_rate", "frame_acc_y")
-STEP = 1e-3
 BOUND = 0.029  # ln(conicity) after 200 m at conicity 0.1, Kalker 100 % (docs/learned-filter.md)
 
 
 def conicity_error(seed: int, conicity: float, kalker: float) -> np.ndarray:
     """`ln(conicity_estimate / conicity)` every 10 m from 200 m to 390 m of the standard case
     (20 s at 20 m/s) on track `seed`, the bank over conicities told nothing."""
-    out = track_alignment.simulate(
-        packaged_fmus()["RailVehicle"], 20.0, step=STEP,
-        parameters={"track_seed": seed, "noise_seed": seed + 1000, "conicity": conicity, "kalker_scale": kalker},
-        variables=[*SENSORS, "distance", "forward_speed"],
-    )
-    r = {k: np.ascontiguousarray(v[1:]) for k, v in out.items()}
+    r = noisy_record(track_alignment, packaged_fmus()["RailVehicle"], seed, 20.0,
+                     {"conicity": conicity, "kalker_scale": kalker}, seed + 1000)
     est = track_alignment.estimate(r["forward_speed"], *(r[c] for c in SENSORS), step=STEP,
                                    settings={"tap_file": "learned-conicity.taps"})
     at = np.arange(200.0, 391.0, 10.0)

@@ -14,23 +14,19 @@ import numpy as np
 import pytest
 
 from project import packaged_fmus
+from wiener_bound import STEP, noisy_record
 
 track_alignment = pytest.importorskip(
     "track_alignment", reason="the bindings are built into .venv by `cargo xtask test`"
 )
 
 SENSORS = ("ws_acc_y", "ws_yaw_rate", "frame_acc_y")
-STEP = 1e-3
 
 
 @pytest.mark.parametrize("seed", [2, 4])
 def test_on_another_vehicle_the_default_degrades_toward_the_kalman_filter(seed: int) -> None:
-    out = track_alignment.simulate(
-        packaged_fmus()["RailVehicle"], 20.0, step=STEP,
-        parameters={"track_seed": seed, "noise_seed": seed + 1000, "vehicle": "manchester.toml"},
-        variables=[*SENSORS, "alignment", "distance", "forward_speed"],
-    )
-    r = {k: np.ascontiguousarray(v[1:]) for k, v in out.items()}
+    r = noisy_record(track_alignment, packaged_fmus()["RailVehicle"], seed, 20.0,
+                     {"vehicle": "manchester.toml"}, seed + 1000)
     o = track_alignment.estimate(r["forward_speed"], *(r[c] for c in SENSORS), step=STEP)
 
     def whole(estimate: np.ndarray, distance: np.ndarray) -> float:

@@ -222,11 +222,13 @@ def noise_parameters(density) -> dict[str, float]:
     return {f"{c}_noise_psd": n for c, n in zip(CHANNELS, density)}
 
 
-def noisy_record(ta, vehicle, seed: int, duration: float, noise: dict[str, float], noise_seed: int) -> dict[str, np.ndarray]:
-    """A run of the vehicle FMU at the standard case's speed with the sensor noise `noise` (its
-    parameters: [`noise_parameters`], or none for the FMU's default sigmas)."""
+def noisy_record(ta, vehicle, seed: int, duration: float, parameters: dict, noise_seed: int) -> dict[str, np.ndarray]:
+    """A run of the vehicle FMU at the standard case's speed on track `seed`, with its noise
+    drawn from `noise_seed` and `parameters` set: a grade's sensor noise ([`noise_parameters`];
+    none: the FMU's default sigmas), the wheels (`conicity`, `kalker_scale`), another vehicle
+    (`vehicle`)."""
     out = ta.simulate(vehicle, duration, step=STEP,
-                      parameters={"track_seed": seed, "noise_seed": noise_seed, **noise},
+                      parameters={"track_seed": seed, "noise_seed": noise_seed, **parameters},
                       variables=[*CHANNELS, "alignment", "distance", "forward_speed"])
     return {k: np.ascontiguousarray(v[1:]) for k, v in out.items()}
 
