@@ -8,9 +8,10 @@ shaped alike)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy import signal
 
-from wiener_bound import apply, back_to_target, bound, fir, shape, spectra, wiener
+from wiener_bound import apply, back_to_target, bound, fir, lag_fir, shape, spectra, wiener
 
 FS = 50.0
 A = 0.95
@@ -161,3 +162,45 @@ def test_the_d3_fir_s_positive_lags_reach_only_the_past():
     assert d3_fir(runs, (0,), past, fs)[0] < 0.03
     assert d3_fir(runs, (1,), past, fs)[0] > 0.3
     assert d3_fir(runs, (1,), both, fs)[0] < 0.03
+
+
+def test_the_causal_fir_is_the_kalman_filter_and_a_late_look_costs_the_prediction_error():
+    """`lag_fir` against two textbook answers from the same Welch spectra: a causal window on the
+    AR(1) signal in white noise reaches the steady-state Kalman filter's error (the Riccati
+    equation's fixed point), a two-sided one the non-causal bound; a noise-free look 5 samples
+    late leaves a causal filter the 5-step prediction error `sigma^2 sum_{i<5} a^{2i}` and a
+    two-sided one nothing. A reversed lag convention would give the late look back exactly."""
+    rng = np.random.default_rng(13)
+    nperseg, late = 1024, 5
+    runs = []
+    for _ in range(8):
+        y = ar1(rng, 200_016)
+        runs.append(np.array([y[8 - late: 8 - late + 200_000], y[8: 8 + 200_000], y[8: 8 + 200_000]]))
+    f, s = spectra(runs, FS, nperseg)
+    one = np.ones_like(f)
+    variance = SIGMA**2 / (1 - A**2)
+    causal, both = range(0, 250), range(-250, 250)
+
+    def mse(sensor: int, noise: float, lags: range) -> float:
+        sxx = s[sensor: sensor + 1, sensor: sensor + 1] + noise
+        return lag_fir(sxx, s[sensor: sensor + 1, 2], s[2, 2].real, one, nperseg, lags)[1] ** 2 * variance
+
+    r = NOISE * FS / 2  # the noise's variance per sample
+    p = 0.0
+    for _ in range(200):
+        prior = A**2 * p + SIGMA**2
+        p = prior * r / (prior + r)
+    assert abs(mse(1, NOISE, causal) / p - 1) < 0.05
+    _, err = wiener(s, 2, (1,), np.array([0.0, NOISE, 0.0]))
+    assert abs(mse(1, NOISE, both) / (np.sum(err) * (f[1] - f[0])) - 1) < 0.05
+    assert mse(1, NOISE, both) < 0.8 * p
+
+    predicted = SIGMA**2 * sum(A ** (2 * i) for i in range(late))
+    assert abs(mse(0, 0.0, causal) / predicted - 1) < 0.05
+    assert mse(0, 0.0, both) < 0.02 * predicted
+
+
+def test_lag_fir_refuses_a_window_its_covariances_cannot_hold():
+    s = np.ones((1, 1, 33))
+    with pytest.raises(ValueError, match="span 40 samples"):
+        lag_fir(s, s[0], s[0, 0], np.ones(33), 64, range(0, 41))

@@ -49,7 +49,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-from scipy import signal
+from scipy import linalg, signal
 
 SPEED = 20.0
 STEP = 1e-3
@@ -163,6 +163,41 @@ def apply(h: np.ndarray, x: np.ndarray) -> np.ndarray:
     """`sum_i h_i * x_i` with each `h_i` centred (non-causal), as long as `x`."""
     half = h.shape[-1] // 2
     return sum(np.convolve(xi, hi)[half: half + x.shape[-1]] for xi, hi in zip(x, h))
+
+
+def lag_fir(sxx: np.ndarray, sxy: np.ndarray, syy: np.ndarray, weight: np.ndarray, nperseg: int,
+            lags: range, floor: float = 0.0, ridge: float = 1e-9) -> tuple[np.ndarray, float]:
+    """The FIR over `lags` (samples, `k` reads the sensors `k` samples back: a causal filter has
+    every `k >= 0`) with the least error under the power weight `weight + floor`, from one-sided
+    spectra on `nperseg`'s grid: `sxx` sensors x sensors x frequencies (noise included), `sxy`
+    sensors x frequencies (`E[X* Y]`), `syy`. Time domain normal equations, so a causal window
+    is exact: `E[x_j(t-l) x_i(t-k)] = R_ij(k - l)` and `E[x_j(t-l) y(t)] = R_jy(l)`, the
+    covariances the inverse FFT of the weighted spectra. Returns the taps (sensors x lags) and
+    their Jrel under `weight` alone: the error's weighted variance, computed for the taps
+    themselves (not assumed optimal), over the target's.
+
+    `floor` asks the filter for a small error outside the weight too (a filter run on records,
+    whose starts the stationary weight does not see); `ridge` only steadies the solve. A
+    window as long as it needs to be (the error stops falling) makes the causal one the causal
+    Wiener-Hopf bound of the spectra, and the two-sided one their non-causal bound."""
+    ks = np.asarray(lags)
+    if np.ptp(ks) >= nperseg // 2:
+        raise ValueError(f"lags {ks[0]}..{ks[-1]} span {np.ptp(ks)} samples: the covariances of "
+                         f"{nperseg}-sample spectra hold fewer than {nperseg // 2} without wrapping")
+    m = len(sxy)
+    diff = (ks[None, :] - ks[:, None]) % nperseg
+
+    def normal(w: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        rxx = np.fft.irfft(sxx * w, n=nperseg, axis=-1)
+        rxy = np.fft.irfft(sxy * w, n=nperseg, axis=-1)
+        a = np.block([[rxx[i, j][diff] for i in range(m)] for j in range(m)])
+        b = np.concatenate([rxy[j][ks % nperseg] for j in range(m)])
+        return a, b, float(np.fft.irfft(syy * w, n=nperseg)[0])
+
+    a, b, _ = normal(weight + floor)
+    h = linalg.solve(a + ridge * np.trace(a) / len(a) * np.eye(len(a)), b, assume_a="pos")
+    a, b, ref = normal(weight)
+    return h.reshape(m, len(ks)), float(np.sqrt(max(ref - 2 * h @ b + h @ a @ h, 0.0) / ref))
 
 
 def lagged(x: np.ndarray, lags: list[int]) -> np.ndarray:
