@@ -93,7 +93,8 @@ def causal_fir(ta, vehicle, wheels: dict, seeds: list[int], duration: float, fs:
         runs.append(np.vstack([x, y[None]])[:, int(20.0 * fs):])  # the run-in ramp left out
     f, s = spectra(runs, fs, nperseg)
     back = back_to_target(SHAPE[-1], f, fs, SPEED)
-    undo = np.array([1.0] * len(SENSORS) + [0.0])[:, None] + np.array([0.0] * len(SENSORS) + [1.0])[:, None] * back
+    # Per channel, what takes its spectra back to the unshaped signal: the Kalman channel's shaping.
+    undo = np.vstack([np.ones((len(SENSORS), len(f))), back[None]])
     m = len(SENSORS) + 1
     sxx = s[:m, :m] * np.conj(undo)[:, None] * undo[None, :]
     sxy, syy = s[:m, m] * np.conj(undo) * back, s[m, m].real * np.abs(back) ** 2
