@@ -196,7 +196,7 @@ impl Learned {
         let (lagged, lagged_std) = self
             .lagged(distance)
             .map(|(a, s)| {
-                let k = self.kalman_lagged(distance).unwrap_or(kalman).0;
+                let k = self.kalman_lagged(distance).unwrap_or(kalman.0);
                 (mix(a, k, w), s * grow)
             })
             .unwrap_or((alignment, std));

@@ -457,10 +457,11 @@ impl Learned {
         self.causal.at(distance)
     }
 
-    /// The Kalman filter's estimate made at the fixed-lag output's position, `lag` metres
-    /// behind `distance`; `None` before the first closed cell and without a fixed-lag output.
-    pub fn kalman_lagged(&self, distance: f64) -> Option<(f64, f64)> {
-        self.kalman_delay.at(distance - self.lag())
+    /// The Kalman filter's alignment estimate made at the fixed-lag output's position, `lag`
+    /// metres behind `distance`; `None` before the first closed cell and without a fixed-lag
+    /// output.
+    pub fn kalman_lagged(&self, distance: f64) -> Option<f64> {
+        self.kalman_delay.at(distance - self.lag()).map(|(a, _)| a)
     }
 
     /// The fixed-lag estimate for the position `lag` metres behind `distance` (the causal
