@@ -194,9 +194,9 @@ def lag_fir(sxx: np.ndarray, sxy: np.ndarray, syy: np.ndarray, weight: np.ndarra
         b = np.concatenate([rxy[j][ks % nperseg] for j in range(m)])
         return a, b, float(np.fft.irfft(syy * w, n=nperseg)[0])
 
-    a, b, _ = normal(weight + floor)
-    h = linalg.solve(a + ridge * np.trace(a) / len(a) * np.eye(len(a)), b, assume_a="pos")
     a, b, ref = normal(weight)
+    fa, fb = (a, b) if floor == 0 else normal(weight + floor)[:2]
+    h = linalg.solve(fa + ridge * np.trace(fa) / len(fa) * np.eye(len(fa)), fb, assume_a="pos")
     return h.reshape(m, len(ks)), float(np.sqrt(max(ref - 2 * h @ b + h @ a @ h, 0.0) / ref))
 
 

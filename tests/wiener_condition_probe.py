@@ -73,8 +73,7 @@ def causal_bounds(s: np.ndarray, f: np.ndarray, fs: float, nperseg: int, memory:
     target = len(CHANNELS)
     idx = list(SENSORS)
     back = back_to_target(SHAPE[target], f, fs, SPEED)
-    sxx = s[np.ix_(idx, idx)] + np.einsum("ij,if->ijf", np.eye(len(idx)),
-                                          np.array(PAPER)[idx, None] * np.ones_like(f))
+    sxx = s[np.ix_(idx, idx)] + np.diag(np.array(PAPER)[idx])[:, :, None]
     sxy, syy = s[idx, target] * back, s[target, target].real * np.abs(back) ** 2
     return {name: lag_fir(sxx, sxy, syy, band_weight(f, fs, band, SPEED), nperseg, range(memory))[1]
             for name, band in BANDS.items()}
