@@ -106,6 +106,7 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
         prov.vehicle
     );
     assert!(prov.validation_seeds.is_empty());
+    assert!(prov.contact_validation_seeds.is_empty());
     assert!(
         (2.0 * 1500.0..2.0 * 1900.0).contains(&prov.training_distance),
         "{}",

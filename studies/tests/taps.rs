@@ -32,6 +32,7 @@ fn the_shipped_taps_are_regenerated_byte_for_byte() {
     // The seeds the shipped bank was fitted and chosen on, as its command gave them.
     o.training_seed = shipped.provenance.training_seed;
     o.validation_seeds = shipped.provenance.validation_seeds.clone();
+    o.contact_validation_seeds = shipped.provenance.contact_validation_seeds.clone();
     o.speeds = vec![20.0];
     o.conicities = vec![0.05, 0.1, 0.4];
     o.kalker_scales = vec![1.0, 0.75, 0.5];

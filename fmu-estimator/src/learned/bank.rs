@@ -85,6 +85,10 @@ pub struct Provenance {
     pub training_seed: u32,
     /// Track seeds the ridge was chosen on, and the rms errors measured.
     pub validation_seeds: Vec<u32>,
+    /// Those of the validation seeds the contact model was judged on (its errors, its young
+    /// memories, its novelty level), where not all of them; empty: all.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contact_validation_seeds: Vec<u32>,
     /// Kalker-coefficient scales of the training runs (one run each, normal equations summed).
     pub kalker_scales: Vec<f64>,
     /// Length of each training run \[m\].
@@ -747,6 +751,7 @@ pub(crate) mod tests {
                 vehicle: "test".into(),
                 training_seed: 101,
                 validation_seeds: vec![102, 103],
+                contact_validation_seeds: vec![],
                 kalker_scales: vec![1.0, 0.5],
                 training_distance: 1000.0,
                 sample_step: 1e-3,

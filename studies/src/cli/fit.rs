@@ -108,6 +108,8 @@ pub fn execute(a: &FitArgs, log: &dyn Fn(&str)) -> Result<String, Error> {
     taps.roll_rate = !a.no_roll_rate && interface.roll_rate;
     taps.training_seed = a.seed;
     taps.validation_seeds = a.validation_seeds.clone();
+    // The contact model judged on every validation seed the user gives.
+    taps.contact_validation_seeds = vec![];
     taps.command = command_line();
     if !interface.kalker_scale && taps.kalker_scales != [1.0] {
         return Err(Error::input(format!(

@@ -81,9 +81,18 @@ pub struct TapsArgs {
     /// Track seed of the training runs.
     #[arg(long, default_value_t = CALIBRATION_SEED)]
     pub seed: u32,
-    /// Track seeds the ridge is chosen on (neither the training seed nor an evaluation seed).
-    #[arg(long, value_delimiter = ',', default_value = "102,103,104,105,106")]
+    /// Track seeds the ridge and band weights are chosen on (neither the training seed nor an
+    /// evaluation seed).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "102,103,104,105,106,107,108,109,110,111,112,113,114,115,116,117,118,119,120,121"
+    )]
     pub validation_seeds: Vec<u32>,
+    /// Those of --validation-seeds the contact model is judged on (its errors, young memories
+    /// and novelty level): the fallback's nodes were chosen for the level these give.
+    #[arg(long, value_delimiter = ',', default_value = "102,103,104,105,106")]
+    pub contact_validation_seeds: Vec<u32>,
     /// The file to write (a tap bank written before, such as the shipped one, is replaced).
     #[arg(long, default_value = "fmu-estimator/resources/learned-conicity.taps")]
     pub out: PathBuf,
@@ -129,6 +138,7 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
         );
     }
     o.validation_seeds = a.validation_seeds.clone();
+    o.contact_validation_seeds = a.contact_validation_seeds.clone();
     crate::study::learned::taps::check(&o)?;
     let defaults = Options::shipped();
     if a.taps_from.is_some()
@@ -149,6 +159,7 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             o.roll_rate,
             o.training_seed,
             o.validation_seeds.clone(),
+            o.contact_validation_seeds.clone(),
         ) != (
             defaults.speeds,
             defaults.kalker_scales,
@@ -157,6 +168,7 @@ pub fn execute(a: &TapsArgs, log: &dyn Fn(&str)) -> Result<Report, Error> {
             defaults.roll_rate,
             defaults.training_seed,
             defaults.validation_seeds,
+            defaults.contact_validation_seeds,
         )
     {
         o.command = std::env::args().collect::<Vec<_>>().join(" ");
