@@ -333,6 +333,27 @@ def check_runs(ap: argparse.ArgumentParser, a: argparse.Namespace) -> None:
         ap.error(f"--duration {a.duration} s holds fewer than two --segment {a.segment} m windows")
 
 
+def training_spectra(ta, vehicle, seeds: list[int], duration: float, fs: float, nperseg: int,
+                     parameters: dict | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The Welch spectra of noise-free runs on `seeds` (the vehicle's `parameters` added):
+    frequencies, the shaped channels' cross-spectra (target last), the truth's own spectrum
+    (no weight beyond LONGEST), and the runs decimated but not shaped. The first 20 s, the
+    run-in ramp, are left out."""
+    runs, plain = [], []
+    for seed in seeds:
+        out = ta.simulate(vehicle, duration, step=STEP,
+                          parameters={"track_seed": seed, "sensor_noise": False, **(parameters or {})},
+                          variables=[*CHANNELS, "alignment"])
+        x = decimate(np.array([out[c][1:] for c in (*CHANNELS, "alignment")]))
+        plain.append(x[:, int(20.0 * fs):])
+        x = np.array([shape(xi, order, fs) for xi, order in zip(x, SHAPE)])
+        runs.append(x[:, int(20.0 * fs):])
+    f, s = spectra(runs, fs, nperseg)
+    target = len(CHANNELS)
+    syy = s[target, target].real * np.abs(back_to_target(SHAPE[target], f, fs, SPEED)) ** 2
+    return f, s, syy, plain
+
+
 def main() -> None:
     import track_alignment as ta
     from project import packaged_fmus, seed_list
@@ -351,18 +372,7 @@ def main() -> None:
     vehicle = packaged_fmus()["RailVehicle"]
     fs = 1.0 / (STEP * np.prod(DECIMATION))
     nperseg = int(round(a.segment / SPEED * fs))
-    runs, plain = [], []
-    for seed in a.train_seeds:
-        out = ta.simulate(vehicle, a.duration, step=STEP, parameters={"track_seed": seed, "sensor_noise": False},
-                          variables=[*CHANNELS, "alignment"])
-        x = decimate(np.array([out[c][1:] for c in (*CHANNELS, "alignment")]))
-        plain.append(x[:, int(20.0 * fs):])  # the run-in ramp left out
-        x = np.array([shape(xi, order, fs) for xi, order in zip(x, SHAPE)])
-        runs.append(x[:, int(20.0 * fs):])
-    f, s = spectra(runs, fs, nperseg)
-    target = len(CHANNELS)
-    # The truth's spectrum back from the shaped alignment; no weight on waves beyond LONGEST.
-    syy = s[target, target].real * np.abs(back_to_target(SHAPE[target], f, fs, SPEED)) ** 2
+    f, s, syy, plain = training_spectra(ta, vehicle, a.train_seeds, a.duration, fs, nperseg)
     print(f"Training: seeds {a.train_seeds[0]}-{a.train_seeds[-1]}, {a.duration:g} s each at {SPEED:g} m/s; "
           f"held out: {a.seeds}. Jrel whole / D1 / D2 / D3.\n")
     print("| sensors (noise only) | sensor set | Wiener bound (stationary) | Wiener FIR, non-causal, on the records | learned default, causal |")

@@ -37,8 +37,8 @@ from scipy import signal
 
 from project import packaged_fmus, seed_list
 from wiener_bound import (BANDS, CHANNELS, DECIMATION, GRADES, SHAPE, SPEED, STEP, back_to_target, band_weight, bound,
-                          check_runs, decimate, lag_fir, noise_parameters, noisy_record, shape, spectra, wiener_fir,
-                          wiener_metrics)
+                          check_runs, decimate, lag_fir, noise_parameters, noisy_record, shape, spectra,
+                          training_spectra, wiener_fir, wiener_metrics)
 
 SENSORS = (0, 1, 2)
 PAPER = GRADES["paper's sensors"]
@@ -150,17 +150,7 @@ def main() -> None:
     print("|---|---|---|---|---|---|---|---|---|")
     for c, k in a.conditions:
         wheels = {"conicity": c, "kalker_scale": k}
-        runs = []
-        for seed in a.train_seeds:
-            out = ta.simulate(vehicle, a.duration, step=STEP,
-                              parameters={"track_seed": seed, "sensor_noise": False, **wheels},
-                              variables=[*CHANNELS, "alignment"])
-            x = decimate(np.array([out[ch][1:] for ch in (*CHANNELS, "alignment")]))
-            x = np.array([shape(xi, order, fs) for xi, order in zip(x, SHAPE)])
-            runs.append(x[:, int(20.0 * fs):])  # the run-in ramp left out
-        f, s = spectra(runs, fs, nperseg)
-        target = len(CHANNELS)
-        syy = s[target, target].real * np.abs(back_to_target(SHAPE[target], f, fs, SPEED)) ** 2
+        f, s, syy, _ = training_spectra(ta, vehicle, a.train_seeds, a.duration, fs, nperseg, wheels)
         h, err = wiener_fir(s, f, fs, nperseg, PAPER, SENSORS)
         records = [noisy_record(ta, vehicle, seed, 20.0, {**noise_parameters(PAPER), **wheels}, seed + 1000)
                    for seed in a.seeds]
