@@ -93,12 +93,12 @@ pub fn taps(fmus: &Fmus, o: &Options, out: &Path, log: &dyn Fn(&str)) -> Result<
     let mut lines = vec![];
     for m in bank.contact.iter().flat_map(|c| &c.speeds) {
         lines.push(format!(
-            "{:>5} m/s contact model: rms error of the Kalker scale on the validation runs {:.3}",
+            "{:>5} m/s contact model: rms error of the Kalker scale on its validation runs {:.3}",
             m.speed, m.rms_error
         ));
         if let Some(c) = &m.conicity {
             lines.push(format!(
-                "{:>5} m/s conicity model: rms error of ln(conicity) on the validation runs {:.3}; novelty level (squared distance) {:.1}",
+                "{:>5} m/s conicity model: rms error of ln(conicity) on its validation runs {:.3}; novelty level (squared distance) {:.1}",
                 m.speed, c.rms_error, c.level
             ));
         }

@@ -762,6 +762,11 @@ fn speed_runs(
                 .map(move |(k, c)| (*s, *c, vehicles[(j + k) % vehicles.len()]))
         })
         .collect();
+    // Kept taps need no validation runs but the contact model's (each keeps its vehicle).
+    let cases: Vec<(u32, Condition, Option<&str>)> = cases
+        .into_iter()
+        .filter(|(s, _, _)| o.taps_from.is_none() || contact_seeds(o).contains(s))
+        .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
         .map(|(s, c, v)| {
@@ -875,6 +880,25 @@ impl Group<'_> {
     }
 }
 
+/// The validation seeds the contact model is judged on ([`Options::contact_validation_seeds`]).
+fn contact_seeds(o: &Options) -> &[u32] {
+    if o.contact_validation_seeds.is_empty() {
+        &o.validation_seeds
+    } else {
+        &o.contact_validation_seeds
+    }
+}
+
+/// The seeds a provenance's contact model was judged on, where they are not all its validation
+/// seeds (`judged`, chosen on `chosen`): empty when they are.
+fn contact_provenance(judged: &[u32], chosen: &[u32]) -> Vec<u32> {
+    if judged == chosen {
+        vec![]
+    } else {
+        judged.to_vec()
+    }
+}
+
 /// The entries of one speed: both sensor sets, causal and every lag; per condition with its
 /// contact model, or pooled over the Kalker scales (one conicity only).
 fn fit_speed(
@@ -948,14 +972,22 @@ fn fit_speed(
         }
     }
     let model = if per_condition {
-        let judged: Vec<(Condition, GridRun)> = validation
-            .iter()
-            .zip(&seeds)
-            .filter(|(_, s)| {
-                o.contact_validation_seeds.is_empty() || o.contact_validation_seeds.contains(s)
-            })
-            .map(|(v, _)| v.clone())
-            .collect();
+        // In the order of the contact model's own seeds: the runs (and the sums over them)
+        // of a fit with those seeds alone as its validation seeds.
+        let mut pool: Vec<(u32, (Condition, GridRun))> =
+            seeds.into_iter().zip(validation).collect();
+        let mut judged = vec![];
+        for seed in contact_seeds(o) {
+            let (mine, rest): (Vec<_>, Vec<_>) = pool.into_iter().partition(|(s, _)| s == seed);
+            judged.extend(mine.into_iter().map(|(_, v)| v));
+            pool = rest;
+        }
+        if judged.is_empty() {
+            return Err(Error::input(format!(
+                "at {speed} m/s every validation run on the contact model's seeds {:?} is unstable",
+                contact_seeds(o)
+            )));
+        }
         Some(super::contact::fit(
             speed,
             &training,
@@ -1177,6 +1209,15 @@ pub fn with_contact_from(
     let bands = band_list(&model.bands());
     bank.contact = Some(model);
     let p = &mut bank.provenance;
+    let judged = &contact.provenance;
+    p.contact_validation_seeds = contact_provenance(
+        if judged.contact_validation_seeds.is_empty() {
+            &judged.validation_seeds
+        } else {
+            &judged.contact_validation_seeds
+        },
+        &p.validation_seeds,
+    );
     // Made again from a bank made so: its note replaced, not repeated.
     if let Some(at) = p.objective.find(CONTACT_FROM_NOTE) {
         p.objective.truncate(at);
@@ -1196,13 +1237,27 @@ pub fn check(o: &Options) -> Result<(), Error> {
             "--contact-from takes the taps of --taps-from and one conicity (--conicities): the one they were fitted at",
         ));
     }
+    for (name, seeds) in [
+        ("validation", &o.validation_seeds),
+        ("contact model's validation", &o.contact_validation_seeds),
+    ] {
+        for (i, s) in seeds.iter().enumerate() {
+            if let Some(j) = seeds[..i].iter().position(|t| t == s) {
+                return Err(Error::input(format!(
+                    "the {name} seed {s} is given twice (places {} and {})",
+                    j + 1,
+                    i + 1
+                )));
+            }
+        }
+    }
     if let Some(s) = o
         .contact_validation_seeds
         .iter()
         .find(|s| !o.validation_seeds.contains(s))
     {
         return Err(Error::input(format!(
-            "the contact model's validation seed {s} is not among the validation seeds {:?}",
+            "the contact model's validation seed {s} (--contact-validation-seeds, 102-106 unless given) is not among the validation seeds {:?}: give --contact-validation-seeds with --validation-seeds, the same list to judge it on all",
             o.validation_seeds
         )));
     }
@@ -1289,6 +1344,12 @@ fn assemble(
         .map(|k| format!("{}", k * 100.0))
         .collect();
     let contract = contract(o, contact.as_ref().map(|c| c.band))?;
+    // The seeds the taps were chosen on: kept taps' own.
+    let chosen = o
+        .taps_from
+        .as_ref()
+        .map(|b| b.provenance.validation_seeds.clone())
+        .unwrap_or_else(|| o.validation_seeds.clone());
     Ok(Header {
         format: fmu_estimator::learned::bank::FORMAT,
         contract,
@@ -1299,8 +1360,12 @@ fn assemble(
         provenance: Provenance {
             vehicle: format!("RailVehicle FMU ({}), parameter set {}", fmus.vehicle.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(), fmus.vehicle_params().map(|p| p.name).unwrap_or_else(|_| DEFAULT_PARAMETER_SET.into())),
             training_seed: o.training_seed,
-            validation_seeds: o.validation_seeds.clone(),
-            contact_validation_seeds: o.contact_validation_seeds.clone(),
+            validation_seeds: chosen.clone(),
+            contact_validation_seeds: if contact.is_some() {
+                contact_provenance(contact_seeds(o), &chosen)
+            } else {
+                vec![]
+            },
             kalker_scales: o.kalker_scales.clone(),
             training_distance: TRAINING_DISTANCE,
             sample_step: STEP,
@@ -1404,7 +1469,16 @@ mod tests {
         check(&o).unwrap();
         o.contact_validation_seeds = vec![102, 200];
         let e = check(&o).unwrap_err().to_string();
-        assert!(e.contains("validation seed 200 is not among"), "{e}");
+        assert!(
+            e.contains("validation seed 200 (--contact-validation-seeds"),
+            "{e}"
+        );
+        o.contact_validation_seeds = vec![102, 103, 102];
+        let e = check(&o).unwrap_err().to_string();
+        assert!(
+            e.contains("seed 102 is given twice (places 1 and 3)"),
+            "{e}"
+        );
         o.contact_validation_seeds = vec![];
         check(&o).unwrap();
     }
