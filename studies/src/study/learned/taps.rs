@@ -236,9 +236,9 @@ pub struct Options {
     pub contact_validation_seeds: Vec<u32>,
     /// How the bank stores its taps ([`Encoding`]: `i12` takes 0.4 of `f32`'s data).
     pub encoding: Encoding,
-    /// Keep this bank's taps and fit only the contact model (the runs are made as for a full
-    /// fit, the tap solves skipped): a change to the contact model's fit without refitting
-    /// taps that do not depend on it.
+    /// Keep this bank's taps and fit only the contact model (the training runs and the contact
+    /// model's validation runs are made as for a full fit, the tap solves skipped): a change to
+    /// the contact model's fit without refitting taps that do not depend on it.
     pub taps_from: Option<Bank>,
     /// With [`Self::taps_from`] and one conicity in [`Self::conicities`] (the one those taps
     /// were fitted at): take this bank's contact model (fitted over conicities) instead of
@@ -690,8 +690,9 @@ fn conditions(o: &Options) -> Vec<Condition> {
 }
 
 /// The runs of one speed, each with its condition: the training runs on the training seed and
-/// the validation runs on every validation seed (each with its seed), under every condition in which the vehicle is
-/// stable at this speed ([`UNSTABLE_WS_Y`]).
+/// the validation runs on every validation seed (each with its seed; with kept taps the contact
+/// model's seeds only), under every condition in which the vehicle is stable at this speed
+/// ([`UNSTABLE_WS_Y`]).
 #[allow(clippy::type_complexity)]
 fn speed_runs(
     fmus: &Fmus,
@@ -1102,7 +1103,12 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
 pub fn speed_cost(o: &Options, speed: f64) -> f64 {
     let stop = |d: f64| (d / speed).clamp(MIN_STOP, MAX_STOP).round();
     let n = o.vehicles.len().max(1) as f64;
-    stop(TRAINING_DISTANCE / n) * n + o.validation_seeds.len() as f64 * stop(VALIDATION_DISTANCE)
+    let validated = if o.taps_from.is_some() {
+        contact_seeds(o).len()
+    } else {
+        o.validation_seeds.len()
+    };
+    stop(TRAINING_DISTANCE / n) * n + validated as f64 * stop(VALIDATION_DISTANCE)
 }
 
 /// [`fit`], calling `done` with each speed when its entries are fitted.
