@@ -766,7 +766,7 @@ fn speed_runs(
     // Kept taps need no validation runs but the contact model's (each keeps its vehicle).
     let cases: Vec<(u32, Condition, Option<&str>)> = cases
         .into_iter()
-        .filter(|(s, _, _)| o.taps_from.is_none() || contact_seeds(o).contains(s))
+        .filter(|(s, _, _)| run_seeds(o).contains(s))
         .collect();
     let validation: Vec<Option<GridRun>> = cases
         .par_iter()
@@ -881,12 +881,28 @@ impl Group<'_> {
     }
 }
 
+/// The seeds a contact model is judged on: `contact`, or all of `validation` where it is
+/// empty (as [`Options`] and a bank's provenance both keep them).
+fn judged_on<'a>(contact: &'a [u32], validation: &'a [u32]) -> &'a [u32] {
+    if contact.is_empty() {
+        validation
+    } else {
+        contact
+    }
+}
+
 /// The validation seeds the contact model is judged on ([`Options::contact_validation_seeds`]).
 fn contact_seeds(o: &Options) -> &[u32] {
-    if o.contact_validation_seeds.is_empty() {
-        &o.validation_seeds
+    judged_on(&o.contact_validation_seeds, &o.validation_seeds)
+}
+
+/// The validation seeds a fit runs: the contact model's alone where the taps are kept
+/// ([`Options::taps_from`]).
+fn run_seeds(o: &Options) -> &[u32] {
+    if o.taps_from.is_some() {
+        contact_seeds(o)
     } else {
-        &o.contact_validation_seeds
+        &o.validation_seeds
     }
 }
 
@@ -975,14 +991,19 @@ fn fit_speed(
     let model = if per_condition {
         // In the order of the contact model's own seeds: the runs (and the sums over them)
         // of a fit with those seeds alone as its validation seeds.
-        let mut pool: Vec<(u32, (Condition, GridRun))> =
-            seeds.into_iter().zip(validation).collect();
-        let mut judged = vec![];
-        for seed in contact_seeds(o) {
-            let (mine, rest): (Vec<_>, Vec<_>) = pool.into_iter().partition(|(s, _)| s == seed);
-            judged.extend(mine.into_iter().map(|(_, v)| v));
-            pool = rest;
-        }
+        // The sort is stable: a seed's runs keep their condition order.
+        let mut ranked: Vec<(usize, (Condition, GridRun))> = seeds
+            .into_iter()
+            .zip(validation)
+            .filter_map(|(s, v)| {
+                contact_seeds(o)
+                    .iter()
+                    .position(|c| *c == s)
+                    .map(|i| (i, v))
+            })
+            .collect();
+        ranked.sort_by_key(|(i, _)| *i);
+        let judged: Vec<(Condition, GridRun)> = ranked.into_iter().map(|(_, v)| v).collect();
         if judged.is_empty() {
             return Err(Error::input(format!(
                 "at {speed} m/s every validation run on the contact model's seeds {:?} is unstable",
@@ -1103,12 +1124,7 @@ pub fn fit(fmus: &Fmus, o: &Options, progress: &dyn Fn(&str)) -> Result<Bank, Er
 pub fn speed_cost(o: &Options, speed: f64) -> f64 {
     let stop = |d: f64| (d / speed).clamp(MIN_STOP, MAX_STOP).round();
     let n = o.vehicles.len().max(1) as f64;
-    let validated = if o.taps_from.is_some() {
-        contact_seeds(o).len()
-    } else {
-        o.validation_seeds.len()
-    };
-    stop(TRAINING_DISTANCE / n) * n + validated as f64 * stop(VALIDATION_DISTANCE)
+    stop(TRAINING_DISTANCE / n) * n + run_seeds(o).len() as f64 * stop(VALIDATION_DISTANCE)
 }
 
 /// [`fit`], calling `done` with each speed when its entries are fitted.
@@ -1217,11 +1233,7 @@ pub fn with_contact_from(
     let p = &mut bank.provenance;
     let judged = &contact.provenance;
     p.contact_validation_seeds = contact_provenance(
-        if judged.contact_validation_seeds.is_empty() {
-            &judged.validation_seeds
-        } else {
-            &judged.contact_validation_seeds
-        },
+        judged_on(&judged.contact_validation_seeds, &judged.validation_seeds),
         &p.validation_seeds,
     );
     // Made again from a bank made so: its note replaced, not repeated.
