@@ -1,6 +1,6 @@
 """The bank over conicities' conicity estimate and accuracy on 400 m records, told nothing: the
 figures of docs/learned-filter.md ("What the sensors tell of the conicity", the table of the
-estimator) and of the constants `SHARE`, `DISAGREEMENT` and `EVERY_FULL` in
+estimator) and of the constants `SHARE`, `DISAGREEMENT`, `FIT_LEVEL` and `EVERY_FULL` in
 fmu-estimator/src/learned/spectral.rs.
 
 Records: the standard case (20 s at 20 m/s, the paper's noise, `noise_seed` = seed + 1000) at

@@ -377,7 +377,7 @@ impl Learned {
     }
 
     /// A new estimate of the conicity at `speed`: the likelihood's, averaged with the features'
-    /// ([`super::spectral::share`]); the output moves to it from the conicity the filter has
+    /// by its fit and their agreement ([`super::spectral::share`]); the output moves to it from the conicity the filter has
     /// now (the features' estimate before the first).
     fn update_spectral(&mut self, speed: f64) {
         let (Some(model), Some(s), Some(m)) = (
@@ -399,9 +399,10 @@ impl Learned {
                 .conicity_range
                 .map_or(0.0, |[lo, hi]| 0.5 * (lo.ln() + hi.ln()))
         };
-        let Some((x, n)) = s.update(speed, &models) else {
+        let Some(reading) = s.update(speed, &models) else {
             return;
         };
+        let x = reading.ln_c;
         let features = model
             .estimate_told(
                 m,
@@ -414,7 +415,7 @@ impl Learned {
             .map(f64::ln);
         let target = match features {
             Some(f) => {
-                let w = super::spectral::share(n, x - f);
+                let w = super::spectral::share(reading.cells, x - f, reading.dispersion);
                 w * x + (1.0 - w) * f
             }
             None => x,
