@@ -56,8 +56,8 @@
 //! likelihood's `ln c`, averaged with the contact features' ([`SHARE`]; less, down to none,
 //! where the model spectra fit the window worse than they fit the training vehicle's,
 //! `dispersion` and [`FIT_LEVEL`], or where the two estimates disagree far more than they
-//! do on it, [`DISAGREEMENT`]), becomes the target, and the output moves to it linearly over the next [`EVERY`] cells
-//! (from the features' estimate before the first).
+//! do on it, [`DISAGREEMENT`]), becomes the target, and the output moves to it linearly over
+//! the next [`EVERY`] cells (from the features' estimate before the first).
 //!
 //! # Figures
 //! Validation seeds 102-106, 400 m at 20 m/s, conicity 0.06-0.3 at Kalker 100 and 50 %, the
@@ -138,8 +138,8 @@ pub const SHARE: f64 = 0.8;
 /// features' differ by `d` and its fit's dispersion (the private function of that name) is
 /// `dispersion`: the full share while `d` is within [`DISAGREEMENT_FULL`] [`DISAGREEMENT`]s at
 /// that length and the dispersion within [`FIT_LEVEL`] there, none from 1.5 times either
-/// bound, linear between (the two gates multiplied). A dispersion that is not a number gates
-/// nothing.
+/// bound, linear between (the two gates multiplied). A dispersion that is not a number (the
+/// model spectra not positive definite at the maximum found) gives the likelihood no share.
 pub fn share(n: usize, d: f64, dispersion: f64) -> f64 {
     let i = LENGTHS
         .iter()
@@ -149,8 +149,9 @@ pub fn share(n: usize, d: f64, dispersion: f64) -> f64 {
     let [first, full] = DISAGREEMENT_FULL;
     let agree = first + (full - first) * t.clamp(0.0, 1.0);
     let gate = |x: f64, bound: f64| (3.0 - 2.0 * x / bound).clamp(0.0, 1.0);
+    // A NaN fails the comparison inside `gate` and would pass clamped: no fit, no share.
     let fit = if dispersion.is_nan() {
-        1.0
+        0.0
     } else {
         gate(dispersion, FIT_LEVEL[i])
     };
@@ -734,11 +735,14 @@ pub struct Reading {
 ///
 /// Why: where the model is right, `y_k` is complex Gaussian with covariance `a_o E_k`, so
 /// `z_k` is a sum of three unit exponentials (mean 3, variance 3) and the dispersion is near 1
-/// (less where the Hann window correlates neighbouring bins and the level is fitted per octave:
-/// on the ML95 0.3-0.8). Where the vehicle is another, the ML95's spectra have the wrong shape
-/// across the bins and channels at every conicity, and the bins where they fall short of the
-/// sensors' power give large `z_k` ([`FIT_LEVEL`]). The likelihood's own value cannot tell it:
-/// its level is free.
+/// with many bins per octave. With few it is less, as the level is fitted from the same bins
+/// (an octave of one bin contributes nothing): a 30 m window holds 10 bins, 5 / 3 / 1 / 1 per
+/// octave: each of an octave's `n` bins adds `(n - 1) / (n + 1/3)` on average, about 0.55 over
+/// the window where the model is right; on the ML95 0.3-0.8 by the window's length, hence a
+/// level per length ([`FIT_LEVEL`]). Where the vehicle is another, the ML95's spectra have the
+/// wrong shape across the bins and channels at every conicity, and the bins where they fall
+/// short of the sensors' power give large `z_k`. The likelihood's own value cannot tell it: its
+/// level is free.
 fn dispersion(e: &[[f64; PACKED]], y: &[[C; 3]], octaves: &[usize]) -> f64 {
     let mut q = Vec::with_capacity(y.len());
     let mut t = [0.0; OCTAVES];
@@ -1030,9 +1034,9 @@ mod tests {
         assert_eq!(share(WINDOW, 1.5 * full, 0.0), 0.0);
         assert!((share(WINDOW, 0.0, 1.25 * level) - 0.5 * SHARE).abs() < 1e-12);
         assert_eq!(share(WINDOW, 0.0, 1.5 * level), 0.0);
-        // The two gates multiply; a fit that is not a number gates nothing.
+        // The two gates multiply; a fit that is not a number leaves the likelihood nothing.
         assert!((share(WINDOW, 1.25 * full, 1.25 * level) - 0.25 * SHARE).abs() < 1e-12);
-        assert_eq!(share(WINDOW, 0.0, f64::NAN), SHARE);
+        assert_eq!(share(WINDOW, 0.0, f64::NAN), 0.0);
         // The shortest window's bounds are its own; between, the disagreement's bound is
         // linear in the length (halfway: the two bounds' mean, in its length's DISAGREEMENT).
         let short = DISAGREEMENT_FULL[0] * DISAGREEMENT[0];
@@ -1044,6 +1048,13 @@ mod tests {
         let mid = 0.5 * (DISAGREEMENT_FULL[0] + DISAGREEMENT_FULL[1]) * DISAGREEMENT[i];
         assert!((share(n, mid, 0.0) - SHARE).abs() < 1e-12);
         assert!((share(n, 1.25 * mid, 0.0) - 0.5 * SHARE).abs() < 1e-12);
+        // The fit's level is that length's too (FIT_LEVEL is not monotone in the length).
+        assert_eq!(share(n, 0.0, FIT_LEVEL[i]), SHARE);
+        assert!((share(n, 0.0, 1.25 * FIT_LEVEL[i]) - 0.5 * SHARE).abs() < 1e-12);
+        let (higher, level) = (FIT_LEVEL[2], FIT_LEVEL[3]);
+        assert!(higher > level);
+        assert_eq!(share(LENGTHS[3], 0.0, level), SHARE);
+        assert!(share(LENGTHS[3], 0.0, higher) < SHARE);
     }
 
     /// Bins drawn complex Gaussian with the covariances `E_k` themselves (any level per

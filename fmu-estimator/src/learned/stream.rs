@@ -377,8 +377,8 @@ impl Learned {
     }
 
     /// A new estimate of the conicity at `speed`: the likelihood's, averaged with the features'
-    /// by its fit and their agreement ([`super::spectral::share`]); the output moves to it from the conicity the filter has
-    /// now (the features' estimate before the first).
+    /// by its fit and their agreement ([`super::spectral::share`]); the output moves to it from
+    /// the conicity the filter has now (the features' estimate before the first).
     fn update_spectral(&mut self, speed: f64) {
         let (Some(model), Some(s), Some(m)) = (
             &self.selection.contact,
