@@ -149,7 +149,7 @@ pub fn share(n: usize, d: f64, dispersion: f64) -> f64 {
     let [first, full] = DISAGREEMENT_FULL;
     let agree = first + (full - first) * t.clamp(0.0, 1.0);
     let gate = |x: f64, bound: f64| (3.0 - 2.0 * x / bound).clamp(0.0, 1.0);
-    // A NaN fails the comparison inside `gate` and would pass clamped: no fit, no share.
+    // The model spectra were not positive definite at the maximum: no fit, no share.
     let fit = if dispersion.is_nan() {
         0.0
     } else {
