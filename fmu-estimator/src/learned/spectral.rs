@@ -100,12 +100,17 @@ pub const MARGIN: usize = 14;
 /// conicities told nothing, whole Jrel:
 /// - the ML95 (seeds 102-106, 400 m at 20 m/s, conicity 0.05, 0.06, 0.075, 0.1, 0.15, 0.2,
 ///   0.3, 0.4 at Kalker 100 and 50 %; mean / worst condition, always 0.05 / 50 %);
-/// - eight random ML95 variants (`studies/src/study/vehicles.rs`' family, seed 5: all
+/// - eight random ML95 variants (`VALIDATION_FAMILY` in `studies/src/study/vehicles.rs`: all
 ///   parameters at once; seeds 102-104, mean);
-/// - eight variants changed in one kind (car body x 0.75 and x 1.2, wheelsets x 1.2, bogie
-///   frames x 0.8 in mass and inertia, secondary lateral x 1.3, primary longitudinal x 1.3,
-///   primary lateral x 0.7, wheelsets x 0.85 with frames x 1.15; none an evaluation vehicle's
-///   change): seeds 102-104, 400 m, mean / worst; and seeds 102-103, 2 km, mean.
+/// - eight variants changed in one kind (`VALIDATION_VARIANTS` there: car body x 0.75 and
+///   x 1.2, wheelsets x 1.2, bogie frames x 0.8 in mass and inertia, secondary lateral x 1.3,
+///   primary longitudinal x 1.3, primary lateral x 0.7, wheelsets x 0.85 with frames x 1.15;
+///   none an evaluation vehicle's change): seeds 102-104, 400 m, mean / worst; and seeds
+///   102-103, 2 km, mean.
+///
+/// `tests/conicity_estimate_probe.py` makes the table's figures: the ML95 with `--conicities
+/// 0.05,0.06,0.075,0.1,0.15,0.2,0.3,0.4`, the vehicles with `--vehicles DIR` (the files of
+/// `cargo run --release -p alignment-studies --example validation_vehicles -- DIR`).
 ///
 /// The disagreement's bounds are in [`DISAGREEMENT`]s, at 30 m and at 200 m (linear in the
 /// window's length between); the fit's in [`FIT_LEVEL`]s.

@@ -25,10 +25,8 @@ pub const VARIANTS: [Variant; 5] = [
     Variant {
         name: "ML95, lateral suspension -40 % (primary and secondary ky, cy)",
         change: |p| {
-            for s in [&mut p.primary, &mut p.secondary] {
-                s.ky *= 0.6;
-                s.cy *= 0.6;
-            }
+            lateral(&mut p.primary, 0.6);
+            lateral(&mut p.secondary, 0.6);
         },
     },
     Variant {
@@ -37,26 +35,13 @@ pub const VARIANTS: [Variant; 5] = [
     },
     Variant {
         name: "ML95, car body +40 % (load)",
-        change: |p| {
-            p.car_body.mass *= 1.4;
-            p.car_body.roll_inertia *= 1.4;
-            p.car_body.pitch_inertia *= 1.4;
-            p.car_body.yaw_inertia *= 1.4;
-        },
+        change: |p| car_body(p, 1.4),
     },
     Variant {
         name: "ML95, wheelsets and bogie frames +30 % mass and inertia",
         change: |p| {
-            let w = &mut p.wheelset;
-            w.mass *= 1.3;
-            w.yaw_inertia *= 1.3;
-            w.roll_inertia *= 1.3;
-            w.spin_inertia *= 1.3;
-            let b = &mut p.bogie;
-            b.mass *= 1.3;
-            b.roll_inertia *= 1.3;
-            b.pitch_inertia *= 1.3;
-            b.yaw_inertia *= 1.3;
+            wheelsets(p, 1.3);
+            frames(p, 1.3);
         },
     },
     Variant {
@@ -68,6 +53,107 @@ pub const VARIANTS: [Variant; 5] = [
         },
     },
 ];
+
+/// The ML95 variants that chose the estimator's gates on other vehicles (the conicity
+/// likelihood's share, `fmu-estimator/src/learned/spectral.rs`), with [`VALIDATION_FAMILY`]:
+/// one kind changed at a time, as [`VARIANTS`], but by other amounts or in other parts, so that
+/// no choice is made on an evaluation vehicle. `cargo run --release -p alignment-studies
+/// --example validation_vehicles -- DIR` writes them.
+pub const VALIDATION_VARIANTS: [Variant; 8] = [
+    Variant {
+        name: "ML95, car body -25 %",
+        change: |p| car_body(p, 0.75),
+    },
+    Variant {
+        name: "ML95, car body +20 %",
+        change: |p| car_body(p, 1.2),
+    },
+    Variant {
+        name: "ML95, wheelsets +20 % mass and inertia",
+        change: |p| wheelsets(p, 1.2),
+    },
+    Variant {
+        name: "ML95, bogie frames -20 % mass and inertia",
+        change: |p| frames(p, 0.8),
+    },
+    Variant {
+        name: "ML95, secondary lateral suspension +30 % (ky, cy)",
+        change: |p| lateral(&mut p.secondary, 1.3),
+    },
+    Variant {
+        name: "ML95, primary longitudinal stiffness +30 %",
+        change: |p| p.primary.kx *= 1.3,
+    },
+    Variant {
+        name: "ML95, primary lateral suspension -30 % (ky, cy)",
+        change: |p| lateral(&mut p.primary, 0.7),
+    },
+    Variant {
+        name: "ML95, wheelsets -15 %, bogie frames +15 % mass and inertia",
+        change: |p| {
+            wheelsets(p, 0.85);
+            frames(p, 1.15);
+        },
+    },
+];
+
+/// The random family beside [`VALIDATION_VARIANTS`]: its seed and size ([`family`]). The
+/// taps' family trial (`taps --vehicle-family`) drew its training members from seed 1 and
+/// judged on seed 2.
+pub const VALIDATION_FAMILY: (u64, usize) = (5, 8);
+
+/// The ML95 with `variant`'s change, named for it.
+pub fn variant(v: &Variant) -> VehicleParams {
+    let mut p = VehicleParams::ml95();
+    (v.change)(&mut p);
+    p.name = v.name.to_string();
+    p
+}
+
+/// The car body's mass and inertias times `f` (a load).
+fn car_body(p: &mut VehicleParams, f: f64) {
+    let c = &mut p.car_body;
+    for x in [
+        &mut c.mass,
+        &mut c.roll_inertia,
+        &mut c.pitch_inertia,
+        &mut c.yaw_inertia,
+    ] {
+        *x *= f;
+    }
+}
+
+/// The wheelsets' mass and inertias times `f`.
+fn wheelsets(p: &mut VehicleParams, f: f64) {
+    let w = &mut p.wheelset;
+    for x in [
+        &mut w.mass,
+        &mut w.yaw_inertia,
+        &mut w.roll_inertia,
+        &mut w.spin_inertia,
+    ] {
+        *x *= f;
+    }
+}
+
+/// The bogie frames' mass and inertias times `f`.
+fn frames(p: &mut VehicleParams, f: f64) {
+    let b = &mut p.bogie;
+    for x in [
+        &mut b.mass,
+        &mut b.roll_inertia,
+        &mut b.pitch_inertia,
+        &mut b.yaw_inertia,
+    ] {
+        *x *= f;
+    }
+}
+
+/// A suspension stage's lateral stiffness and damping times `f`.
+fn lateral(s: &mut fmu_vehicle::params::Stage, f: f64) {
+    s.ky *= f;
+    s.cy *= f;
+}
 
 /// A family of random ML95 variants for training or validation: every mass and inertia
 /// group, the bogie wheelbase, the bogie spacing, the primary and secondary stiffnesses and
@@ -92,17 +178,8 @@ pub fn family(base: &VehicleParams, seed: u64, n: usize) -> Vec<VehicleParams> {
         .map(|i| {
             let mut p = base.clone();
             p.name = format!("{} variant {seed}.{i}", base.name);
-            let w = factor(SPREAD);
-            let ws = &mut p.wheelset;
-            for x in [
-                &mut ws.mass,
-                &mut ws.yaw_inertia,
-                &mut ws.roll_inertia,
-                &mut ws.spin_inertia,
-            ] {
-                *x *= w;
-            }
-            ws.rolling_radius *= factor(RADIUS_SPREAD);
+            wheelsets(&mut p, factor(SPREAD));
+            p.wheelset.rolling_radius *= factor(RADIUS_SPREAD);
             let (b, base_length) = (factor(SPREAD), factor(SPREAD));
             let bg = &mut p.bogie;
             bg.mass *= b;
@@ -110,17 +187,8 @@ pub fn family(base: &VehicleParams, seed: u64, n: usize) -> Vec<VehicleParams> {
             bg.semi_wheelbase *= base_length;
             bg.pitch_inertia *= b * base_length * base_length;
             bg.yaw_inertia *= b * base_length * base_length;
-            let c = factor(SPREAD);
-            let cb = &mut p.car_body;
-            for x in [
-                &mut cb.mass,
-                &mut cb.roll_inertia,
-                &mut cb.pitch_inertia,
-                &mut cb.yaw_inertia,
-            ] {
-                *x *= c;
-            }
-            cb.semi_bogie_distance *= factor(SPREAD);
+            car_body(&mut p, factor(SPREAD));
+            p.car_body.semi_bogie_distance *= factor(SPREAD);
             for s in [&mut p.primary, &mut p.secondary] {
                 s.kx *= factor(SPREAD);
                 s.ky *= factor(SPREAD);
@@ -168,15 +236,7 @@ pub fn cases(dir: &Path) -> Result<Vec<Case>, Error> {
             VehicleParams::manchester().wheelset.conicity,
         ),
     ];
-    let variants: Vec<VehicleParams> = VARIANTS
-        .iter()
-        .map(|v| {
-            let mut p = VehicleParams::ml95();
-            (v.change)(&mut p);
-            p.name = v.name.to_string();
-            p
-        })
-        .collect();
+    let variants: Vec<VehicleParams> = VARIANTS.iter().map(variant).collect();
     for (p, file) in variants.iter().zip(write(&variants, dir, "variant")?) {
         vehicles.push((p.name.clone(), Some(file), p.wheelset.conicity));
     }
@@ -217,6 +277,26 @@ pub fn cases(dir: &Path) -> Result<Vec<Case>, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn validation_variants_are_valid_and_none_is_an_evaluation_vehicle() {
+        let mut base = VehicleParams::ml95();
+        let evaluation: Vec<VehicleParams> = VARIANTS.iter().map(variant).collect();
+        for v in &VALIDATION_VARIANTS {
+            let p = variant(v);
+            p.check().unwrap();
+            base.name = p.name.clone();
+            assert_ne!(p, base, "{}: changes nothing", v.name);
+            for e in &evaluation {
+                let mut e = e.clone();
+                e.name = p.name.clone();
+                assert_ne!(p, e, "{} is an evaluation vehicle", v.name);
+            }
+            // One kind: the wheels, geometry and conicity stay the ML95's.
+            assert_eq!(p.wheelset.conicity, base.wheelset.conicity);
+            assert_eq!(p.bogie.semi_wheelbase, base.bogie.semi_wheelbase);
+        }
+    }
 
     #[test]
     fn a_family_is_reproducible_within_its_spread_and_every_member_differs() {
