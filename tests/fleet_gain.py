@@ -10,6 +10,7 @@ pass covers it):
 | `wiener` | `<x^, x> / <x^, x^>`: 1 if the error is orthogonal to the estimate (a Wiener estimate); then `sd_ratio` = sqrt(g) |
 | `seg_err_%` | per-segment relative error of the SD (200 m segments), min and max; of single passes after the pipeline's correction (`fleet.SD_MODEL`), of the average before it |
 | `corrected_seg_errs_%` | the average's per-segment errors after the correction |
+| `error` (printed) | the error's variance over the truth's, `sd_ratio^2 - 2 slope + 1`: for the average of many passes, the part of the error the passes share (the track's, not the sensors' noise) |
 
 for one pass (the mean over passes) and for the average of all passes.
 
@@ -104,6 +105,8 @@ def main() -> int:
             for k in ("sd_ratio", "slope", "wiener"):
                 v = np.array([r[band][which][k] for r in rows])
                 print(f"{band} {which:3s} {k:8s} mean {v.mean():.4f} min {v.min():.4f} max {v.max():.4f}")
+            v = np.array([r[band][which]["sd_ratio"] ** 2 - 2 * r[band][which]["slope"] + 1 for r in rows])
+            print(f"{band} {which:3s} error    mean {v.mean():.4f} min {v.min():.4f} max {v.max():.4f}")
     return 0
 
 
