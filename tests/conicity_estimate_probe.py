@@ -56,7 +56,10 @@ def main() -> None:
         files = sorted(a.vehicles.glob("*.toml"))
         if not files:
             ap.error(f"--vehicles {a.vehicles}: no vehicle files (*.toml)")
-        runs = {f.stem: ({"vehicle": str(f.resolve())}, vehicle_conicity(f)) for f in files}
+        try:
+            runs = {f.stem: ({"vehicle": str(f.resolve())}, vehicle_conicity(f)) for f in files}
+        except ValueError as e:
+            ap.error(str(e))
     else:
         try:
             conicities = [float(c) for c in a.conicities.split(",")]
@@ -89,11 +92,16 @@ def main() -> None:
 
 
 def vehicle_conicity(file: Path) -> float:
-    """The tread conicity a vehicle file gives its wheelsets."""
+    """The tread conicity a vehicle file gives its wheelsets; `ValueError` naming the file if it
+    has none."""
     import tomllib
 
-    with file.open("rb") as f:
-        return float(tomllib.load(f)["wheelset"]["conicity"])
+    try:
+        with file.open("rb") as f:
+            return float(tomllib.load(f)["wheelset"]["conicity"])
+    except (OSError, tomllib.TOMLDecodeError, KeyError, TypeError, ValueError) as e:
+        raise ValueError(f"{file}: no wheelset.conicity ({type(e).__name__}: {e})") from None
+
 
 if __name__ == "__main__":
     os.environ.setdefault("OMP_NUM_THREADS", "1")

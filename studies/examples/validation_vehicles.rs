@@ -21,14 +21,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: validation_vehicles DIR (one argument)".into());
     }
     // Files this program did not write are never replaced.
-    if dir.exists() && std::fs::read_dir(&dir)?.next().is_some() {
+    let named = |e: std::io::Error| format!("{}: {e}", dir.display());
+    if dir.exists() && std::fs::read_dir(&dir).map_err(named)?.next().is_some() {
         return Err(format!(
             "{}: not empty; give a new or empty directory",
             dir.display()
         )
         .into());
     }
-    std::fs::create_dir_all(&dir)?;
+    std::fs::create_dir_all(&dir).map_err(named)?;
     let kinds: Vec<VehicleParams> = VALIDATION_VARIANTS.iter().map(variant).collect();
     let (seed, n) = VALIDATION_FAMILY;
     let members = family(&VehicleParams::ml95(), seed, n);
