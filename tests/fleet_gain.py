@@ -8,7 +8,7 @@ pass covers it):
 | `sd_ratio` | SD(estimate) / SD(truth) over the line |
 | `slope` | regression slope of the estimate on the truth, `<x^, x> / <x, x>` (the in-band gain g) |
 | `wiener` | `<x^, x> / <x^, x^>`: 1 if the error is orthogonal to the estimate (a Wiener estimate); then `sd_ratio` = sqrt(g) |
-| `seg_err_%` | per-segment relative error of the SD (200 m segments), min and max; of single passes after the pipeline's correction (`fleet.SD_MODEL`), of the average before it |
+| `seg_err_%` | per-segment relative error of the SD (200 m segments), min and max; of single passes after the pipeline's correction (`fleet.SD_MODELS`, the settings' model), of the average before it |
 | `corrected_seg_errs_%` | the average's per-segment errors after the correction |
 | `error` (printed) | the error's variance over the truth's, `sd_ratio^2 - 2 slope + 1`: for the average of many passes, the part of the error the passes share (the track's, not the sensors' noise) |
 
@@ -78,7 +78,7 @@ def measure(seed: int, passes: int, work: Path, options: fleet.Options) -> dict:
         out[band]["all"]["seg_err_%"] = [float(np.nanmin(err) * 100), float(np.nanmax(err) * 100)]
         out[band]["one"]["seg_err_%"] = [float(np.nanmin(one_err) * 100), float(np.nanmax(one_err) * 100)]
         out[band]["all"]["seg_errs_%"] = [round(float(e) * 100, 2) for e in err]
-        fixed = fleet.corrected({band: avg_sd[band][:m]}, passes)[band] / truth_sd[band][:m] - 1
+        fixed = fleet.corrected({band: avg_sd[band][:m]}, passes, fleet.model_of(options))[band] / truth_sd[band][:m] - 1
         out[band]["all"]["corrected_seg_errs_%"] = [round(float(e) * 100, 2) for e in fixed]
     return out
 

@@ -6,6 +6,7 @@ reading the recordings back."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -191,6 +192,37 @@ def test_the_command_line_writes_the_map(fleet_dir, tmp_path):
     seg = pd.read_parquet(out / "segments.parquet")
     assert list(seg["end_m"]) == [250.0, 500.0, 750.0, 1000.0] and (seg["passes"] == 4).all()
     assert "4 segments from 4 passes" in p.stdout
+    assert json.loads((out / "manifest.json").read_text())["sd_model"] == "learned.taps"
+    assert "warning" not in p.stderr, p.stderr
+    # Told the contact, the estimate is another one, for which no SD model was measured: said
+    # once, the SDs left as they are, and the manifest says so.
+    told = tmp_path / "told"
+    p = subprocess.run([sys.executable, "-m", "track_alignment.fleet", *map(str, files), "--out", str(told),
+                        "--workers", "1", "--segment", "250", "--set", "kalker_scale=1"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert p.stderr.count("warning: no SD model was measured for the estimator settings kalker_scale=1") == 1, p.stderr
+    assert json.loads((told / "manifest.json").read_text())["sd_model"] is None
+
+
+def test_the_sd_model_is_the_one_measured_for_the_settings():
+    """The correction's model follows the tap file; settings that change the estimate have none
+    and leave the SDs as they are; the line's settings keep the model."""
+    assert fleet.sd_model(None) == ("learned.taps", fleet.SD_MODEL)
+    assert fleet.sd_model({"line_file": "metro-line.csv", "lag": 0}) == ("learned.taps", fleet.SD_MODEL)
+    bank = fleet.sd_model({"tap_file": "learned-conicity.taps"})
+    assert bank is not None and bank[0] == "learned-conicity.taps" and bank[1] != fleet.SD_MODEL
+    for other in ({"kalker_scale": 1.0}, {"tap_file": "learned-conicity.taps", "conicity": 0.2},
+                  {"use_roll_rate": True}, {"tap_file": "/data/fitted.taps"}):
+        assert fleet.sd_model(other) is None, other
+    sds = {"d1": np.array([1.0, 2.0]), "d2": np.array([3.0, np.nan]), "segment": np.array([0, 1])}
+    same = fleet.corrected(sds, 5, None)
+    for k in sds:
+        np.testing.assert_array_equal(same[k], sds[k])
+    # The bank's model: SD(average of n) / SD(truth) = sqrt(g^2 + shared + independent / n).
+    g2, shared, independent = bank[1]["d1"]
+    out = fleet.corrected(sds, 5, bank[1])
+    np.testing.assert_allclose(out["d1"], sds["d1"] / np.sqrt(g2 + shared + independent / 5), rtol=1e-15)
+    np.testing.assert_array_equal(out["segment"], sds["segment"])
 
 
 def test_recordings_at_2_ms_are_read_at_their_rate_and_meet_the_tolerance(tmp_path):

@@ -140,18 +140,16 @@ fn design_model(
     }
     let in_resources = resources.is_some_and(|d| d.join(name).is_file());
     let model = if name == crate::design::SHIPPED_NAME && !in_resources {
-        crate::design::DesignModel::shipped()
+        crate::design::DesignModel::shipped_shared()
     } else {
         let path = user_file(name, resources).ok_or_else(|| {
             Error::DesignFile(format!(
                 "design_response_file '{name}': not found (relative names are looked up in the FMU's resources, then in the working directory)"
             ))
         })?;
-        crate::design::DesignModel::read(&path)
+        crate::design::DesignModel::read_shared(&path)
     };
-    model
-        .map(|m| Some(std::sync::Arc::new(m)))
-        .map_err(Error::DesignFile)
+    model.map(Some).map_err(Error::DesignFile)
 }
 
 /// The design line `line_file` names ([`user_file`]), rounded as `line_rounding` says, with

@@ -49,6 +49,9 @@ pub const SHIPPED_NAME: &str = "design-response.toml";
 /// The shipped model's text (the ML95, `alignment-studies design-response`).
 const SHIPPED: &str = include_str!("../resources/design-response.toml");
 
+/// The models parsed so far, shared by the instances that read them.
+static MODELS: crate::parsed::Cache<DesignModel> = crate::parsed::Cache::new();
+
 /// The sensors in the estimator's order: `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`,
 /// `ws_roll_rate`.
 pub const SENSORS: [&str; 4] = ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "ws_roll_rate"];
@@ -104,25 +107,32 @@ pub struct DesignModel {
 }
 
 impl DesignModel {
-    /// Reads and checks a model file; errors name the file and what is wrong.
-    pub fn read(path: &Path) -> Result<DesignModel, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
-        let model: DesignModel = toml::from_str(&text)
-            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
-        model
-            .check()
-            .map_err(|e| format!("design response file {}: {e}", path.display()))?;
-        Ok(model)
+    /// The checked model in the file at `path`, parsed once per process for every instance
+    /// that reads the same bytes there ([`crate::parsed`]); errors name the file and what is
+    /// wrong.
+    pub fn read_shared(path: &Path) -> Result<std::sync::Arc<DesignModel>, String> {
+        let named = |e: String| format!("design response file {}: {e}", path.display());
+        let bytes = std::fs::read(path).map_err(|e| named(e.to_string()))?;
+        MODELS.get_or_parse(&path.to_string_lossy(), &bytes, |b| {
+            let text = std::str::from_utf8(b).map_err(|e| named(format!("not UTF-8 text: {e}")))?;
+            DesignModel::parse(text).map_err(named)
+        })
+    }
+
+    /// The shipped model (the ML95), parsed once per process ([`crate::parsed`]).
+    pub fn shipped_shared() -> Result<std::sync::Arc<DesignModel>, String> {
+        MODELS.get_or_parse(SHIPPED_NAME, SHIPPED.as_bytes(), |_| DesignModel::shipped())
     }
 
     /// The shipped model (the ML95).
     pub fn shipped() -> Result<DesignModel, String> {
-        let model: DesignModel =
-            toml::from_str(SHIPPED).map_err(|e| format!("the built-in {SHIPPED_NAME}: {e}"))?;
-        model
-            .check()
-            .map_err(|e| format!("the built-in {SHIPPED_NAME}: {e}"))?;
+        DesignModel::parse(SHIPPED).map_err(|e| format!("the built-in {SHIPPED_NAME}: {e}"))
+    }
+
+    /// A model from its TOML text, checked.
+    fn parse(text: &str) -> Result<DesignModel, String> {
+        let model: DesignModel = toml::from_str(text).map_err(|e| e.to_string())?;
+        model.check()?;
         Ok(model)
     }
 

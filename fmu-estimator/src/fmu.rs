@@ -471,14 +471,14 @@ pub fn learned_from_values(
     // Without resources (the offline path) a shipped name is the bank built into the library.
     let builtin = resources
         .is_none()
-        .then(|| crate::learned::shipped_named(&name))
+        .then(|| crate::learned::shared_named(&name))
         .flatten();
     let bank = match (builtin, crate::config::user_file(&name, resources)) {
         (Some(bank), _) => bank.map_err(Error::Bank)?,
         (None, Some(path)) if !path.exists() => {
             return Err(SettingError::TapFileMissing { name, path }.into());
         }
-        (None, Some(path)) => Bank::load(&path).map_err(Error::Bank)?,
+        (None, Some(path)) => Bank::load_shared(&path).map_err(Error::Bank)?,
         (None, None) => return Err(SettingError::TapFileRelative { name }.into()),
     };
     check_contract(v, &bank, config, &name, log)?;

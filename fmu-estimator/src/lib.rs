@@ -10,6 +10,7 @@
 //! |---|---|
 //! | the FMI call, the variable table, what each FMI phase does | [`fmu`], [`variables`] |
 //! | the user's settings, read once at initialization | [`config`], [`calibration`] |
+//! | the files it reads (tap bank, design response), parsed once per process and shared | [`parsed`] |
 //! | one sample's step, the same in the FMU and offline: distance, hold, sensors, filters | [`step`] |
 //! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
 //! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
@@ -52,6 +53,7 @@ pub mod model;
 pub mod observability;
 pub mod offline;
 pub mod params;
+pub mod parsed;
 pub mod plausible;
 pub mod prior;
 pub mod smoother;

@@ -181,6 +181,32 @@ fn a_bank_made_for_another_runtime_is_refused_naming_the_constant() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Instances share a bank parsed from the same bytes (`fmu_estimator::parsed`): one rewritten
+/// in place between two initializations, even to the same length, is read again.
+#[test]
+fn a_bank_rewritten_between_two_initializations_is_read_again() {
+    let dir = scratch("rewritten");
+    let bank = Bank::load(&resources().join("learned-nominal.taps")).unwrap();
+    let mut other = bank.clone();
+    other.contract.contact_min_speed = 0.5;
+    let (good, bad) = (bank.to_bytes(), other.to_bytes());
+    assert_eq!(
+        good.len(),
+        bad.len(),
+        "the same length: a size check could not tell them"
+    );
+    let path = dir.join("bank.taps");
+    for (bytes, passes) in [(&good, true), (&good, true), (&bad, false), (&good, true)] {
+        std::fs::write(&path, bytes).unwrap();
+        let e = initialize(&with_tap_file(&path));
+        assert_eq!(e.is_ok(), passes, "{e:?}");
+        if !passes {
+            assert!(e.unwrap_err().contains("another build"));
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn a_bank_used_with_another_kalman_channel_fails_initialization() {
     let dir = scratch("kalman");

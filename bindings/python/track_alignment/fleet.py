@@ -13,7 +13,9 @@ Steps, each recording one task:
    Butterworth filter and drop ``trim`` metres at both ends of the pass;
 4. per segment (``segment`` metres, 200 by default): the pass's standard deviation in each
    band, where the pass covers at least half the segment, divided by the SD ratio the
-   estimate's in-band gain and error give (:data:`SD_MODEL`; the average's likewise).
+   estimate's in-band gain and error give (:data:`SD_MODELS`, measured for the shipped tap
+   files told nothing; the average's likewise). Other estimator settings: left uncorrected,
+   with a warning (:class:`UncorrectedWarning`).
 
 The passes' band-passed estimates are summed in a fixed binary tree of tasks (so the result
 does not depend on the number of workers or the order tasks finish), and averaged: averaging
@@ -27,7 +29,7 @@ Output (``out_dir``):
 | ``segments.parquet`` | per segment: ``segment``, ``start_m``, ``end_m``, ``passes``, ``d1_sd_mm`` and ``d2_sd_mm`` (of the average over passes), ``d1_pass_sd_mean_mm``, ``d1_pass_sd_spread_mm`` (mean and standard deviation over passes of each pass's own SD), the same for D2; with a truth, ``d1_truth_sd_mm``, ``d2_truth_sd_mm`` |
 | ``passes.parquet`` | per pass and segment: ``pass``, ``file``, ``segment``, ``d1_sd_mm``, ``d2_sd_mm`` |
 | ``map.png`` | segment index against D1 and D2 standard deviation, the passes' spread as error bars |
-| ``manifest.json`` | the command, its settings and the files above: a rerun into the directory replaces only these |
+| ``manifest.json`` | the command, its settings, ``sd_model`` (the tap file whose SD model corrected the SDs; null: uncorrected) and the files above: a rerun into the directory replaces only these |
 
 The output directory follows the commands' output policy (:mod:`track_alignment._output`): checked
 before any work, files the command did not write and its inputs never replaced, each file
@@ -60,25 +62,56 @@ OUTPUTS = ("segments.parquet", "passes.parquet", "map.png")
 BANDS = {name.lower(): edges for name, edges in _native.BANDS if name in ("D1", "D2")}
 
 #: The estimate's variance in each band as a fraction of the truth's, for the average of ``n``
-#: passes: ``GAIN2 + SHARED + INDEPENDENT / n``. ``GAIN2`` is the square of the in-band gain
-#: (the regression slope of the estimate on the truth: the learned filter shrinks its estimate,
-#: as a minimum-error filter does where the signal-to-noise ratio is finite), ``SHARED`` the
-#: error every pass over a track shares, ``INDEPENDENT`` the one averaging removes. Measured on
-#: the calibration and validation track seeds 101-106 (``tests/fleet_gain.py``, 20 passes each;
-#: docs/python.md); the segment SDs are divided by its square root.
-SD_MODEL = {"d1": (0.966, 0.0087, 0.0162), "d2": (0.967, 0.0008, 0.0016)}
+#: passes: ``GAIN2 + SHARED + INDEPENDENT / n``, per shipped tap bank told nothing (the
+#: ``tap_file`` setting; none: the default). ``GAIN2`` is the square of the in-band gain (the
+#: regression slope of the estimate on the truth: the learned filter shrinks its estimate, as a
+#: minimum-error filter does where the signal-to-noise ratio is finite), ``SHARED`` the error
+#: every pass over a track shares, ``INDEPENDENT`` the one averaging removes. Measured on the
+#: calibration and validation track seeds 101-106 (``tests/fleet_gain.py``: the default from 20
+#: passes each, the bank over conicities from 50; docs/python.md); the segment SDs are divided
+#: by its square root.
+SD_MODELS = {
+    "learned.taps": {"d1": (0.966, 0.0087, 0.0162), "d2": (0.967, 0.0008, 0.0016)},
+    "learned-conicity.taps": {"d1": (0.992, 0.0299, 0.0310), "d2": (0.954, 0.0014, 0.0020)},
+}
+#: The default's model (no settings).
+SD_MODEL = SD_MODELS["learned.taps"]
+#: Settings the models hold with: the line's (the curved line's fleet meets the straight one's
+#: tolerance, tests/test_fleet.py), and the fixed-lag output's, which the pipeline does not read.
+NEUTRAL_SETTINGS = ("line_file", "line_rounding", "line_start", "design_response_file", "lag")
 
 
-def sd_factor(band: str, passes) -> np.ndarray:
-    """SD(estimate) / SD(truth) expected in ``band`` for an average of ``passes`` passes."""
-    gain2, shared, independent = SD_MODEL[band]
+class UncorrectedWarning(UserWarning):
+    """The settings are not ones an SD model was measured for: the SDs are left uncorrected."""
+
+
+def sd_model(settings: Mapping[str, Any] | None) -> tuple[str, dict] | None:
+    """The SD model measured for the estimator ``settings`` and its name (the tap file), or None
+    where none was: another tap file, or a setting that changes the estimate (told conicity or
+    contact, the roll-rate gyroscope, the filter's parameters). A model measured for other
+    settings would be wrong by their difference in gain and shared error: the bank over
+    conicities' D1 segment SDs corrected with the default's model err by up to 19 %."""
+    rest = {k: v for k, v in (settings or {}).items() if k not in NEUTRAL_SETTINGS}
+    name = str(rest.pop("tap_file", "")).strip() or "learned.taps"
+    if rest or name not in SD_MODELS:
+        return None
+    return name, SD_MODELS[name]
+
+
+def sd_factor(band: str, passes, model: Mapping[str, tuple] | None = None) -> np.ndarray:
+    """SD(estimate) / SD(truth) expected in ``band`` for an average of ``passes`` passes under
+    ``model`` (one of :data:`SD_MODELS`; None: the default's)."""
+    gain2, shared, independent = (model or SD_MODEL)[band]
     return np.sqrt(gain2 + shared + independent / np.maximum(np.asarray(passes, dtype=np.float64), 1.0))
 
 
-def corrected(sds: Mapping[str, np.ndarray], passes) -> dict[str, np.ndarray]:
+def corrected(sds: Mapping[str, np.ndarray], passes, model: Mapping[str, tuple] | None = SD_MODEL
+              ) -> dict[str, np.ndarray]:
     """Segment SDs of an average of ``passes`` passes (per segment, or one number) divided by
-    :func:`sd_factor`: unbiased estimates of the track's SDs."""
-    return {k: (x / sd_factor(k, passes) if k in SD_MODEL else x) for k, x in sds.items()}
+    :func:`sd_factor`: unbiased estimates of the track's SDs. ``model`` None: as they are."""
+    if model is None:
+        return dict(sds)
+    return {k: (x / sd_factor(k, passes, model) if k in model else x) for k, x in sds.items()}
 
 
 @dataclass
@@ -114,7 +147,13 @@ def estimate_pass(path: str, options: Options) -> tuple[Coverage, dict[str, np.n
         raise RecordingError(f"{path}: covers {position[-1] - position[0]:.0f} m, too short for the D2 band")
     bands = banded(np.interp(np.arange(first, last + 1) * ds, position, out["alignment"]), options)
     count = np.isfinite(bands["d1"]).astype(np.float64)
-    return Coverage(first, bands, count), corrected(segment_sds(first, bands, options), 1)
+    return Coverage(first, bands, count), corrected(segment_sds(first, bands, options), 1, model_of(options))
+
+
+def model_of(options: Options) -> dict | None:
+    """The SD model of ``options``' settings (:func:`sd_model`), None where none was measured."""
+    found = sd_model(options.settings)
+    return found[1] if found else None
 
 
 def estimate_recording(path: str, settings: Mapping[str, Any] | None = None, *,
@@ -259,6 +298,8 @@ def run(
     options = options or Options()
     files = expand(recordings)
     check_settings(options.settings or {}, options.fit_design)
+    if sd_model(options.settings) is None:
+        warnings.warn(uncorrected_message(options.settings), UncorrectedWarning, stacklevel=2)
     out = OutputDir(out_dir, COMMAND)
     out.check(OUTPUTS if plot else OUTPUTS[:2], inputs=[*files, *([truth] if truth is not None else [])])
     truth_sd = truth_sds(truth, options) if truth is not None else None
@@ -278,6 +319,14 @@ def run(
             own.close()
             own.cluster.close()
     return write(files, total, sds, options, out, truth_sd, plot)
+
+
+def uncorrected_message(settings: Mapping[str, Any] | None) -> str:
+    """Why the segment SDs are left uncorrected, naming the settings."""
+    given = ", ".join(f"{k}={v}" for k, v in (settings or {}).items())
+    return (f"no SD model was measured for the estimator settings {given} (only for the shipped tap files "
+            f"{', '.join(SD_MODELS)} told nothing): the segment SDs are the estimate's own, not corrected for "
+            "its in-band gain and shared error (manifest.json: sd_model null)")
 
 
 def check_settings(settings: Mapping[str, Any], fit_design: bool = False) -> None:
@@ -312,7 +361,7 @@ def write(files, total: Coverage, sds, options: Options, out: OutputDir, truth_s
             "end_m": (np.arange(n_segments) + 1) * options.segment}
     per_pass = {k: np.vstack([pad(s[k]) for s in sds]) for k in BANDS}
     rows["passes"] = np.isfinite(per_pass["d1"]).sum(axis=0)
-    averaged = corrected({k: pad(averaged[k]) for k in BANDS}, rows["passes"])
+    averaged = corrected({k: pad(averaged[k]) for k in BANDS}, rows["passes"], model_of(options))
     for k in BANDS:
         rows[f"{k}_sd_mm"] = averaged[k]
         # Segments no pass covers: numpy's 'mean of empty slice' warnings, NaN as wanted.
@@ -336,7 +385,8 @@ def write(files, total: Coverage, sds, options: Options, out: OutputDir, truth_s
         out.stage("map.png", lambda tmp: plot_map(segments, tmp))
     out.commit({"recordings": [str(f) for f in files], "segment_m": options.segment, "ds_m": options.ds,
                 "trim_m": options.trim, "settings": {k: str(v) for k, v in (options.settings or {}).items()},
-                "fit_design": options.fit_design})
+                "fit_design": options.fit_design,
+                "sd_model": (sd_model(options.settings) or [None])[0]})
     return segments
 
 
@@ -421,7 +471,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             # A failed task reaches the user as one error line, not as the workers' logs.
             client = Client(LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True,
                                          dashboard_address=":0", silence_logs=logging.CRITICAL))
-        segments = run(files, a.out, options=options, client=client, truth=a.truth, plot=plot)
+        with warnings.catch_warnings():
+            # Said once, as a line of its own.
+            warnings.simplefilter("ignore", UncorrectedWarning)
+            if sd_model(settings) is None:
+                print(f"warning: {uncorrected_message(settings)}", file=sys.stderr)
+            segments = run(files, a.out, options=options, client=client, truth=a.truth, plot=plot)
     except OutputError as e:
         print(f"error: {e}", file=sys.stderr)
         return 1

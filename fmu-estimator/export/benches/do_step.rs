@@ -352,11 +352,43 @@ fn bench_update_forms(c: &mut Criterion) {
     }
 }
 
+/// What an importer pays once per instance before the first step: instantiate, set up,
+/// initialize (where the learned filter reads and checks its tap bank) and free. Why it is
+/// measured: a fleet or Monte-Carlo run makes one instance per pass.
+fn bench_startup(c: &mut Criterion) {
+    let mut group = c.benchmark_group("startup");
+    group.sample_size(10);
+    for (estimator, taps, label) in [
+        (1, c"learned.taps", "paper's filter"),
+        (2, c"learned.taps", "learned filter, learned.taps (default)"),
+        (
+            2,
+            c"learned-conicity.taps",
+            "learned filter, learned-conicity.taps",
+        ),
+    ] {
+        group.bench_function(format!("instantiate + initialize + free ({label})"), |b| {
+            b.iter(|| {
+                // SAFETY: `instance_with` passes its live instance; each reference and value
+                // is one element; the tap file's name is a NUL-terminated static string.
+                let comp = instance_with(1, 1, 0, |c| unsafe {
+                    fmi2SetInteger(c, &vr::ESTIMATOR, 1, &estimator);
+                    fmi2SetString(c, &vr::TAP_FILE, 1, &taps.as_ptr());
+                });
+                // SAFETY: the instance `instance_with` returned, freed once and not used after.
+                unsafe { fmi2FreeInstance(black_box(comp)) };
+            })
+        });
+    }
+    group.finish();
+}
+
 criterion_group!(
     benches,
     bench,
     bench_options,
     bench_learned,
-    bench_update_forms
+    bench_update_forms,
+    bench_startup
 );
 criterion_main!(benches);

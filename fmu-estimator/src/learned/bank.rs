@@ -581,9 +581,19 @@ impl Header {
 
     /// Reads the tap bank at `path`.
     pub fn load(path: &Path) -> Result<Bank, BankError> {
-        let bytes =
-            fmi_abi::resource::read_bytes(path, "tap bank", 64 << 20).map_err(BankError::Read)?;
-        Bank::parse(&bytes, path)
+        Bank::parse(&Bank::bytes(path)?, path)
+    }
+
+    /// The tap bank at `path`, parsed once per process for every instance that reads the same
+    /// bytes there ([`crate::parsed`]).
+    pub fn load_shared(path: &Path) -> Result<std::sync::Arc<Bank>, BankError> {
+        let bytes = Bank::bytes(path)?;
+        BANKS.get_or_parse(&path.to_string_lossy(), &bytes, |b| Bank::parse(b, path))
+    }
+
+    /// The bytes of the file at `path`, within the size a bank may have.
+    fn bytes(path: &Path) -> Result<Vec<u8>, BankError> {
+        fmi_abi::resource::read_bytes(path, "tap bank", 64 << 20).map_err(BankError::Read)
     }
 
     /// The consistency of the header (taps aside).
@@ -699,6 +709,10 @@ fn assemble(format: u32, header: &str, data: &[u8]) -> Vec<u8> {
     out.extend_from_slice(data);
     out
 }
+
+/// The banks parsed so far, shared by the instances that read them ([`Bank::load_shared`],
+/// [`super::shared_named`]).
+pub(crate) static BANKS: crate::parsed::Cache<Bank> = crate::parsed::Cache::new();
 
 /// FNV-1a, 64 bits: detects a damaged or edited data block.
 pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {

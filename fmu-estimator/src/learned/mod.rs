@@ -70,9 +70,30 @@ pub(crate) fn weights(xs: &[f64], v: f64) -> Vec<(usize, f64)> {
 /// (offline processing without an unpacked FMU); `None` for any other name, and for every name
 /// in a build without the `builtin-banks` feature (the FMU's shared library, which reads its
 /// resources).
-#[cfg(feature = "builtin-banks")]
 pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
-    let bytes: &[u8] = match name {
+    let bytes = builtin(name)?;
+    Some(bytes.and_then(|b| Bank::parse(b, &builtin_path(name))))
+}
+
+/// [`shipped_named`], parsed once per process for every instance that reads it
+/// ([`crate::parsed`]).
+pub fn shared_named(name: &str) -> Option<Result<std::sync::Arc<Bank>, BankError>> {
+    let bytes = builtin(name)?;
+    Some(bytes.and_then(|b| {
+        let path = builtin_path(name);
+        bank::BANKS.get_or_parse(&path.to_string_lossy(), b, |b| Bank::parse(b, &path))
+    }))
+}
+
+/// How a built-in bank is named in errors (and keyed in the cache of parsed banks).
+fn builtin_path(name: &str) -> std::path::PathBuf {
+    std::path::PathBuf::from(format!("{name} (built in)"))
+}
+
+/// The bytes of the shipped bank `name` built into this library; `None` for another name.
+#[cfg(feature = "builtin-banks")]
+fn builtin(name: &str) -> Option<Result<&'static [u8], BankError>> {
+    let bytes: &'static [u8] = match name {
         "learned.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned.taps")),
         "learned-nominal.taps" => include_bytes!(concat!(env!("OUT_DIR"), "/learned-nominal.taps")),
         "learned-conicity.taps" => {
@@ -83,15 +104,12 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
     if bytes.is_empty() {
         return Some(Err(BankError::NotBuilt(name.to_string())));
     }
-    Some(Bank::parse(
-        bytes,
-        std::path::Path::new(&format!("{name} (built in)")),
-    ))
+    Some(Ok(bytes))
 }
 
 /// Without the `builtin-banks` feature no bank is built in.
 #[cfg(not(feature = "builtin-banks"))]
-pub fn shipped_named(_name: &str) -> Option<Result<Bank, BankError>> {
+fn builtin(_name: &str) -> Option<Result<&'static [u8], BankError>> {
     None
 }
 
