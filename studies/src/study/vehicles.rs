@@ -113,38 +113,48 @@ pub fn variant(v: &Variant) -> VehicleParams {
 /// The car body's mass and inertias times `f` (a load).
 fn car_body(p: &mut VehicleParams, f: f64) {
     let c = &mut p.car_body;
-    for x in [
-        &mut c.mass,
-        &mut c.roll_inertia,
-        &mut c.pitch_inertia,
-        &mut c.yaw_inertia,
-    ] {
-        *x *= f;
-    }
+    times(
+        f,
+        [
+            &mut c.mass,
+            &mut c.roll_inertia,
+            &mut c.pitch_inertia,
+            &mut c.yaw_inertia,
+        ],
+    );
 }
 
 /// The wheelsets' mass and inertias times `f`.
 fn wheelsets(p: &mut VehicleParams, f: f64) {
     let w = &mut p.wheelset;
-    for x in [
-        &mut w.mass,
-        &mut w.yaw_inertia,
-        &mut w.roll_inertia,
-        &mut w.spin_inertia,
-    ] {
-        *x *= f;
-    }
+    times(
+        f,
+        [
+            &mut w.mass,
+            &mut w.yaw_inertia,
+            &mut w.roll_inertia,
+            &mut w.spin_inertia,
+        ],
+    );
 }
 
 /// The bogie frames' mass and inertias times `f`.
 fn frames(p: &mut VehicleParams, f: f64) {
     let b = &mut p.bogie;
-    for x in [
-        &mut b.mass,
-        &mut b.roll_inertia,
-        &mut b.pitch_inertia,
-        &mut b.yaw_inertia,
-    ] {
+    times(
+        f,
+        [
+            &mut b.mass,
+            &mut b.roll_inertia,
+            &mut b.pitch_inertia,
+            &mut b.yaw_inertia,
+        ],
+    );
+}
+
+/// Each of `values` times `f`.
+fn times<const N: usize>(f: f64, values: [&mut f64; N]) {
+    for x in values {
         *x *= f;
     }
 }
