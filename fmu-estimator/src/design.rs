@@ -50,7 +50,7 @@ pub const SHIPPED_NAME: &str = "design-response.toml";
 const SHIPPED: &str = include_str!("../resources/design-response.toml");
 
 /// The models parsed so far, shared by the instances that read them.
-static MODELS: crate::parsed::Cache<DesignModel> = crate::parsed::Cache::new();
+pub(crate) static MODELS: crate::parsed::Cache<DesignModel> = crate::parsed::Cache::new();
 
 /// The sensors in the estimator's order: `ws_acc_y`, `ws_yaw_rate`, `frame_acc_y`,
 /// `ws_roll_rate`.

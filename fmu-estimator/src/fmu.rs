@@ -52,6 +52,26 @@ pub struct Estimator {
     step_warned: bool,
     /// Warnings that recur per step, logged once and counted.
     repeats: fmi_abi::logger::Repeats,
+    /// This instance's share of the parsed files ([`crate::parsed`]): when the last instance
+    /// (or saved state) goes, they are let go, so that an importer may unload the library.
+    #[serde(skip)]
+    _files: FilesInUse,
+}
+
+/// The FMU's instances and saved states, as users of the parsed tap banks and design responses.
+static FILES: crate::parsed::Group = crate::parsed::Group::new(|| {
+    crate::learned::bank::BANKS.clear();
+    crate::design::MODELS.clear();
+});
+
+/// A member of [`FILES`] (a new one for every instance, copy and restored state).
+#[derive(Debug, Clone)]
+struct FilesInUse(#[allow(dead_code, reason = "held for its drop")] crate::parsed::Member);
+
+impl Default for FilesInUse {
+    fn default() -> Self {
+        FilesInUse(FILES.join())
+    }
 }
 
 impl Estimator {
@@ -159,6 +179,7 @@ impl Model for Estimator {
             bias_warned: false,
             step_warned: false,
             repeats: Default::default(),
+            _files: FilesInUse::default(),
         })
     }
 

@@ -15,6 +15,14 @@
 //! means a file rewritten between two instances is read again whatever its clock says. A file
 //! that does not parse is not kept: every instance reports it. The lock is held only to look up
 //! and to insert; two instances that miss at once both parse, and the second's result is kept.
+//!
+//! # Lifetime
+//! Where instances come and go through a host that may unload the library (the FMU), they
+//! belong to a [`Group`]: when its last member goes, the group empties the caches, so a library
+//! whose instances are all freed holds no parsed file (an importer that unloads it loses no
+//! memory; valgrind sees none lost). Instances that live at once share; one after another, each
+//! parses again. Without a group (the bindings, the studies: a process that never unloads the
+//! library) the caches keep what they parsed.
 
 use std::sync::{Arc, Mutex};
 
@@ -70,10 +78,70 @@ impl<T> Cache<T> {
         Ok(value)
     }
 
+    /// Forgets every entry (the values stay with whoever holds them), and the list's own
+    /// memory: nothing of the cache is left allocated.
+    pub fn clear(&self) {
+        *self.lock() = Vec::new();
+    }
+
     /// The entries, also after a thread panicked holding the lock: the list is replaced whole
     /// or not at all under it, so it is never half written.
     fn lock(&self) -> std::sync::MutexGuard<'_, Vec<Entry<T>>> {
         self.entries.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+/// Users of some caches, and what empties them when the last user goes ([module docs](self)).
+pub struct Group {
+    users: Mutex<usize>,
+    release: fn(),
+}
+
+impl Group {
+    /// A group whose last member's going calls `release` (a `static`).
+    pub const fn new(release: fn()) -> Group {
+        Group {
+            users: Mutex::new(0),
+            release,
+        }
+    }
+
+    /// A new member, until dropped.
+    pub fn join(&'static self) -> Member {
+        *self.count() += 1;
+        Member { group: self }
+    }
+
+    fn count(&self) -> std::sync::MutexGuard<'_, usize> {
+        self.users.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+/// One user of a [`Group`]'s caches: an instance, or a copy of one (a saved FMU state).
+pub struct Member {
+    group: &'static Group,
+}
+
+impl Clone for Member {
+    fn clone(&self) -> Member {
+        self.group.join()
+    }
+}
+
+impl Drop for Member {
+    fn drop(&mut self) {
+        let mut n = self.group.count();
+        *n = n.saturating_sub(1);
+        // Emptied under the count's lock: no member joins halfway through.
+        if *n == 0 {
+            (self.group.release)();
+        }
+    }
+}
+
+impl std::fmt::Debug for Member {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Member")
     }
 }
 
@@ -117,6 +185,28 @@ mod tests {
         assert!(!Arc::ptr_eq(&c, &d) && calls.get() == 3);
         // What a caller holds is untouched by what replaces it in the cache.
         assert_eq!(a.as_str(), "one");
+    }
+
+    #[test]
+    fn the_group_empties_its_caches_when_its_last_member_goes() {
+        static CACHE: Cache<String> = Cache::new();
+        static GROUP: Group = Group::new(|| CACHE.clear());
+        let calls = Cell::new(0);
+        let a = GROUP.join();
+        let b = a.clone();
+        parse_count(&CACHE, "f", b"x", &calls);
+        drop(a);
+        parse_count(&CACHE, "f", b"x", &calls);
+        assert_eq!(calls.get(), 1, "kept while a member lives");
+        drop(b);
+        assert_eq!(
+            CACHE.lock().capacity(),
+            0,
+            "emptied, its memory too, when the last member went"
+        );
+        let _c = GROUP.join();
+        parse_count(&CACHE, "f", b"x", &calls);
+        assert_eq!(calls.get(), 2);
     }
 
     #[test]

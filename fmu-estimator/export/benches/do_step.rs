@@ -354,7 +354,9 @@ fn bench_update_forms(c: &mut Criterion) {
 
 /// What an importer pays once per instance before the first step: instantiate, set up,
 /// initialize (where the learned filter reads and checks its tap bank) and free. Why it is
-/// measured: a fleet or Monte-Carlo run makes one instance per pass.
+/// measured: a fleet or Monte-Carlo run makes one instance per pass. Alone, each instance
+/// parses its files; beside a live instance it shares what that one parsed
+/// (`fmu_estimator::parsed`).
 fn bench_startup(c: &mut Criterion) {
     let mut group = c.benchmark_group("startup");
     group.sample_size(10);
@@ -367,18 +369,32 @@ fn bench_startup(c: &mut Criterion) {
             "learned filter, learned-conicity.taps",
         ),
     ] {
-        group.bench_function(format!("instantiate + initialize + free ({label})"), |b| {
-            b.iter(|| {
-                // SAFETY: `instance_with` passes its live instance; each reference and value
-                // is one element; the tap file's name is a NUL-terminated static string.
-                let comp = instance_with(1, 1, 0, |c| unsafe {
-                    fmi2SetInteger(c, &vr::ESTIMATOR, 1, &estimator);
-                    fmi2SetString(c, &vr::TAP_FILE, 1, &taps.as_ptr());
-                });
-                // SAFETY: the instance `instance_with` returned, freed once and not used after.
-                unsafe { fmi2FreeInstance(black_box(comp)) };
+        let make = || {
+            // SAFETY: `instance_with` passes its live instance; each reference and value is
+            // one element; the tap file's name is a NUL-terminated static string.
+            instance_with(1, 1, 0, |c| unsafe {
+                fmi2SetInteger(c, &vr::ESTIMATOR, 1, &estimator);
+                fmi2SetString(c, &vr::TAP_FILE, 1, &taps.as_ptr());
             })
-        });
+        };
+        for beside in [false, true] {
+            let live = beside.then(make);
+            let how = if beside { "beside a live one" } else { "alone" };
+            group.bench_function(
+                format!("instantiate + initialize + free, {how} ({label})"),
+                |b| {
+                    b.iter(|| {
+                        let comp = make();
+                        // SAFETY: the instance `make` returned, freed once and not used after.
+                        unsafe { fmi2FreeInstance(black_box(comp)) };
+                    })
+                },
+            );
+            if let Some(comp) = live {
+                // SAFETY: the live instance, freed once after its bench.
+                unsafe { fmi2FreeInstance(comp) };
+            }
+        }
     }
     group.finish();
 }
