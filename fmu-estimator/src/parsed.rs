@@ -4,7 +4,7 @@
 //! An instance reads its tap bank (2.9 MB for `learned.taps`, 3.4 MB over conicities) and the
 //! design response (0.3 MB of TOML) at initialization, and parsing them cost most of an
 //! instance's start: about 10 ms and 5 ms of the 20 ms the bindings took per record
-//! (2026-11-28, `perf`), against 25 ms of stepping for a 1 km pass. A fleet or Monte-Carlo run
+//! (2026-11-28, `perf`), against some 30 ms of stepping for a 1 km pass. A fleet or Monte-Carlo run
 //! makes one instance per pass, in the same process; they all read the same files.
 //!
 //! # Rule
