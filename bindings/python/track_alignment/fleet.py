@@ -98,10 +98,10 @@ def sd_model(settings: Mapping[str, Any] | None) -> tuple[str, dict] | None:
     return name, SD_MODELS[name]
 
 
-def sd_factor(band: str, passes, model: Mapping[str, tuple] | None = None) -> np.ndarray:
+def sd_factor(band: str, passes, model: Mapping[str, tuple] = SD_MODEL) -> np.ndarray:
     """SD(estimate) / SD(truth) expected in ``band`` for an average of ``passes`` passes under
-    ``model`` (one of :data:`SD_MODELS`; None: the default's)."""
-    gain2, shared, independent = (model or SD_MODEL)[band]
+    ``model`` (one of :data:`SD_MODELS`; the default's unless given)."""
+    gain2, shared, independent = model[band]
     return np.sqrt(gain2 + shared + independent / np.maximum(np.asarray(passes, dtype=np.float64), 1.0))
 
 

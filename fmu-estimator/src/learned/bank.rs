@@ -587,8 +587,16 @@ impl Header {
     /// The tap bank at `path`, parsed once per process for every instance that reads the same
     /// bytes there ([`crate::parsed`]).
     pub fn load_shared(path: &Path) -> Result<std::sync::Arc<Bank>, BankError> {
-        let bytes = Bank::bytes(path)?;
-        BANKS.get_or_parse(&path.to_string_lossy(), &bytes, |b| Bank::parse(b, path))
+        Bank::parse_shared(&Bank::bytes(path)?, path)
+    }
+
+    /// [`Bank::parse`], shared with every other reader of the same bytes under `file`
+    /// ([`crate::parsed`]).
+    pub(crate) fn parse_shared(
+        bytes: &[u8],
+        file: &Path,
+    ) -> Result<std::sync::Arc<Bank>, BankError> {
+        BANKS.get_or_parse(&file.to_string_lossy(), bytes, |b| Bank::parse(b, file))
     }
 
     /// The bytes of the file at `path`, within the size a bank may have.

@@ -79,10 +79,7 @@ pub fn shipped_named(name: &str) -> Option<Result<Bank, BankError>> {
 /// ([`crate::parsed`]).
 pub fn shared_named(name: &str) -> Option<Result<std::sync::Arc<Bank>, BankError>> {
     let bytes = builtin(name)?;
-    Some(bytes.and_then(|b| {
-        let path = builtin_path(name);
-        bank::BANKS.get_or_parse(&path.to_string_lossy(), b, |b| Bank::parse(b, &path))
-    }))
+    Some(bytes.and_then(|b| Bank::parse_shared(b, &builtin_path(name))))
 }
 
 /// How a built-in bank is named in errors (and keyed in the cache of parsed banks).
