@@ -471,6 +471,25 @@ pub fn process_columns_from(
     run_from(config, start, h, n, |k| columns.sample(k), false, check)
 }
 
+/// [`process_learned`] continuing from `start`, without the smoother; also where the run
+/// stopped (the learned filter as the run left it: the long-wave stage's fit reads its log).
+pub fn process_learned_from(
+    config: &Config,
+    start: Resume,
+    h: f64,
+    samples: &[Sample],
+) -> Result<(Processed, Resume), Error> {
+    run_from(
+        config,
+        start,
+        h,
+        samples.len(),
+        |k| samples[k],
+        false,
+        false,
+    )
+}
+
 /// [`run`] from `start`; also where it stopped.
 fn run_from(
     config: &Config,

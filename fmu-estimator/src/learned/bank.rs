@@ -182,6 +182,11 @@ pub struct Header {
     /// The estimator of the contact condition, in a bank with per-condition entries.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<super::contact::ContactModel>,
+    /// The long-wave stage after the causal taps ([`super::stage`]), when fitted. Optional
+    /// within format 6 (2026-11-29): a reader without it ignores it and gives the taps'
+    /// estimate alone, as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stage: Option<super::stage::StageBank>,
     /// The taps' entries: per speed, sensor set, lag and (with a contact model) condition.
     #[serde(rename = "entry")]
     pub entries: Vec<Entry>,
@@ -612,6 +617,9 @@ impl Header {
         if let Some(c) = &self.contact {
             c.check(self.grid)?;
         }
+        if let Some(st) = &self.stage {
+            st.check(self.grid).map_err(BankProblem::Stage)?;
+        }
         let conditional = self
             .entries
             .iter()
@@ -785,6 +793,7 @@ pub(crate) mod tests {
             contract: sample_contract(),
             encoding: Encoding::F32,
             contact: None,
+            stage: None,
             entries: vec![
                 entry(10.0, 0),
                 entry(20.0, 0),

@@ -144,6 +144,9 @@ pub enum BankProblem {
         /// Bytes the data holds.
         held: usize,
     },
+    /// The long-wave stage cannot be applied as it was fitted ([`super::stage`]).
+    #[error("long-wave stage: {0}")]
+    Stage(String),
     /// The entry at this position (0-based) has a tap that is NaN or infinite.
     #[error("entry {0} has a tap that is not a number")]
     Tap(usize),

@@ -86,9 +86,15 @@ impl Biquad {
     /// Second-order Butterworth low-pass with cut-off wavelength `cutoff` on a grid of `ds`
     /// (RBJ cookbook low-pass, `Q = 1/sqrt(2)`).
     pub fn lowpass(ds: f64, cutoff: f64) -> Biquad {
+        Biquad::lowpass_q(ds, cutoff, std::f64::consts::FRAC_1_SQRT_2)
+    }
+
+    /// A second-order low-pass section of quality factor `q` (RBJ cookbook): the sections of
+    /// a higher-order Butterworth low-pass share the cut-off and differ in `q`.
+    pub fn lowpass_q(ds: f64, cutoff: f64, q: f64) -> Biquad {
         let w0 = std::f64::consts::TAU * ds / cutoff;
         let (sin, cos) = w0.sin_cos();
-        let alpha = sin / std::f64::consts::SQRT_2;
+        let alpha = sin / (2.0 * q);
         let a0 = 1.0 + alpha;
         let k = (1.0 - cos) / 2.0 / a0;
         Biquad {

@@ -27,6 +27,7 @@ pub mod grid;
 mod history;
 mod selection;
 pub mod spectral;
+pub mod stage;
 pub mod stream;
 mod track;
 pub mod window;

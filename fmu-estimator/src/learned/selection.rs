@@ -5,6 +5,7 @@ use super::bank::{Bank, Entry};
 use super::contact::ContactModel;
 use super::error::{LearnedError, Taps};
 use super::grid::{CHANNELS, ROLL_RATE};
+use super::stage::StageTaps;
 use super::window::Windows;
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +43,9 @@ pub(super) struct Selection {
     pub(super) lag: usize,
     pub(super) uses_roll_rate: bool,
     pub(super) sample_step: f64,
+    /// The long-wave stage's taps for this sensor set, one per speed of `speeds`, when the
+    /// bank has them ([`super::stage`]).
+    pub(super) stage: Option<StageTaps>,
 }
 
 impl Selection {
@@ -74,6 +78,11 @@ impl Selection {
             (0, vec![])
         };
         let contact = bank.contact.clone().filter(|_| !conditions.is_empty());
+        let sensors = &CHANNELS[..if choice.roll_rate { 4 } else { 3 }];
+        let stage = bank
+            .stage
+            .as_ref()
+            .and_then(|st| StageTaps::select(st, sensors, &speeds));
         Ok(Selection {
             speeds,
             conditions,
@@ -84,6 +93,7 @@ impl Selection {
             lag,
             uses_roll_rate: choice.roll_rate,
             sample_step: bank.provenance.sample_step,
+            stage,
         })
     }
 

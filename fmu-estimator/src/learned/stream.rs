@@ -6,8 +6,10 @@
 //! Per sample: the sample joins its cell ([`Grid`]). When cells close, their values enter the
 //! history and, if the speed lies inside the bank's range, the estimate of the newest cell
 //! (causal) and of the cell `lag` points behind (fixed lag) are computed with the taps of the
-//! two bank speeds around the current speed, blended linearly in speed. Between closings the
-//! outputs extrapolate the last two grid estimates linearly in distance (causal).
+//! two bank speeds around the current speed, blended linearly in speed. With a bank's
+//! long-wave stage ([`super::stage`]) every closed cell also steps the stage, whose correction
+//! is added to the causal estimate (not to the fixed-lag one). Between closings the outputs
+//! extrapolate the last two grid estimates linearly in distance (causal).
 //!
 //! At the start of a run the history is short: each entry has windows with shorter pasts, and
 //! the longest one the history covers is used. Until the fixed-lag window has its `lag` metres
@@ -44,6 +46,7 @@ use super::history::History;
 pub use super::selection::Choice;
 use super::selection::Selection;
 use super::spectral::Spectral;
+use super::stage::{Stage, StageRow};
 use super::track::{Point, Track};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -88,6 +91,11 @@ pub const CONICITY_MEMORY: f64 = 500.0;
 /// 0.075-0.3, Kalker 100 and 75 %: within 20 % from 0.075 to 0.2, the rule 20 % low at
 /// Kalker 50 % and at 0.3), what `alignment_std` is grown by.
 pub const CONICITY_ERROR_SCALE: f64 = 0.1;
+
+/// The long-wave stage's inputs: the sensor channels the taps read, then their estimate.
+fn stage_inputs(roll_rate: bool) -> usize {
+    if roll_rate { 5 } else { 4 }
+}
 
 /// `V^TAP_SPEED_POWER` per channel (with one square root: it runs at every closed cell).
 fn speed_factors(v: f64) -> [f64; 5] {
@@ -139,6 +147,13 @@ pub struct Learned {
     /// The Kalman filter's estimates over the last `lag` metres: its share of the fixed-lag
     /// output ([`super::fallback_share`]) is its estimate made at that output's position.
     kalman_delay: Delay,
+    /// The long-wave stage's band-passes and memory ([`super::stage`]): with a bank's stage,
+    /// or while its inputs are logged for the fit.
+    stage: Option<Stage>,
+    /// The stage's inputs per closed cell, for the fit ([`Self::log_stage`]); not part of an
+    /// FMU state.
+    #[serde(skip)]
+    stage_log: Option<Vec<StageRow>>,
 }
 
 impl Learned {
@@ -172,8 +187,86 @@ impl Learned {
             delay: Delay::new(selection.lag),
             kalman_delay: Delay::new(selection.lag),
             in_range: false,
+            stage: selection
+                .stage
+                .as_ref()
+                .map(|_| Stage::new(stage_inputs(choice.roll_rate), bank.grid)),
+            stage_log: None,
             selection: Arc::new(selection),
         })
+    }
+
+    /// Logs the long-wave stage's inputs at every closed cell from here on, for its fit
+    /// (`alignment-studies stage`): the band-passed inputs and the taps' estimate before the
+    /// stage, whether the bank has a stage or not.
+    pub fn log_stage(&mut self, grid: f64) {
+        let inputs = stage_inputs(self.selection.uses_roll_rate);
+        self.stage.get_or_insert_with(|| Stage::new(inputs, grid));
+        self.stage_log.get_or_insert_with(Vec::new);
+    }
+
+    /// The rows logged since [`Self::log_stage`] (empty without it).
+    pub fn take_stage_log(&mut self) -> Vec<StageRow> {
+        self.stage_log
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default()
+    }
+
+    /// Whether the bank's long-wave stage corrects the causal output.
+    pub fn has_stage(&self) -> bool {
+        self.selection.stage.is_some()
+    }
+
+    /// Steps the long-wave stage with the cells just closed (`cells`, raw; `factors` their
+    /// speed's gains) and the taps' causal estimate `made` (the Kalman filter's `kalman`
+    /// where they made none); the correction of `made` at `speed` (0 without a stage or an
+    /// estimate).
+    fn stage_step(
+        &mut self,
+        cells: &[[f64; 5]],
+        factors: &[f64; 5],
+        made: Option<f64>,
+        kalman: f64,
+        distance: f64,
+        speed: f64,
+    ) -> f64 {
+        let Some(stage) = self.stage.as_mut() else {
+            return 0.0;
+        };
+        let n = stage_inputs(self.selection.uses_roll_rate) - 1;
+        let mut x = [0.0; 5];
+        x[n] = made.unwrap_or(kalman);
+        let mut passed = [0.0; 5];
+        for cell in cells {
+            for c in 0..n {
+                x[c] = cell[c] / factors[c];
+            }
+            passed = stage.push(&x[..=n], speed);
+        }
+        // The sensors' share of the correction is multiplied back by the current speed's
+        // gain, as the taps' is: at constant speed the stage reads the band-passed raw cells.
+        let mut gain = [1.0; 5];
+        gain[..n].copy_from_slice(&factors[..n]);
+        if let Some(log) = self.stage_log.as_mut() {
+            log.push(StageRow {
+                distance,
+                estimate: made.unwrap_or(f64::NAN),
+                inputs: std::array::from_fn(|c| passed[c] * gain[c]),
+            });
+        }
+        let (Some(taps), Some(_)) = (&self.selection.stage, made) else {
+            return 0.0;
+        };
+        let share = stage.share();
+        if share == 0.0 {
+            return 0.0;
+        }
+        share
+            * super::weights(&taps.speeds, speed)
+                .iter()
+                .map(|(i, w)| w * stage.correction(&taps.taps[*i], &gain[..=n]))
+                .sum::<f64>()
     }
 
     /// The estimated Kalker-coefficient scale of the contact (1: the nominal coefficients), from
@@ -337,10 +430,12 @@ impl Learned {
             distance: closed.distance,
         };
         self.kalman_delay.push(kalman);
+        let d = closed.distance;
         if !self.in_range {
             self.causal.clear();
             self.lagged.clear();
             self.delay.push(kalman);
+            self.stage_step(&closed.cells, &factors, None, x[KALMAN], d, speed);
             return;
         }
         let sel = &self.selection;
@@ -352,11 +447,24 @@ impl Learned {
             &sel.conicities,
             self.conicity,
         );
-        let d = closed.distance;
-        match blend.apply(&sel.causal, &self.history, &factors) {
+        let made = blend.apply(&sel.causal, &self.history, &factors);
+        let lagged = if sel.lagged.is_empty() {
+            None
+        } else {
+            blend.apply(&sel.lagged, &self.history, &factors)
+        };
+        let correction = self.stage_step(
+            &closed.cells,
+            &factors,
+            made.map(|m| m.0),
+            x[KALMAN],
+            d,
+            speed,
+        );
+        match made {
             Some((value, std)) => {
                 let p = Point {
-                    value,
+                    value: value + correction,
                     std,
                     distance: d,
                 };
@@ -365,9 +473,7 @@ impl Learned {
             }
             None => self.delay.push(kalman),
         }
-        if !sel.lagged.is_empty()
-            && let Some((value, std)) = blend.apply(&sel.lagged, &self.history, &factors)
-        {
+        if let Some((value, std)) = lagged {
             self.lagged.push(Point {
                 value,
                 std,

@@ -598,3 +598,88 @@ fn the_judged_conicity_is_a_running_mean_of_the_estimate_from_a_full_memory() {
     assert!((told.conicity_distance() - 1.5f64.ln()).abs() < 1e-12);
     assert!(told.beyond_conicities());
 }
+
+/// A bank's long-wave stage: with one tap, on the estimate's newest band-passed value, the
+/// causal output is the stage-free one plus that tap (blended in speed) times the band-passed
+/// stage-free estimate, from where the stage's start ramp ends; nothing before it begins; the
+/// fixed-lag output is the stage-free one (past the lag's start-up, when it is the delayed
+/// causal output).
+#[test]
+fn the_stage_adds_its_taps_times_the_band_passed_estimate_to_the_causal_output() {
+    use super::super::stage::{self, LAGS, StageBank, StageEntry};
+    let plain = sample_bank();
+    let mut staged = plain.clone();
+    let entry = |speed: f64, tap: f64| {
+        let mut taps = vec![0.0; 4 * LAGS];
+        taps[3 * LAGS] = tap; // the estimate, lag 0
+        StageEntry {
+            speed,
+            channels: ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", stage::ESTIMATE]
+                .map(String::from)
+                .to_vec(),
+            ridge: 1e-6,
+            validation: [0.1, 0.09],
+            taps,
+        }
+    };
+    staged.stage = Some(StageBank {
+        highpass: stage::HIGHPASS,
+        lowpass: stage::LOWPASS,
+        spacing: stage::SPACING,
+        lags: LAGS,
+        entries: vec![entry(20.0, 1.0), entry(10.0, 0.5)],
+    });
+    let (mut a, mut b) = (three_sensors(&plain, 0.6), three_sensors(&staged, 0.6));
+    assert!(!a.has_stage() && b.has_stage());
+    // 12.5 m/s, 0.05 m a sample: the tap blends to 0.75 * 0.5 + 0.25 * 1.0.
+    let tap = 0.625;
+    let mut filters = stage::design(0.2);
+    let mut grid = Grid::new(0.2, 500.0, None);
+    let (mut d, mut last) = (0.0, f64::NAN);
+    let [start, full] = stage::START_RAMP;
+    for k in 0..12_000 {
+        d += 0.05;
+        // Long waves too, for the band-pass to pass.
+        let x = [
+            (k as f64 * 0.3).sin() + (k as f64 * 0.002).sin(),
+            0.0,
+            0.0,
+            0.0,
+            (k as f64 * 0.11).cos() + (k as f64 * 0.0015).cos(),
+        ];
+        a.step(d, 12.5, &x, 0.0);
+        b.step(d, 12.5, &x, 0.0);
+        let Some(closed) = grid.add(d, &x) else {
+            continue;
+        };
+        assert_eq!(closed.cells.len(), 1);
+        // The stage's input: the taps' estimate where they made one, else the Kalman channel.
+        let made = a
+            .causal
+            .points
+            .last()
+            .filter(|p| p.distance == closed.distance);
+        let u = filters
+            .iter_mut()
+            .fold(made.map_or(x[4], |p| p.value), |v, f| f.step(v));
+        let (Some(p), Some(q)) = (made, b.causal.points.last()) else {
+            continue;
+        };
+        last = p.distance;
+        if p.distance < start {
+            assert_eq!(q.value, p.value, "at {} m", p.distance);
+        } else if p.distance > full + 1.0 {
+            let want = p.value + tap * u;
+            assert!(
+                (q.value - want).abs() < 1e-12 * want.abs().max(1.0),
+                "at {} m: {} {want}",
+                p.distance,
+                q.value
+            );
+        }
+        if p.distance > 2.0 {
+            assert_eq!(a.lagged(d), b.lagged(d), "at {d} m");
+        }
+    }
+    assert!(last > 590.0);
+}
