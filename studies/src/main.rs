@@ -11,8 +11,8 @@
 use alignment_studies::Error;
 use alignment_studies::cli::cases::Group;
 use alignment_studies::cli::{
-    StudyArgs, calibrate, cases, design, fit, learn, orchestrator_summary, run, smooth, taps,
-    variants,
+    StudyArgs, calibrate, cases, design, fit, learn, orchestrator_summary, run, smooth, stage,
+    taps, variants,
 };
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -60,6 +60,10 @@ enum Command {
     /// the fixed lags; ridge chosen on validation seeds (rebuild the FMU afterwards: cargo
     /// xtask fmu).
     Taps(taps::TapsArgs),
+    /// Fit the long-wave stage of a tap bank: taps over 600 m of the band-passed sensors and
+    /// the bank's own causal estimate, added to its causal output; writes the bank with it
+    /// (rebuild the FMU afterwards: cargo xtask fmu).
+    Stage(stage::StageArgs),
     /// Fit the estimator to a vehicle FMU in one directory: the simplified model's
     /// identification and Q/R calibration, the tap bank over speeds and contact conditions
     /// with that calibration, and report.md with the validation figures, the bank's envelope
@@ -102,6 +106,7 @@ fn execute(command: Command) -> Result<(), Error> {
         Command::Learn(a) => learn::execute(&a)?,
         Command::DesignResponse(a) => design::execute(&a)?,
         Command::Taps(a) => taps::execute(&a, &|m| eprintln!("{m}"))?,
+        Command::Stage(a) => stage::execute(&a, &|m| eprintln!("{m}"))?,
         Command::Fit(a) => {
             let md = fit::execute(&a, &|m| eprintln!("{m}"))?;
             println!("{md}");

@@ -10,6 +10,7 @@ pub mod fit;
 pub mod learn;
 pub mod run;
 pub mod smooth;
+pub mod stage;
 pub mod taps;
 pub mod variants;
 

@@ -65,6 +65,7 @@ mod fir;
 pub mod recorded;
 pub mod spectra;
 mod split;
+pub mod stage;
 pub mod taps;
 mod training;
 

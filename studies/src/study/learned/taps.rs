@@ -1415,6 +1415,7 @@ fn assemble(
             command: o.command.clone(),
         },
         contact,
+        stage: None,
         entries,
     })
 }
