@@ -35,6 +35,10 @@ EVERY = int(round(10.0 / (SPEED * STEP)))  # samples between taps: 10 m
 LAGS = range(0, 61)  # 600 m
 HIGH = signal.butter(2, SPEED / 400.0, btype="high", fs=1 / STEP, output="sos")
 LOW = signal.butter(2, SPEED / 40.0, btype="low", fs=1 / STEP, output="sos")
+
+
+def low(order: int, cut: float = 40.0):
+    return signal.butter(order, SPEED / cut, btype="low", fs=1 / STEP, output="sos")
 RIDGES = (1e-8, 1e-7, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2)
 BANDS = ("whole", "D1", "D2", "D3")
 
@@ -62,7 +66,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grade", choices=sorted(NOISE), default="paper")
     ap.add_argument("--without-estimate", action="store_true", help="the sensors only as the stage's inputs")
+    ap.add_argument("--sensors", type=int, nargs="+", choices=(3, 4), default=[3, 4])
+    ap.add_argument("--low-order", type=int, default=2, help="the low-pass's order")
+    ap.add_argument("--low-cut", type=float, default=40.0, help="the low-pass's cut-off [m]")
+    ap.add_argument("--d3-weight", type=float, default=0.0, help="the D3 residual's extra weight in the fit")
+    ap.add_argument("--per-seed", action="store_true", help="also each standard-case seed's D3")
     a = ap.parse_args()
+    global LOW
+    LOW = low(a.low_order, a.low_cut)
+    d3 = lambda x: ta.bandpass(np.ascontiguousarray(x), SPEED * STEP, 70.0, 200.0)  # noqa: E731
     vehicle = packaged_fmus()["RailVehicle"]
     whole = lambda x: ta.bandpass(np.ascontiguousarray(x), SPEED * STEP, 3.0, 200.0)  # noqa: E731
     fmt = lambda ms: " / ".join(f"{np.mean([m[k]['Jrel'] for m in ms]):.3f}" for k in BANDS)  # noqa: E731
@@ -70,13 +82,16 @@ def main() -> None:
     print(f"The stage's inputs: {inputs}. Jrel whole / D1 / D2 / D3.\n")
     print("| noise | sensors | ridge (chosen on 109-112) | seeds 109-112: default | with the stage | seeds 1-5, standard case: default | with the stage |")
     print("|---|---|---|---|---|---|---|")
-    for sensors in (3, 4):
+    for sensors in a.sensors:
         rows, target = [], []
         for seed in range(101, 109):
             r = record(ta, vehicle, seed, 300.0, a.grade, sensors, not a.without_estimate)
             keep = slice(int(800.0 / (SPEED * STEP)), None, int(2.0 / (SPEED * STEP)))  # past 800 m, every 2 m
             rows.append(np.array([whole(x)[keep] for x in delayed(r["inputs"])]).T)
             target.append(whole(r["alignment"] - r["estimate"])[keep])
+            if a.d3_weight > 0:
+                rows.append(np.sqrt(a.d3_weight) * np.array([d3(x)[keep] for x in delayed(r["inputs"])]).T)
+                target.append(np.sqrt(a.d3_weight) * d3(r["alignment"] - r["estimate"])[keep])
         x, y = np.concatenate(rows), np.concatenate(target)
         gram = x.T @ x
 
@@ -101,6 +116,10 @@ def main() -> None:
         w, (v0, v1) = fits[ridge]
         s0, s1 = judged(w, range(1, 6), 20.0, 10.0)
         print(f"| {a.grade} | {sensors} | {ridge:g} | {fmt(v0)} | {fmt(v1)} | {fmt(s0)} | {fmt(s1)} |", flush=True)
+        if a.per_seed:
+            for k in BANDS:
+                each = lambda ms: " ".join(f"{m[k]['Jrel']:.3f}" for m in ms)  # noqa: E731
+                print(f"  seeds 1-5 {k}: default {each(s0)}; with the stage {each(s1)}", flush=True)
 
 
 if __name__ == "__main__":

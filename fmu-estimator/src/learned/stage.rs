@@ -23,11 +23,11 @@
 //!
 //! # The fit
 //! `alignment-studies stage` (`studies/src/study/learned/stage.rs`) runs the vehicle FMU on
-//! the training seed at every bank speed and contact condition, runs this estimator over the
-//! runs with [`super::Learned::log_stage`] on (the same band-pass, the same estimate the FMU
-//! makes), and solves the ridge least squares of the taps' residual in the metric's whole band
-//! (3-200 m, zero-phase, on the regressors and the residual alike: the stage is causal, the
-//! fit minimises what the metric measures).
+//! five training track seeds at every bank speed and contact condition, runs this estimator
+//! over the runs with [`super::Learned::log_stage`] on (the same band-pass, the same estimate
+//! the FMU makes), and solves the ridge least squares of the taps' residual with the taps'
+//! objective (the metric's bands, zero-phase, on the regressors and the residual alike: the
+//! stage is causal, the fit minimises what the metric measures).
 
 use super::grid::Biquad;
 use serde::{Deserialize, Serialize};

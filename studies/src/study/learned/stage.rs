@@ -5,21 +5,25 @@
 //! # Method
 //! For every speed of the bank and sensor set (three sensors, and with the roll-rate
 //! gyroscope where the bank has those taps):
-//! 1. Training runs: the vehicle FMU at that constant speed on the training seed, once per
-//!    Kalker scale of the bank's entries, [`TRAINING_DISTANCE`] long (at most
-//!    [`super::taps::MAX_STOP`] s). The estimator library runs the bank over each as the FMU
-//!    does (told nothing: contact estimated, the Kalman channel's scheduled gain) with the
-//!    stage's log on ([`fmu_estimator::learned::Learned::log_stage`]): per grid cell the
-//!    stage's band-passed inputs and the taps' estimate before it.
-//! 2. Least squares: the residual (truth at the cell minus the taps' estimate) and every
-//!    input, each band-passed in the metric's whole band (3-200 m, zero phase, as the metric
-//!    does), the inputs then delayed by each of the stage's lags (zeros before the run's
-//!    start); rows every [`ROW_EVERY`] cells from [`SKIP`] m on (the memory full, the
-//!    band-pass settled). A causal FIR fitted so minimises what the metric measures.
+//! 1. Training runs: the vehicle FMU at that constant speed on each training seed, once per
+//!    Kalker scale of the bank's entries, the seeds sharing [`TRAINING_DISTANCE`] per scale
+//!    (at most [`super::taps::MAX_STOP`] s a run). The estimator library runs the bank over
+//!    each as the FMU does (told nothing: contact estimated, the Kalman channel's scheduled
+//!    gain) with the stage's log on ([`fmu_estimator::learned::Learned::log_stage`]): per
+//!    grid cell the stage's band-passed inputs and the taps' estimate before it. Why five
+//!    seeds: fitted on seed 101 alone, 244 taps learnt that track's irregularities (the
+//!    validation runs gained, the held-out ones did not; docs/accuracy.md).
+//! 2. Least squares with the taps' plain objective, `sum_b w_b Jrel_b^2` over the metric's
+//!    bands ([`BAND_WEIGHTS`]): per band, the residual (truth at the cell minus the taps'
+//!    estimate) and every input band-passed alike (zero phase, as the metric does), the
+//!    inputs then delayed by each of the stage's lags (zeros before the run's start), the
+//!    rows weighed by the band's truth power; rows every [`ROW_EVERY`] cells from [`SKIP`] m
+//!    on (the memory full, the band-pass settled). A causal FIR fitted so minimises what the
+//!    metric measures.
 //! 3. Ridge: from [`RIDGES`] (times the normal equations' mean diagonal), the one of least
-//!    whole-band Jrel on the validation runs (the validation seeds at every trained Kalker
-//!    scale, [`VALIDATION_DISTANCE`] from their start, the estimate and the stage made as the
-//!    FMU makes them with the stage's share over the start, the first 10 m trimmed as the
+//!    objective on the validation runs (the validation seeds at every trained Kalker scale,
+//!    [`VALIDATION_DISTANCE`] from their start, the estimate and the stage made as the FMU
+//!    makes them with the stage's share over the start, the first 10 m trimmed as the
 //!    standard case's metric is). Where no ridge improves on the taps alone the stage's taps
 //!    at that speed are zeros (no correction).
 
@@ -38,7 +42,7 @@ use nalgebra::{DMatrix, DVector};
 use orchestrator::system::Value;
 use rayon::prelude::*;
 
-/// Length of each training run \[m\].
+/// Training distance per Kalker scale and speed, shared by the training seeds \[m\].
 pub const TRAINING_DISTANCE: f64 = 30_000.0;
 /// Length of each validation run \[m\].
 pub const VALIDATION_DISTANCE: f64 = 2_000.0;
