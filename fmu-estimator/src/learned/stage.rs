@@ -51,15 +51,17 @@ pub const LAGS: usize = 61;
 /// inputs unlike their training (the accelerations' long waves are mostly the roll's gravity,
 /// which the taps' `V^1.5` rescaling does not follow). Without it, the variable-speed profile
 /// (0 -> 20 -> 10 m/s, 640 m; validation seeds 102-106) went from whole Jrel 0.114 without
-/// the stage to 0.151; with it the stage sits that profile out (0.114), as it does any record
+/// the stage to 0.151 (the first fit: whole band, seed 101, no start ramp); with it the stage
+/// sits that profile out (0.114), as it does any record
 /// starting from a standstill for its first 600 m at speed. The edges are a judgement (a
 /// train's speed within +-5 % keeps the whole stage), not a fit.
 pub const SPEED_SPAN: [f64; 2] = [1.1, 1.2];
 
 /// The stage's share over a run's start: none over the first of these distances \[m\] of
 /// its memory, whole from the second, linear between. Fitted on full memories, the stage
-/// corrects a cold start's partial one badly: on the validation seeds 102-106 (standard case,
-/// 400 m from a cold start) the stage from the first cell gave whole Jrel 0.105, none 0.097,
+/// corrects a cold start's partial one badly: with the whole-band fit on seed 101, on the
+/// validation seeds 102-106 (standard case, 400 m from a cold start) the stage from the first
+/// cell gave whole Jrel 0.105, none 0.097,
 /// this ramp 0.096; on 2 km runs of seeds 104-106 (which the ridge was not chosen on) 0.092,
 /// 0.104 and 0.092 (ramps over 0-200, 0-400, 100-400, 200-600, 300-600 and 400-800 m gave
 /// 0.107 / 0.099 / 0.099 / 0.096 / 0.097 / 0.097 and 0.093 / 0.092 / 0.092 / 0.093 / 0.094
@@ -154,11 +156,11 @@ impl StageBank {
             ));
         }
         for (i, e) in self.entries.iter().enumerate() {
-            let known = e.channels.iter().take(e.channels.len().saturating_sub(1));
+            let sensors = &e.channels[..e.channels.len().saturating_sub(1)];
             if e.channels.last().map(String::as_str) != Some(ESTIMATE)
-                || e.channels.len() < 2
-                || known
-                    .clone()
+                || sensors.is_empty()
+                || sensors
+                    .iter()
                     .any(|c| !super::grid::CHANNELS[..4].contains(&c.as_str()))
             {
                 return Err(format!(
@@ -279,8 +281,8 @@ pub fn share(r: f64) -> f64 {
 /// The memory is kept by phase: a cell's correction reads the cells a whole number of
 /// spacings behind it, which all share its position within a spacing (its phase). Each
 /// (input, phase) holds its last `LAGS` values contiguously, so a correction reads four short
-/// runs of memory instead of 244 values spread over 100 kB (kept as one ring per input, the
-/// cache misses made the default's step 0.70 µs instead of 0.50).
+/// runs of memory instead of 244 values spread over 100 kB. (Against one ring per input the
+/// benchmark showed no difference beyond its run-to-run spread.)
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub(super) struct Stage {
     filters: Vec<[Biquad; 3]>,

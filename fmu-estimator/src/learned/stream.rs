@@ -199,8 +199,9 @@ impl Learned {
     /// Logs the long-wave stage's inputs at every closed cell from here on, for its fit
     /// (`alignment-studies stage`): the band-passed inputs and the taps' estimate before the
     /// stage, whether the bank has a stage or not.
-    pub fn log_stage(&mut self, grid: f64) {
+    pub fn log_stage(&mut self) {
         let inputs = stage_inputs(self.selection.uses_roll_rate);
+        let grid = self.grid.step_length();
         self.stage.get_or_insert_with(|| Stage::new(inputs, grid));
         self.stage_log.get_or_insert_with(Vec::new);
     }

@@ -27,10 +27,12 @@
 //!    standard case's metric is). Where no ridge improves on the taps alone the stage's taps
 //!    at that speed are zeros (no correction).
 
+use super::taps::{Condition, stable_record};
 use crate::Error;
 use crate::study::metrics::{BANDS, accuracy, bandpass, resample};
-use crate::study::records::{Record, record_table};
-use crate::study::runs::{Fmus, STEP, seeded};
+use crate::study::records::Record;
+use crate::study::runs::{Fmus, STEP};
+use fmu_estimator::config::Config;
 use fmu_estimator::learned::bank::Bank;
 use fmu_estimator::learned::grid::CHANNELS;
 use fmu_estimator::learned::stage::{
@@ -39,7 +41,6 @@ use fmu_estimator::learned::stage::{
 use fmu_estimator::learned::{Choice, Learned};
 use fmu_estimator::offline;
 use nalgebra::{DMatrix, DVector};
-use orchestrator::system::Value;
 use rayon::prelude::*;
 
 /// Training distance per Kalker scale and speed, shared by the training seeds \[m\].
@@ -62,7 +63,7 @@ const TRIM: f64 = 10.0;
 /// What the stage is fitted on.
 #[derive(Debug, Clone)]
 pub struct StageOptions {
-    /// Track seed of the training runs.
+    /// Track seeds of the training runs (they share [`TRAINING_DISTANCE`]).
     pub training_seeds: Vec<u32>,
     /// Track seeds of the validation runs (the ridge's choice).
     pub validation_seeds: Vec<u32>,
@@ -72,8 +73,9 @@ pub struct StageOptions {
 }
 
 impl StageOptions {
-    /// The shipped default bank's stage: trained on the calibration seed, the ridge chosen on
-    /// two of the taps' validation seeds.
+    /// The shipped default bank's stage: trained on the calibration seed and four seeds no
+    /// fit of the default bank used (107-110), the ridge chosen on two of the taps'
+    /// validation seeds.
     pub fn shipped() -> StageOptions {
         StageOptions {
             training_seeds: vec![101, 107, 108, 109, 110],
@@ -93,51 +95,9 @@ struct Logged {
     truth: Vec<f64>,
 }
 
-/// A run of the vehicle at `speed` on `seed` with the Kalker scale `kalker`, with the
-/// roll-rate gyroscope; `None` if the vehicle is unstable in it
-/// ([`super::taps::UNSTABLE_WS_Y`]).
-fn run(
-    fmus: &Fmus,
-    seed: u32,
-    kalker: f64,
-    speed: f64,
-    distance: f64,
-) -> Result<Option<Record>, Error> {
-    let stop = (distance / speed)
-        .clamp(20.0, super::taps::MAX_STOP)
-        .round();
-    let mut settings = seeded(seed);
-    if kalker != 1.0 {
-        settings.push(("kalker_scale".into(), Value::Real(kalker)));
-    }
-    let (rec, table) = match record_table(
-        fmus,
-        settings,
-        stop,
-        Some(&move |_| speed),
-        Some("ws_roll_rate"),
-        &["ws_y"],
-    ) {
-        Ok(r) => r,
-        Err(e) if e.is_derailment() => return Ok(None),
-        Err(e) => return Err(e),
-    };
-    let ws_y = table
-        .column("vehicle.ws_y")
-        .ok_or_else(|| Error::input("no column vehicle.ws_y"))?;
-    Ok(ws_y
-        .iter()
-        .all(|y| y.abs() <= super::taps::UNSTABLE_WS_Y)
-        .then_some(rec))
-}
-
-/// The bank (its stage left out) over `rec` as the FMU runs it, for the sensor set with the
-/// roll rate or not: the stage's log.
-fn logged(bank: &Bank, rec: &Record, roll_rate: bool) -> Result<Logged, Error> {
-    let values = offline::settings(&[])?;
-    let (config, _) = offline::config(&values, None)?;
-    let mut plain = bank.clone();
-    plain.stage = None;
+/// `bank` (without a stage) over `rec` as the FMU runs it with the Kalman channel `config`,
+/// for the sensor set with the roll rate or not: the stage's log.
+fn logged(bank: &Bank, config: &Config, rec: &Record, roll_rate: bool) -> Result<Logged, Error> {
     let choice = Choice {
         roll_rate,
         lag: 0.0,
@@ -145,11 +105,11 @@ fn logged(bank: &Bank, rec: &Record, roll_rate: bool) -> Result<Logged, Error> {
         kalker: None,
     };
     let mut learned =
-        Learned::new(&plain, choice).map_err(|e| Error::input(format!("the bank: {e}")))?;
-    learned.log_stage(bank.grid);
+        Learned::new(bank, choice).map_err(|e| Error::input(format!("the bank: {e}")))?;
+    learned.log_stage();
     let (_, end) = offline::process_learned_from(
-        &config,
-        offline::Resume::new(&config, Some(learned)),
+        config,
+        offline::Resume::new(config, Some(learned)),
         STEP,
         &rec.samples,
     )?;
@@ -327,6 +287,13 @@ pub fn fit(
             "the bank's grid of {ds} m does not divide the stage's {SPACING} m"
         ))
     })?;
+    // The taps alone, as the fit's runs estimate with them (a stage the bank has is fitted
+    // anew), and the Kalman channel the FMU runs them with by default.
+    let plain = Bank {
+        stage: None,
+        ..bank.clone()
+    };
+    let config = offline::config(&offline::settings(&[])?, None)?.0;
     let causal: Vec<_> = bank.entries.iter().filter(|e| e.lag == 0).collect();
     let mut speeds: Vec<f64> = causal.iter().map(|e| e.speed).collect();
     speeds.sort_by(f64::total_cmp);
@@ -356,14 +323,20 @@ pub fn fit(
             .collect();
         let runs: Vec<Option<Record>> = jobs
             .par_iter()
-            .map(|(s, k, d)| run(fmus, *s, *k, speed, *d))
+            .map(|(s, k, d)| {
+                let condition = Condition {
+                    kalker: *k,
+                    conicity: None,
+                };
+                stable_record(fmus, *s, condition, None, speed, *d, true)
+            })
             .collect::<Result<_, _>>()?;
         for roll_rate in &sets {
             let logs: Vec<(u32, Logged)> = jobs
                 .par_iter()
                 .zip(&runs)
                 .filter_map(|((s, _, _), r)| r.as_ref().map(|r| (*s, r)))
-                .map(|(s, r)| Ok((s, logged(bank, r, *roll_rate)?)))
+                .map(|(s, r)| Ok((s, logged(&plain, &config, r, *roll_rate)?)))
                 .collect::<Result<_, Error>>()?;
             let (training, validation): (Vec<_>, Vec<_>) = logs
                 .into_iter()

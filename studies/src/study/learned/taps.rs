@@ -360,6 +360,23 @@ fn run(
     distance: f64,
     roll: bool,
 ) -> Result<Option<GridRun>, Error> {
+    stable_record(fmus, seed, condition, vehicle, speed, distance, roll)?
+        .map(|rec| on_grid(&rec, config))
+        .transpose()
+}
+
+/// The vehicle's record on track `seed` under `condition` at the constant `speed` over
+/// `distance` (whole seconds, [`MIN_STOP`] to [`MAX_STOP`]), with the roll-rate gyroscope if
+/// `roll`; `None` if the vehicle is unstable in it ([`UNSTABLE_WS_Y`], or it derails).
+pub(super) fn stable_record(
+    fmus: &Fmus,
+    seed: u32,
+    condition: Condition,
+    vehicle: Option<&str>,
+    speed: f64,
+    distance: f64,
+    roll: bool,
+) -> Result<Option<Record>, Error> {
     // A whole number of seconds: the master runs whole steps.
     let stop = (distance / speed).clamp(MIN_STOP, MAX_STOP).round();
     let mut settings = seeded(seed);
@@ -393,7 +410,7 @@ fn run(
     if ws_y.iter().any(|y| !(y.abs() <= UNSTABLE_WS_Y)) {
         return Ok(None);
     }
-    Ok(Some(on_grid(&rec, config)?))
+    Ok(Some(rec))
 }
 
 /// The estimator's view of a record: the paper's filter as the Kalman channel, then the grid.
