@@ -13,7 +13,8 @@
 //! | step | rule |
 //! |---|---|
 //! | inputs | the history's sensor channels as the taps read them (each cell divided by its speed's [`super::stream::TAP_SPEED_POWER`]), then the taps' causal estimate (before the stage; the Kalman filter's estimate where the taps made none) |
-//! | band-pass | each input through a causal Butterworth high-pass of order 2 at [`HIGHPASS`] and a low-pass of order 4 at [`LOWPASS`] (wavelengths, on the bank's grid): the stage sees only the waves it may correct, and its memory starts no transient from the estimate's offset |
+//! | the estimate's mean | the estimate's mean since the run's start is taken from it: an untold gyroscope bias swings the taps' estimate by some 150 mm over its first 2 km (the Kalman channel's drift, high-passed), which the band-pass alone passes into the stage's memory (figures in docs/accuracy.md, "The long-wave stage"). The sensor channels are left whole: their mean taken out changed nothing |
+//! | band-pass | each input through a causal Butterworth high-pass of order 2 at [`HIGHPASS`] and a low-pass of order 4 at [`LOWPASS`] (wavelengths, on the bank's grid): the stage sees only the waves it may correct |
 //! | FIR | `c = sum_i g_i sum_j w_ij u_i(k - j m)`: tap `j` of input `i` multiplies the band-passed input `j` spacings ([`SPACING`], `m` cells) back, `j = 0 .. LAGS - 1` (600 m); `g_i` is the current speed's `V^p` for the sensors (the taps' rescaling), 1 for the estimate |
 //! | output | the causal estimate plus `c` times the stage's share, `c` blended linearly in speed between the two bank speeds around the current one, as the taps are |
 //! | share | 0 over a run's first 200 m, rising to 1 at 400 m ([`START_RAMP`]: fitted on full memories, the stage corrects a cold start's partial one badly); and 1 while the fastest cell in the memory is within 10 % of the slowest, 0 from 20 % ([`SPEED_SPAN`]: fitted at constant speed) |
@@ -88,6 +89,17 @@ pub fn design(ds: f64) -> [Biquad; 3] {
     ]
 }
 
+/// The order of the estimate's high-pass at [`HIGHPASS`]: the band-pass's section and one
+/// more. An untold gyroscope bias swings the taps' estimate by some 150 mm over 2 km; order 2
+/// passes 4 % of such a 2000 m wave, order 4 0.2 %.
+pub const ESTIMATE_HIGHPASS_ORDER: u32 = 4;
+
+/// The estimate's extra high-pass section (applied before [`design`]'s band-pass): with it
+/// the estimate's high-pass is of [`ESTIMATE_HIGHPASS_ORDER`].
+pub fn estimate_highpass(ds: f64) -> Biquad {
+    Biquad::highpass(ds, HIGHPASS)
+}
+
 /// The grid cells between two taps on a grid of `ds` metres (`None` unless [`SPACING`] is a
 /// whole number of cells).
 pub fn every(ds: f64) -> Option<usize> {
@@ -108,6 +120,10 @@ pub struct StageBank {
     pub spacing: f64,
     /// See `highpass`.
     pub lags: usize,
+    /// [`ESTIMATE_HIGHPASS_ORDER`] as the fit had it (0: a stage fitted before the
+    /// estimate's own treatment, refused).
+    #[serde(default)]
+    pub estimate_highpass_order: u32,
     /// The fit's entries.
     #[serde(rename = "entry")]
     pub entries: Vec<StageEntry>,
@@ -136,6 +152,12 @@ pub const ESTIMATE: &str = "estimate";
 impl StageBank {
     /// Whether this build applies the stage as it was fitted; the problem otherwise.
     pub fn check(&self, grid: f64) -> Result<(), String> {
+        if self.estimate_highpass_order != ESTIMATE_HIGHPASS_ORDER {
+            return Err(format!(
+                "the stage was fitted with the estimate high-passed at order {}; this build has order {ESTIMATE_HIGHPASS_ORDER}, its mean taken out first: fit it again",
+                self.estimate_highpass_order
+            ));
+        }
         let ours = (HIGHPASS, LOWPASS, SPACING, LAGS);
         if (self.highpass, self.lowpass, self.spacing, self.lags) != ours {
             return Err(format!(
@@ -294,6 +316,11 @@ pub(super) struct Stage {
     speeds: Extremes,
     /// The grid step \[m\].
     ds: f64,
+    /// The sum of the estimate's values since the run's start: their mean is taken from the
+    /// estimate before its band-pass (module docs, "band-pass").
+    estimate_sum: f64,
+    /// The estimate's extra high-pass section ([`estimate_highpass`]).
+    estimate_filter: Biquad,
 }
 
 impl Stage {
@@ -307,6 +334,8 @@ impl Stage {
             every,
             speeds: Extremes::default(),
             ds,
+            estimate_sum: 0.0,
+            estimate_filter: estimate_highpass(ds),
         }
     }
 
@@ -332,8 +361,16 @@ impl Stage {
         let k = self.speeds.count;
         self.speeds.push(speed, self.span());
         let mut out = [0.0; 5];
-        for i in 0..self.filters.len() {
-            let v = self.filters[i].iter_mut().fold(x[i], |v, s| s.step(v));
+        let n = self.filters.len();
+        self.estimate_sum += x[n - 1];
+        for i in 0..n {
+            let xi = if i == n - 1 {
+                self.estimate_filter
+                    .step(x[i] - self.estimate_sum / (k + 1) as f64)
+            } else {
+                x[i]
+            };
+            let v = self.filters[i].iter_mut().fold(xi, |v, s| s.step(v));
             let (base, slot) = self.at(i, k);
             self.memory[base + slot] = v;
             out[i] = v;
@@ -485,7 +522,7 @@ mod tests {
         }
     }
 
-    /// A stage fitted with another band-pass, or whose taps do not match its channels, is
+    /// A stage fitted with another band-pass or on the estimate with its mean, or whose taps do not match its channels, is
     /// refused with what differs.
     #[test]
     fn a_stage_is_checked_against_this_build() {
@@ -494,6 +531,7 @@ mod tests {
             lowpass: LOWPASS,
             spacing: SPACING,
             lags: LAGS,
+            estimate_highpass_order: ESTIMATE_HIGHPASS_ORDER,
             entries: vec![StageEntry {
                 speed: 20.0,
                 channels: ["ws_acc_y", "ws_yaw_rate", "frame_acc_y", ESTIMATE]
@@ -508,6 +546,9 @@ mod tests {
         let mut other = good.clone();
         other.lowpass = 30.0;
         assert!(other.check(0.2).unwrap_err().contains("fit it again"));
+        let mut whole = good.clone();
+        whole.estimate_highpass_order = 0;
+        assert!(whole.check(0.2).unwrap_err().contains("at order 0"));
         assert!(good.check(0.3).unwrap_err().contains("whole number"));
         let mut short = good.clone();
         short.entries[0].taps.pop();

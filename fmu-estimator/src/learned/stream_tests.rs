@@ -600,8 +600,8 @@ fn the_judged_conicity_is_a_running_mean_of_the_estimate_from_a_full_memory() {
 }
 
 /// A bank's long-wave stage: with one tap, on the estimate's newest band-passed value, the
-/// causal output is the stage-free one plus that tap (blended in speed) times the band-passed
-/// stage-free estimate, from where the stage's start ramp ends; nothing before it begins; the
+/// causal output is the stage-free one plus that tap (blended in speed) times the stage-free
+/// estimate less its mean so far, band-passed, from where the stage's start ramp ends; nothing before it begins; the
 /// fixed-lag output is the stage-free one (past the lag's start-up, when it is the delayed
 /// causal output).
 #[test]
@@ -627,15 +627,16 @@ fn the_stage_adds_its_taps_times_the_band_passed_estimate_to_the_causal_output()
         lowpass: stage::LOWPASS,
         spacing: stage::SPACING,
         lags: LAGS,
+        estimate_highpass_order: stage::ESTIMATE_HIGHPASS_ORDER,
         entries: vec![entry(20.0, 1.0), entry(10.0, 0.5)],
     });
     let (mut a, mut b) = (three_sensors(&plain, 0.6), three_sensors(&staged, 0.6));
     assert!(!a.has_stage() && b.has_stage());
     // 12.5 m/s, 0.05 m a sample: the tap blends to 0.75 * 0.5 + 0.25 * 1.0.
     let tap = 0.625;
-    let mut filters = stage::design(0.2);
+    let (mut filters, mut extra) = (stage::design(0.2), stage::estimate_highpass(0.2));
     let mut grid = Grid::new(0.2, 500.0, None);
-    let (mut d, mut last) = (0.0, f64::NAN);
+    let (mut d, mut last, mut sum, mut cells) = (0.0, f64::NAN, 0.0, 0.0);
     let [start, full] = stage::START_RAMP;
     for k in 0..12_000 {
         d += 0.05;
@@ -645,7 +646,7 @@ fn the_stage_adds_its_taps_times_the_band_passed_estimate_to_the_causal_output()
             0.0,
             0.0,
             0.0,
-            (k as f64 * 0.11).cos() + (k as f64 * 0.0015).cos(),
+            (k as f64 * 0.11).cos() + (k as f64 * 0.0015).cos() + 3.0,
         ];
         a.step(d, 12.5, &x, 0.0);
         b.step(d, 12.5, &x, 0.0);
@@ -659,9 +660,12 @@ fn the_stage_adds_its_taps_times_the_band_passed_estimate_to_the_causal_output()
             .points
             .last()
             .filter(|p| p.distance == closed.distance);
+        // Its mean since the start taken out, then band-passed.
+        let e = made.map_or(x[4], |p| p.value);
+        (sum, cells) = (sum + e, cells + 1.0);
         let u = filters
             .iter_mut()
-            .fold(made.map_or(x[4], |p| p.value), |v, f| f.step(v));
+            .fold(extra.step(e - sum / cells), |v, f| f.step(v));
         let (Some(p), Some(q)) = (made, b.causal.points.last()) else {
             continue;
         };

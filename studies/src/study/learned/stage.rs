@@ -36,7 +36,8 @@ use fmu_estimator::config::Config;
 use fmu_estimator::learned::bank::Bank;
 use fmu_estimator::learned::grid::CHANNELS;
 use fmu_estimator::learned::stage::{
-    ESTIMATE, HIGHPASS, LAGS, LOWPASS, SPACING, StageBank, StageEntry, StageRow, every, start_share,
+    ESTIMATE, ESTIMATE_HIGHPASS_ORDER, HIGHPASS, LAGS, LOWPASS, SPACING, StageBank, StageEntry,
+    StageRow, every, start_share,
 };
 use fmu_estimator::learned::{Choice, Learned};
 use fmu_estimator::offline;
@@ -370,6 +371,7 @@ pub fn fit(
         lowpass: LOWPASS,
         spacing: SPACING,
         lags: LAGS,
+        estimate_highpass_order: ESTIMATE_HIGHPASS_ORDER,
         entries,
     });
     Ok(out)
