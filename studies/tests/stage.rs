@@ -3,7 +3,7 @@
 //! from the shipped bank's own taps (training and validation runs of the packaged vehicle FMU,
 //! the estimator over them, the least squares and the ridge's choice), equal the shipped ones
 //! number for number. One speed exercises every step of the fit (the whole stage, eleven
-//! speeds, takes about 7 min on 2 cores).
+//! speeds, takes about 5.5 min on 2 cores).
 
 mod common;
 
