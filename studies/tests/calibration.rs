@@ -8,10 +8,7 @@ use alignment_studies::study::{calibrate, identify, runs};
 
 #[test]
 fn regenerating_the_calibration_reproduces_the_committed_file() {
-    let fmus = runs::Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let vehicle = fmu_vehicle::params::VehicleParams::ml95();
     let seed = 101; // the CLI's CALIBRATION_SEED
     let id = identify::identify(&fmus, &vehicle, seed, runs::STOP, runs::STEP).unwrap();
@@ -36,10 +33,7 @@ fn regenerating_the_calibration_reproduces_the_committed_file() {
 #[test]
 fn a_filter_calibrated_for_another_vehicle_beats_the_shipped_one_on_it() {
     use alignment_studies::study::cases;
-    let mut fmus = runs::Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let mut fmus = common::fmus();
     fmus.set("vehicle", "vehicle", "manchester.toml").unwrap();
     let e = fmus.set("vehicle", "track_seed", "3").unwrap_err();
     assert_eq!(e.exit_code(), 2, "bad input: {e}");

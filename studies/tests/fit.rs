@@ -7,7 +7,6 @@ mod common;
 
 use alignment_studies::report::fit::{CALIBRATION, FILES, REPORT, TAPS};
 use alignment_studies::study::cases::{Case, run_seed};
-use alignment_studies::study::runs::Fmus;
 use fmu_estimator::learned::bank::Bank;
 use orchestrator::system::Value;
 use std::process::Command;
@@ -65,10 +64,7 @@ fn a_small_fit_writes_files_the_estimator_takes_and_a_failed_one_leaves_nothing(
         report.contains("learned filter, fitted bank and calibration"),
         "{report}"
     );
-    let fmus = Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let file = |f: &str| Value::String(out.join(f).to_string_lossy().into_owned());
     let case = |estimator: Vec<(String, Value)>| Case {
         name: "fitted".into(),

@@ -9,23 +9,16 @@ mod common;
 use alignment_studies::study::cases::{Case, run_seed};
 use alignment_studies::study::learned::recorded::synthetic::{write_pass, write_reference};
 use alignment_studies::study::records::{Record, record};
-use alignment_studies::study::runs::{Fmus, seeded};
+use alignment_studies::study::runs::seeded;
 use fmu_estimator::learned::bank::Bank;
 use orchestrator::system::Value;
 use std::process::Command;
-
-fn fmus() -> Fmus {
-    Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    )
-}
 
 /// A run of `seconds` at 20 m/s on track `seed` with sensor noise `noise`.
 fn run(seed: u32, noise: i32, seconds: f64) -> Record {
     let mut s = seeded(seed);
     s[1].1 = Value::Integer(noise);
-    record(&fmus(), s, seconds, None).unwrap()
+    record(&common::fmus(), s, seconds, None).unwrap()
 }
 
 fn fit(args: &[&std::ffi::OsStr]) -> std::process::Output {
@@ -114,7 +107,7 @@ fn a_bank_is_fitted_from_passes_placed_on_a_reference() {
     );
 
     // The bank on a held-out track, against the paper's filter.
-    let fmus = fmus();
+    let fmus = common::fmus();
     let case = |estimator: Vec<(String, Value)>| Case {
         name: "recorded".into(),
         vehicle: vec![],

@@ -11,10 +11,7 @@ use alignment_studies::study::{runs, variants};
 
 #[test]
 fn the_learned_smoother_beats_the_paper_in_d1_on_a_held_out_seed() {
-    let fmus = runs::Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     // As the study does, with a shorter training run (200 s against 1000 s) to keep it quick.
     let smoother_partner = default_partner(Lookahead::Smoother, 1.0);
     let (runs, provenance) = training_runs(&fmus, 101, 200.0, &[1.0], None).unwrap();

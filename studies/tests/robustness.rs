@@ -5,14 +5,11 @@
 
 mod common;
 
-use alignment_studies::study::{cases, runs};
+use alignment_studies::study::cases;
 
 #[test]
 fn every_robustness_case_runs_with_both_estimators_and_the_told_conicity_reaches_them() {
-    let fmus = runs::Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let seed = 1; // a held-out seed; nothing is chosen here
     let stop = 6.0; // 120 m at 20 m/s: past the learned filter's start-up, enough to differ
     let all = cases::with_learned(cases::robustness(0.1));
@@ -46,10 +43,7 @@ fn the_conicity_sweep_runs_the_learned_filter_told_a_worn_wheel_s_conicity() {
     // The learned filter told the conicity (its `conicity` parameter) blends the taps at it
     // instead of at the one it estimates: it must initialize, and telling it must change its
     // estimate.
-    let fmus = runs::Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let bank = cases::conicity_bank().unwrap();
     let sweep = cases::conicity_sweep(&bank);
     let at = |name: &str| sweep.iter().find(|c| c.name == name).unwrap();

@@ -5,7 +5,6 @@
 
 mod common;
 
-use alignment_studies::study::runs::Fmus;
 use alignment_studies::study::sensors::{SensorResult, run};
 
 fn row<'a>(results: &'a [SensorResult], start: &str) -> &'a SensorResult {
@@ -17,10 +16,7 @@ fn row<'a>(results: &'a [SensorResult], start: &str) -> &'a SensorResult {
 
 #[test]
 fn told_the_priors_the_estimator_removes_the_biases_at_the_standstill() {
-    let fmus = Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let results = run(&fmus, &[3]).unwrap();
     let ideal = row(&results, "ideal");
     let whole = |m: &[alignment_studies::study::metrics::BandMetrics]| m[0].whole.jrel;

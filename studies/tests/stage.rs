@@ -8,16 +8,12 @@
 mod common;
 
 use alignment_studies::study::learned::stage::{StageOptions, fit};
-use alignment_studies::study::runs::Fmus;
 use fmu_estimator::learned::bank::Bank;
 use std::path::Path;
 
 #[test]
 fn the_shipped_stage_is_regenerated_number_for_number() {
-    let fmus = Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let shipped = Bank::load(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("../fmu-estimator/resources/learned.taps"),
     )

@@ -13,16 +13,12 @@
 mod common;
 
 use alignment_studies::study::learned::taps::{Options, fit};
-use alignment_studies::study::runs::Fmus;
 use fmu_estimator::learned::bank::Bank;
 use std::path::Path;
 
 #[test]
 fn the_shipped_taps_are_regenerated_byte_for_byte() {
-    let fmus = Fmus::new(
-        common::fmu("RailVehicle"),
-        common::fmu("AlignmentEstimator"),
-    );
+    let fmus = common::fmus();
     let shipped = Bank::load(
         &Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../fmu-estimator/resources/learned-conicity.taps"),
