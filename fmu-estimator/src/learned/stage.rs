@@ -14,7 +14,7 @@
 //! |---|---|
 //! | inputs | the history's sensor channels as the taps read them (each cell divided by its speed's [`super::stream::TAP_SPEED_POWER`]), then the taps' causal estimate (before the stage; the Kalman filter's estimate where the taps made none) |
 //! | the estimate's mean | the estimate's mean since the run's start is taken from it: an untold gyroscope bias swings the taps' estimate by some 150 mm over its first 2 km (the Kalman channel's drift, high-passed), which the band-pass alone passes into the stage's memory (figures in docs/accuracy.md, "The long-wave stage"). The sensor channels are left whole: their mean taken out changed nothing |
-//! | band-pass | each input through a causal Butterworth high-pass of order 2 at [`HIGHPASS`] and a low-pass of order 4 at [`LOWPASS`] (wavelengths, on the bank's grid): the stage sees only the waves it may correct |
+//! | band-pass | each input through a causal Butterworth high-pass of order 2 at [`HIGHPASS`] and a low-pass of order 4 at [`LOWPASS`] (wavelengths, on the bank's grid), the estimate through one more high-pass section at [`HIGHPASS`] first ([`ESTIMATE_HIGHPASS_ORDER`]): the stage sees only the waves it may correct |
 //! | FIR | `c = sum_i g_i sum_j w_ij u_i(k - j m)`: tap `j` of input `i` multiplies the band-passed input `j` spacings ([`SPACING`], `m` cells) back, `j = 0 .. LAGS - 1` (600 m); `g_i` is the current speed's `V^p` for the sensors (the taps' rescaling), 1 for the estimate |
 //! | output | the causal estimate plus `c` times the stage's share, `c` blended linearly in speed between the two bank speeds around the current one, as the taps are |
 //! | share | 0 over a run's first 200 m, rising to 1 at 400 m ([`START_RAMP`]: fitted on full memories, the stage corrects a cold start's partial one badly); and 1 while the fastest cell in the memory is within 10 % of the slowest, 0 from 20 % ([`SPEED_SPAN`]: fitted at constant speed) |
@@ -317,7 +317,7 @@ pub(super) struct Stage {
     /// The grid step \[m\].
     ds: f64,
     /// The sum of the estimate's values since the run's start: their mean is taken from the
-    /// estimate before its band-pass (module docs, "band-pass").
+    /// estimate before its band-pass (module docs, "the estimate's mean").
     estimate_sum: f64,
     /// The estimate's extra high-pass section ([`estimate_highpass`]).
     estimate_filter: Biquad,
@@ -522,8 +522,8 @@ mod tests {
         }
     }
 
-    /// A stage fitted with another band-pass or on the estimate with its mean, or whose taps do not match its channels, is
-    /// refused with what differs.
+    /// A stage fitted with another band-pass or another treatment of the estimate, or whose
+    /// taps do not match its channels, is refused with what differs.
     #[test]
     fn a_stage_is_checked_against_this_build() {
         let good = StageBank {

@@ -601,9 +601,9 @@ fn the_judged_conicity_is_a_running_mean_of_the_estimate_from_a_full_memory() {
 
 /// A bank's long-wave stage: with one tap, on the estimate's newest band-passed value, the
 /// causal output is the stage-free one plus that tap (blended in speed) times the stage-free
-/// estimate less its mean so far, band-passed, from where the stage's start ramp ends; nothing before it begins; the
-/// fixed-lag output is the stage-free one (past the lag's start-up, when it is the delayed
-/// causal output).
+/// estimate less its mean so far, band-passed, from where the stage's start ramp ends;
+/// nothing before it begins; the fixed-lag output is the stage-free one (past the lag's
+/// start-up, when it is the delayed causal output).
 #[test]
 fn the_stage_adds_its_taps_times_the_band_passed_estimate_to_the_causal_output() {
     use super::super::stage::{self, LAGS, StageBank, StageEntry};
