@@ -134,9 +134,10 @@ fn with_fitted_design(rec: &Record) -> Result<Record, Error> {
     })
 }
 
-/// The estimate of `settings` (`paper`: the paper's filter) over `rec`, the design removed
-/// when `told`.
+/// The default's estimate (`paper`: the paper's filter's) over `rec` with the user's
+/// estimator settings `user`, the design removed when `told`.
 fn judged(
+    user: &[(String, String)],
     rec: &Record,
     paper: bool,
     told: bool,
@@ -144,15 +145,11 @@ fn judged(
 ) -> Result<BandMetrics, Error> {
     let samples = samples_told(rec, told);
     let (distance, est) = if paper {
-        estimate(
-            &samples,
-            1e-3,
-            &[("estimator".into(), "1".into())],
-            None,
-            false,
-        )?
+        let mut settings = user.to_vec();
+        settings.push(("estimator".into(), "1".into()));
+        estimate(&samples, 1e-3, &settings, None, false)?
     } else {
-        estimate_learned(&samples, 1e-3, &[], Output::Alignment)?
+        estimate_learned(&samples, 1e-3, user, Output::Alignment)?
     };
     let (a, b) = window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
     let keep = |d: &[f64], x: &[f64]| -> (Vec<f64>, Vec<f64>) {
@@ -171,8 +168,8 @@ fn judged(
 type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
 
 /// The default told the design over `rec`.
-fn flagged(rec: &Record) -> Result<Flagged, Error> {
-    flagged_told(rec, true)
+fn flagged(user: &[(String, String)], rec: &Record) -> Result<Flagged, Error> {
+    flagged_told(user, rec, true)
 }
 
 /// `rec`'s samples with the design inputs, or (`told` false) without them.
@@ -192,8 +189,8 @@ fn share_of(flags: &[bool]) -> f64 {
 }
 
 /// The default over `rec`, told the design or not (`told`).
-fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
-    let (out, _) = run_learned(&samples_told(rec, told), 1e-3, &[])?;
+fn flagged_told(user: &[(String, String)], rec: &Record, told: bool) -> Result<Flagged, Error> {
+    let (out, _) = run_learned(&samples_told(rec, told), 1e-3, user)?;
     let est: Vec<f64> = out
         .learned
         .as_ref()
@@ -206,20 +203,21 @@ fn flagged_told(rec: &Record, told: bool) -> Result<Flagged, Error> {
 
 /// The share of the default's samples over `rec` with `outside_training` set, told the design
 /// or not.
-fn share(rec: &Record, told: bool) -> Result<f64, Error> {
-    let (_, _, flags) = flagged_told(rec, told)?;
+fn share(user: &[(String, String)], rec: &Record, told: bool) -> Result<f64, Error> {
+    let (_, _, flags) = flagged_told(user, rec, told)?;
     Ok(share_of(&flags))
 }
 
 /// The line with flange contact: the run's figures, the share flagged, the wide curves' whole.
 fn with_flanges(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64, f64), Error> {
     let rec = record(fmus, seed, Lay::LineWithFlanges)?;
-    let (distance, est, flags) = flagged(&rec)?;
+    let user = &fmus.estimator_texts();
+    let (distance, est, flags) = flagged(user, &rec)?;
     let share = share_of(&flags);
     let m = evaluate(&distance, &est, &rec.distance, &rec.alignment, DS, TRIM)?;
     let wide = WIDE_CURVES
         .iter()
-        .map(|w| judged(&rec, false, true, Some(*w)).map(|m| m.whole.jrel))
+        .map(|w| judged(user, &rec, false, true, Some(*w)).map(|m| m.whole.jrel))
         .sum::<Result<f64, Error>>()?
         / WIDE_CURVES.len() as f64;
     Ok((m, share, wide))
@@ -229,7 +227,7 @@ fn with_flanges(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64, f64), Error
 /// part's samples with `outside_training` set.
 fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
     let rec = record(fmus, seed, Lay::Tight)?;
-    let (distance, est, flags) = flagged(&rec)?;
+    let (distance, est, flags) = flagged(&fmus.estimator_texts(), &rec)?;
     let (a, b) = (
         TIGHT[3].1 + TIGHT[1].1,
         TIGHT[3].1 + TIGHT[1].1 + TIGHT[4].1,
@@ -247,6 +245,7 @@ fn tight(fmus: &Fmus, seed: u32) -> Result<(BandMetrics, f64), Error> {
 }
 
 fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
+    let user = &fmus.estimator_texts();
     let (straight, line) = (
         record(fmus, seed, Lay::Straight)?,
         record(fmus, seed, Lay::Line)?,
@@ -254,32 +253,32 @@ fn run_one(fmus: &Fmus, seed: u32) -> Result<CurveRun, Error> {
     let wide = |rec: &Record, told: bool| -> Result<f64, Error> {
         let mut sum = 0.0;
         for w in WIDE_CURVES {
-            sum += judged(rec, false, told, Some(w))?.whole.jrel;
+            sum += judged(user, rec, false, told, Some(w))?.whole.jrel;
         }
         Ok(sum / WIDE_CURVES.len() as f64)
     };
     Ok(CurveRun {
         seed,
         straight: [
-            judged(&straight, true, false, None)?,
-            judged(&straight, false, false, None)?,
+            judged(user, &straight, true, false, None)?,
+            judged(user, &straight, false, false, None)?,
         ],
         known: [
-            judged(&line, true, true, None)?,
-            judged(&line, false, true, None)?,
+            judged(user, &line, true, true, None)?,
+            judged(user, &line, false, true, None)?,
         ],
-        untold: judged(&line, false, false, None)?,
+        untold: judged(user, &line, false, false, None)?,
         fitted: {
             let fitted = with_fitted_design(&line)?;
             [
-                judged(&fitted, true, true, None)?,
-                judged(&fitted, false, true, None)?,
+                judged(user, &fitted, true, true, None)?,
+                judged(user, &fitted, false, true, None)?,
             ]
         },
         wide: [wide(&straight, false)?, wide(&line, true)?],
         tight: tight(fmus, seed)?,
         flange: with_flanges(fmus, seed)?,
-        line_flagged: [share(&line, true)?, share(&line, false)?],
+        line_flagged: [share(user, &line, true)?, share(user, &line, false)?],
     })
 }
 

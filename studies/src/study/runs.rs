@@ -118,6 +118,25 @@ impl Fmus {
         }
     }
 
+    /// The user's estimator settings as text, for the studies that run the estimator's
+    /// library over recorded samples rather than its FMU (the sensor and curve tables): all
+    /// but `estimator`, since there each row names the estimator it measures.
+    pub fn estimator_texts(&self) -> Vec<(String, String)> {
+        self.estimator_settings
+            .iter()
+            .filter(|(n, _)| n != "estimator")
+            .map(|(n, v)| {
+                let text = match v {
+                    Value::Real(x) => format!("{x:?}"),
+                    Value::Integer(i) => i.to_string(),
+                    Value::Boolean(b) => b.to_string(),
+                    Value::String(t) => t.clone(),
+                };
+                (n.clone(), text)
+            })
+            .collect()
+    }
+
     /// The number the user set for `variable` of the estimator, if any (the last one).
     pub fn estimator_number(&self, variable: &str) -> Option<f64> {
         number(last(&self.estimator_settings, variable)?)
@@ -317,4 +336,40 @@ pub fn seeded(seed: u32) -> Settings {
         ("track_seed".into(), Value::Integer(seed as i32)),
         ("noise_seed".into(), Value::Integer(seed as i32 + 1000)),
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The user's estimator settings reach the studies that run the estimator's library as
+    /// text it parses, all but the estimator's choice, which each of their rows makes.
+    #[test]
+    fn the_users_estimator_settings_are_given_to_the_library_as_text() {
+        let mut fmus = Fmus::default();
+        for (n, v) in [
+            ("tap_file", "learned-nominal.taps"),
+            ("estimator", "2"),
+            ("lag", "5"),
+        ] {
+            fmus.set("estimator", n, v).unwrap();
+        }
+        fmus.estimator_settings
+            .push(("bias_sigma_ws_acc_y".into(), Value::Real(0.1)));
+        fmus.estimator_settings
+            .push(("use_roll_rate".into(), Value::Boolean(true)));
+        let texts = fmus.estimator_texts();
+        assert_eq!(
+            texts,
+            [
+                ("tap_file", "learned-nominal.taps"),
+                ("lag", "5"),
+                ("bias_sigma_ws_acc_y", "0.1"),
+                ("use_roll_rate", "true"),
+            ]
+            .map(|(n, v)| (n.to_string(), v.to_string()))
+        );
+        // As the library reads them.
+        assert!(fmu_estimator::offline::settings(&texts).is_ok());
+    }
 }

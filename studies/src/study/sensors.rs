@@ -182,13 +182,16 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
         .iter()
         .rposition(|s| s.speed == 0.0)
         .unwrap_or(0);
-    let mut told: Vec<(String, String)> = PRIORS
+    // The user's settings first, the study's after them.
+    let user = fmus.estimator_texts();
+    let mut told: Vec<(String, String)> = user
         .iter()
-        .map(|(n, v)| (n.to_string(), v.to_string()))
+        .cloned()
+        .chain(PRIORS.iter().map(|(n, v)| (n.to_string(), v.to_string())))
         .collect();
     let mut paper = told.clone();
     paper.push(("estimator".into(), "1".into()));
-    let mut untold = vec![];
+    let mut untold = user;
     if c.roll_rate {
         // The roll gyroscope told like the yaw gyroscope; the paper's filter does not read it.
         told.push(("bias_sigma_ws_roll_rate".into(), PRIORS[1].1.into()));
