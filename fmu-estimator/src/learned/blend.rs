@@ -46,6 +46,11 @@ impl Blend {
         }
     }
 
+    /// The (speed index, weight) pairs of the blend in speed.
+    pub(super) fn by_speed(&self) -> &[(usize, f64)] {
+        &self.by_speed
+    }
+
     /// The blended estimate and rms error of `set` (windows by speed, then by condition) on
     /// `hist`, each window's channels times `gain`; `None` while a window needed has no
     /// history covering it.

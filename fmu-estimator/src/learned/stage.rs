@@ -208,10 +208,10 @@ impl StageBank {
     }
 }
 
-/// The stage's taps for one sensor set, by speed (ascending).
+/// The stage's taps for one sensor set, one per speed of the taps' own (ascending), so the
+/// taps' blend in speed serves the stage as it is.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub(super) struct StageTaps {
-    pub(super) speeds: Vec<f64>,
     /// Per speed, `LAGS` taps per input.
     pub(super) taps: Vec<Vec<f64>>,
 }
@@ -231,7 +231,6 @@ impl StageTaps {
         at.sort_by(|a, b| a.speed.total_cmp(&b.speed));
         let found: Vec<f64> = at.iter().map(|e| e.speed).collect();
         (found == speeds).then(|| StageTaps {
-            speeds: found,
             taps: at.iter().map(|e| e.taps.clone()).collect(),
         })
     }

@@ -219,10 +219,11 @@ impl Learned {
         self.selection.stage.is_some()
     }
 
-    /// Steps the long-wave stage with the cells just closed (`cells`, raw; `factors` their
-    /// speed's gains) and the taps' causal estimate `made` (the Kalman filter's `kalman`
-    /// where they made none); the correction of `made` at `speed` (0 without a stage or an
-    /// estimate).
+    /// Steps the long-wave stage with the cells just closed (`cells`, raw, at `speed`;
+    /// `factors` their speed's gains) and the taps' causal estimate `made` (the Kalman
+    /// filter's `kalman` where they made none); the correction of `made`, blended in speed
+    /// as the taps were (`by_speed`, [`Blend::by_speed`]; 0 without a stage or an estimate).
+    #[allow(clippy::too_many_arguments)]
     fn stage_step(
         &mut self,
         cells: &[[f64; 5]],
@@ -231,6 +232,7 @@ impl Learned {
         kalman: f64,
         distance: f64,
         speed: f64,
+        by_speed: &[(usize, f64)],
     ) -> f64 {
         let Some(stage) = self.stage.as_mut() else {
             return 0.0;
@@ -264,7 +266,7 @@ impl Learned {
             return 0.0;
         }
         share
-            * super::weights(&taps.speeds, speed)
+            * by_speed
                 .iter()
                 .map(|(i, w)| w * stage.correction(&taps.taps[*i], &gain[..=n]))
                 .sum::<f64>()
@@ -436,7 +438,7 @@ impl Learned {
             self.causal.clear();
             self.lagged.clear();
             self.delay.push(kalman);
-            self.stage_step(&closed.cells, &factors, None, x[KALMAN], d, speed);
+            self.stage_step(&closed.cells, &factors, None, x[KALMAN], d, speed, &[]);
             return;
         }
         let sel = &self.selection;
@@ -461,6 +463,7 @@ impl Learned {
             x[KALMAN],
             d,
             speed,
+            blend.by_speed(),
         );
         match made {
             Some((value, std)) => {
