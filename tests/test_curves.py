@@ -84,6 +84,37 @@ def test_told_the_design_the_estimate_is_nearly_the_straight_tracks(curved, stra
     assert nothing["whole"]["Jrel"] > 10 * flat["whole"]["Jrel"]
 
 
+def design_turn(r) -> np.ndarray:
+    """The design line's heading change over the estimator's window at each sample: the design
+    curvature integrated from the cell end 500 m behind the last 10 m cell end (0 m before)."""
+    s, k = r["distance"], r["design_curvature"]
+    turn = np.r_[0.0, np.cumsum(0.5 * (k[1:] + k[:-1]) * np.diff(s))]
+    back = np.maximum(10.0 * np.floor(s / 10.0) - 500.0, 0.0)
+    return turn - np.interp(back, s, turn)
+
+
+def test_told_nothing_the_heading_check_flags_the_curves(curved, straight):
+    """Told nothing, `heading_change` is the line's turn over the last 500 m (the oracle: the
+    design curvature integrated over the same window, to the few mrad of the irregularities'
+    heading and the wheelset's yaw in a curve), so `outside_training` sets within 60 m of the
+    first curve's start (145 m) and not before it, and the deviations grow with the turn. Told
+    the design, its response removed leaves the straight track's few mrad; on straight track
+    neither flags."""
+    nothing, _ = estimate(curved, design=False)
+    told, _ = estimate(curved)
+    flat, _ = estimate(straight, design=False)
+    assert np.max(np.abs(nothing["heading_change"] - design_turn(curved))) < 8e-3
+    assert np.max(np.abs(design_turn(curved))) > 0.5
+    d = nothing["distance"]
+    flags = nothing["outside_training"].astype(bool)
+    first = d[flags][0]
+    assert 145.0 < first < 205.0, first
+    assert np.max(np.abs(told["heading_change"])) < 8e-3
+    assert np.max(np.abs(flat["heading_change"])) < 8e-3 and not flat["outside_training"].any()
+    turned = np.abs(nothing["heading_change"]) > 0.3
+    assert np.all(nothing["alignment_std"][turned] > 10.0 * np.median(flat["alignment_std"]))
+
+
 def test_the_design_fitted_from_the_sensors(curved):
     """Design unknown: `fit_design` finds the line's eight transitions from the wheelset's roll
     and yaw gyroscopes and accelerometer (the file's rows as the oracle: ends within 4 m,

@@ -191,3 +191,32 @@ def test_an_untold_gyro_bias_is_warned_of_after_a_kilometre(make_slave, bias):
         assert len(warned) == 1 and "2.0" in warned[0] and "1000 m" in warned[0], warned
     else:
         assert warned == []
+
+
+@pytest.mark.parametrize("bias", [0.0, 2e-4, 1.5e-3])
+def test_a_heading_straight_track_does_not_give_sets_outside_training(make_slave, bias):
+    """The same 1200 m, yaw rate only, the paper's filter: `heading_change` is the rate's
+    integral over the last 500-510 m (the oracle: the bias times 25-25.5 s, plus the wave's
+    heading, within 3 mrad). A 1.5e-3 rad/s bias (a MEMS gyroscope's turn-on bias) passes the
+    0.015 rad level at 200 m (give or take the wave's 3 mrad: 160-240 m), sets
+    `outside_training` and says so once; 2e-4 rad/s (5 mrad over the window) and none do
+    not."""
+    from fmi_harness import WARNING
+    s = make_slave("heading", logging_on=True)
+    assert s.initialize({"estimator": 1}) == 0
+    inputs = [s.vr[k] for k in ("ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed")]
+    first = None
+    for k in range(60_000):
+        t = k * 1e-3
+        s.fmu.setReal(inputs, [0.0, 3e-3 * np.sin(2.0 * t) + bias, 0.0, 20.0])
+        assert s.step(t, 1e-3) <= WARNING
+        if first is None and s.fmu.getBoolean([s.vr["outside_training"]])[0]:
+            first = s.fmu.getReal([s.vr["distance"]])[0]
+    change = s.fmu.getReal([s.vr["heading_change"]])[0]
+    assert bias * 25.0 - 3e-3 <= change <= bias * 25.5 + 3e-3, change
+    warned = [m for m in s.log.messages(WARNING) if "heading changed" in m]
+    if bias > 1e-3:
+        assert first is not None and 160.0 <= first <= 240.0, first
+        assert len(warned) == 1 and "outside_training is set" in warned[0], warned
+    else:
+        assert first is None and warned == []

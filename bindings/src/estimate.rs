@@ -179,10 +179,16 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
             d.set_item("active_estimator", active.into_pyarray(py))?;
         }
         None => {
+            // The FMU's alignment_std of the paper's filter: grown by the heading check.
+            let std: Vec<f64> = kalman_std
+                .iter()
+                .zip(&out.heading_change)
+                .map(|(s, c)| s * fmu_estimator::heading::growth(*c))
+                .collect();
             d.set_item("alignment", kalman.clone().into_pyarray(py))?;
-            d.set_item("alignment_std", kalman_std.clone().into_pyarray(py))?;
+            d.set_item("alignment_std", std.clone().into_pyarray(py))?;
             d.set_item("alignment_lagged", kalman.clone().into_pyarray(py))?;
-            d.set_item("alignment_lagged_std", kalman_std.into_pyarray(py))?;
+            d.set_item("alignment_lagged_std", std.into_pyarray(py))?;
             let active = vec![fmu_estimator::learned::ACTIVE_PAPER; kalman.len()];
             d.set_item("active_estimator", active.into_pyarray(py))?;
         }
@@ -203,8 +209,8 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
     )?;
     let novelty = out.novelty.unwrap_or_else(|| vec![0.0; n]);
     d.set_item("novelty", novelty.into_pyarray(py))?;
-    let outside = out.outside_training.unwrap_or_else(|| vec![false; n]);
-    d.set_item("outside_training", outside.into_pyarray(py))?;
+    d.set_item("outside_training", out.outside_training.into_pyarray(py))?;
+    d.set_item("heading_change", out.heading_change.into_pyarray(py))?;
     let bias = out.bias.unwrap_or_else(|| vec![[0.0; 4]; n]);
     for (i, name) in [
         "ws_acc_y_bias",

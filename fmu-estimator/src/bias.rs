@@ -24,23 +24,16 @@
 //! bias that wanders is followed from stop to stop. In motion it is held. With every
 //! `sigma_i` 0 (the default) nothing is estimated and the samples pass unchanged.
 //!
-//! # A bias suspected in motion
-//! Whatever the priors, the yaw rate's mean over the distance run since the last standstill
-//! (after the estimated bias is removed) is kept: on straight track it has an rms of 1.9e-5
-//! rad/s over 1000 m (above), so a mean beyond [`SUSPECT_LEVEL`] after [`SUSPECT_DISTANCE`] is
-//! a gyroscope bias the estimator was not told of or could not see (no standstill), and the
-//! FMU says so once in its log. On a curved line the design curvature's `V / R` is such a mean
-//! too.
+//! # In motion
+//! The yaw rate with the bias removed is integrated in motion ([`crate::heading`]): a heading
+//! that straight track does not give, or a mean since the last standstill beyond its own, is a
+//! bias the estimator was not told of or could not see (no standstill).
 
+use crate::heading::Heading;
 use serde::{Deserialize, Serialize};
 
 /// Below this speed \[m/s\] the train stands still: its sensors read their biases.
 pub const STANDSTILL_SPEED: f64 = 0.01;
-/// The distance \[m\] over which the yaw rate's mean is judged.
-pub const SUSPECT_DISTANCE: f64 = 1000.0;
-/// The yaw rate's mean \[rad/s\] beyond which a bias is suspected: five times its rms over
-/// 1000 m of straight track.
-pub const SUSPECT_LEVEL: f64 = 1e-4;
 
 /// The sensors' biases and the current standstill's statistics. Part of the FMU state.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -59,10 +52,8 @@ pub struct Bias {
     /// Their running mean and sum of squared deviations (Welford).
     mean: [f64; 4],
     m2: [f64; 4],
-    /// Distance run since the last standstill \[m\], and the integral of the corrected yaw rate
-    /// over it \[rad\].
-    #[serde(default)]
-    moved: (f64, f64),
+    /// The corrected yaw rate's integrals in motion.
+    pub heading: Heading,
 }
 
 impl Bias {
@@ -76,7 +67,7 @@ impl Bias {
             n: [0; 4],
             mean: [0.0; 4],
             m2: [0.0; 4],
-            moved: (0.0, 0.0),
+            heading: Heading::default(),
         }
     }
 
@@ -91,13 +82,8 @@ impl Bias {
     /// that sensor's figures only.
     pub fn observe(&mut self, speed: f64, h: f64, x: &[f64; 4]) {
         let standing = speed.abs() < STANDSTILL_SPEED;
-        if standing {
-            self.moved = (0.0, 0.0);
-        } else if speed.is_finite() && x[1].is_finite() {
-            let ds = speed * h;
-            self.moved.0 += ds;
-            self.moved.1 += (x[1] - self.estimate[1]) * ds;
-        }
+        self.heading
+            .observe(standing, speed, h, x[1] - self.estimate[1]);
         if standing && !self.standing {
             self.start = self.estimate;
             (self.n, self.mean, self.m2) = ([0; 4], [0.0; 4], [0.0; 4]);
@@ -122,14 +108,6 @@ impl Bias {
                 self.estimate[i] = self.start[i] + w * (self.mean[i] - self.start[i]);
             }
         }
-    }
-
-    /// The yaw rate's mean since the last standstill \[rad/s\] when it suggests a bias (module
-    /// docs), with the distance it is over.
-    pub fn suspected_yaw_bias(&self) -> Option<(f64, f64)> {
-        let (distance, integral) = self.moved;
-        let mean = integral / distance;
-        (distance >= SUSPECT_DISTANCE && mean.abs() > SUSPECT_LEVEL).then_some((mean, distance))
     }
 
     /// `x` with the estimated biases removed.
@@ -199,29 +177,23 @@ mod tests {
         assert!((b.estimate[1] - 1.2e-3).abs() < 5.0 * 5e-4 / 2000f64.sqrt());
     }
 
-    /// 1020 m at 20 m/s: a yaw-rate wave of zero mean is not suspected, the same with 2e-4
-    /// rad/s added is (its mean found), before 1000 m it is not judged, and a standstill
-    /// starts the mean again.
+    /// In motion the heading integrates the yaw rate less the bias removed: after a standstill
+    /// that found a 1e-3 rad/s bias, 10 s of motion at that raw rate turn it by nothing; told
+    /// no prior, by 10 mrad.
     #[test]
-    fn a_yaw_rate_mean_beyond_a_straight_tracks_is_suspected() {
-        let run = |offset: f64, seconds: f64| {
-            let mut b = Bias::new([0.0; 4]);
-            for k in 0..(seconds / 1e-3) as usize {
-                let w = 3e-3 * (k as f64 * 1e-3 * 2.0).sin() + offset;
-                b.observe(20.0, 1e-3, &[0.0, w, 0.0, 0.0]);
+    fn the_heading_integrates_the_rate_with_the_bias_removed() {
+        let moved = |sigma: f64| {
+            let mut b = Bias::new([0.0, sigma, 0.0, 0.0]);
+            for _ in 0..1000 {
+                b.observe(0.0, 1e-3, &[0.0, 1e-3, 0.0, 0.0]);
             }
-            b
+            for _ in 0..10_000 {
+                b.observe(20.0, 1e-3, &[0.0, 1e-3, 0.0, 0.0]);
+            }
+            b.heading.change()
         };
-        assert_eq!(run(0.0, 51.0).suspected_yaw_bias(), None);
-        let (mean, distance) = run(2e-4, 51.0).suspected_yaw_bias().unwrap();
-        // The wave's own mean over 51 s: 3e-3 (1 - cos 102) / 102.
-        let want = 2e-4 + 3e-3 * (1.0 - 102f64.cos()) / 102.0;
-        assert!((mean - want).abs() < 1e-6, "{mean} vs {want}");
-        assert!((distance - 1020.0).abs() < 1e-6);
-        assert_eq!(run(2e-4, 49.0).suspected_yaw_bias(), None);
-        let mut b = run(2e-4, 51.0);
-        b.observe(0.0, 1e-3, &[0.0; 4]);
-        assert_eq!(b.suspected_yaw_bias(), None);
+        assert!(moved(2e-3).abs() < 1e-12, "{}", moved(2e-3));
+        assert!((moved(0.0) - 1e-2).abs() < 1e-9, "{}", moved(0.0));
     }
 
     /// A sensor that is not connected (NaN) leaves the others' estimates as they would be.

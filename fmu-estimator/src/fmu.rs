@@ -48,6 +48,8 @@ pub struct Estimator {
     novelty_warned: bool,
     /// Whether a yaw-rate bias was suspected in this run (warned once).
     bias_warned: bool,
+    /// Whether the heading check has set `outside_training` in this run (warned once).
+    heading_warned: bool,
     /// The step size warned about, if any (once).
     step_warned: bool,
     /// Warnings that recur per step, logged once and counted.
@@ -80,34 +82,39 @@ impl Estimator {
         let (xi, std) = core.alignment();
         let (body, xi_rate) = core.states();
         let distance = v.real[vr::DISTANCE as usize];
+        let heading = &self.bias.heading;
+        // A curve or a bias not told: the estimate's error grows with the heading it did not
+        // explain ([`crate::heading`]), whichever estimator gives it.
+        let grow = heading.growth();
+        let flagged = self.design.outside() || heading.outside();
+        v.real[vr::HEADING_CHANGE as usize] = heading.change();
         let o = &mut v.real;
         o[vr::ALIGNMENT_KALMAN as usize] = xi;
         match &self.learned {
             Some(l) => {
                 let e = l.estimate(distance, (xi, std));
                 o[vr::ALIGNMENT as usize] = e.alignment;
-                o[vr::ALIGNMENT_STD as usize] = e.std;
+                o[vr::ALIGNMENT_STD as usize] = e.std * grow;
                 o[vr::ALIGNMENT_LAGGED as usize] = e.lagged;
-                o[vr::ALIGNMENT_LAGGED_STD as usize] = e.lagged_std;
+                o[vr::ALIGNMENT_LAGGED_STD as usize] = e.lagged_std * grow;
                 o[vr::DISTANCE_LAGGED as usize] = distance - l.lag();
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = e.active;
                 v.real[vr::CONTACT_SCALE as usize] = l.contact_scale();
                 v.real[vr::CONICITY_ESTIMATE as usize] = l.conicity();
                 v.real[vr::NOVELTY as usize] = l.novelty();
-                v.boolean[vr::OUTSIDE_TRAINING as usize] =
-                    l.outside_training() || self.design.outside();
+                v.boolean[vr::OUTSIDE_TRAINING as usize] = l.outside_training() || flagged;
             }
             None => {
                 o[vr::ALIGNMENT as usize] = xi;
-                o[vr::ALIGNMENT_STD as usize] = std;
+                o[vr::ALIGNMENT_STD as usize] = std * grow;
                 o[vr::ALIGNMENT_LAGGED as usize] = xi;
-                o[vr::ALIGNMENT_LAGGED_STD as usize] = std;
+                o[vr::ALIGNMENT_LAGGED_STD as usize] = std * grow;
                 o[vr::DISTANCE_LAGGED as usize] = distance;
                 v.integer[vr::ACTIVE_ESTIMATOR as usize] = crate::learned::ACTIVE_PAPER;
                 v.real[vr::CONTACT_SCALE as usize] = 0.0;
                 v.real[vr::CONICITY_ESTIMATE as usize] = 0.0;
                 v.real[vr::NOVELTY as usize] = 0.0;
-                v.boolean[vr::OUTSIDE_TRAINING as usize] = self.design.outside();
+                v.boolean[vr::OUTSIDE_TRAINING as usize] = flagged;
             }
         }
         let o = &mut v.real;
@@ -177,6 +184,7 @@ impl Model for Estimator {
             outside: false,
             novelty_warned: false,
             bias_warned: false,
+            heading_warned: false,
             step_warned: false,
             repeats: Default::default(),
             _files: FilesInUse::default(),
@@ -225,6 +233,7 @@ impl Model for Estimator {
         self.outside = false;
         self.novelty_warned = false;
         self.bias_warned = false;
+        self.heading_warned = false;
         self.step_warned = false;
         self.repeats.clear();
         self.write_outputs(v);
@@ -303,6 +312,7 @@ impl Model for Estimator {
                 self.note_speed_range(input.speed, log);
                 self.note_novelty(v.real[vr::DISTANCE as usize], log);
                 self.note_bias(v.real[vr::DISTANCE as usize], log);
+                self.note_heading(v.real[vr::DISTANCE as usize], log);
                 self.note_design(v.real[vr::DISTANCE as usize], input.design, log);
                 self.write_outputs(v);
                 Ok(outcome)
@@ -411,13 +421,27 @@ impl Estimator {
 
     /// A yaw-rate mean that straight track does not give ([`crate::bias`]): said once.
     fn note_bias(&mut self, distance: f64, log: &Logger) {
-        if let Some((mean, over)) = self.bias.suspected_yaw_bias()
+        if let Some((mean, over)) = self.bias.heading.suspected_bias()
             && !self.bias_warned
         {
             log.warning(&format!(
                 "at {distance:.1} m the yaw rate's mean over the last {over:.0} m is {mean:.2e} rad/s, beyond the 1e-4 rad/s of straight track: a gyroscope bias is likely, and the estimate may be several times less accurate; set bias_sigma_ws_yaw_rate and start the run standing still (said once)"
             ));
             self.bias_warned = true;
+        }
+    }
+
+    /// The heading check setting `outside_training` ([`crate::heading`]): said once.
+    fn note_heading(&mut self, distance: f64, log: &Logger) {
+        let heading = &self.bias.heading;
+        if heading.outside() && !self.heading_warned {
+            log.warning(&format!(
+                "at {distance:.1} m the yaw gyroscope's heading changed by {:.4} rad over the last {:.0} m, beyond the {} rad that straight track's irregularities give: a curve whose design is not connected (design_curvature and design_cant, or line_file) or a gyroscope bias not removed (bias_sigma_ws_yaw_rate and a standstill); outside_training is set, and the estimate may be many times less accurate (said once)",
+                heading.change(),
+                crate::heading::WINDOW,
+                crate::heading::LEVEL,
+            ));
+            self.heading_warned = true;
         }
     }
 

@@ -13,6 +13,8 @@
 //! | the files it reads (tap bank, design response), parsed once per process and shared | [`parsed`] |
 //! | one sample's step, the same in the FMU and offline: distance, hold, sensors, filters | [`step`] |
 //! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
+//! | the design line's response removed from the sensors | [`design`] |
+//! | the sensors' biases, found at a standstill; the heading check, which flags a curve or a bias the estimator was not told of | [`bias`], [`heading`] |
 //! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
 //! | the learned filter: its tap bank and the bank's contract (checked at initialization), grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
 //!
@@ -48,6 +50,7 @@ pub mod engine;
 pub mod error;
 pub mod filter;
 pub mod fmu;
+pub mod heading;
 pub mod learned;
 pub mod model;
 pub mod observability;

@@ -97,9 +97,12 @@ pub struct Processed {
     pub conicity: Option<Vec<f64>>,
     /// The FMU's `novelty` output per sample (with the learned filter).
     pub novelty: Option<Vec<f64>>,
-    /// The FMU's `outside_training` output per sample (with the learned filter or a design
-    /// response model).
-    pub outside_training: Option<Vec<bool>>,
+    /// The FMU's `outside_training` output per sample.
+    pub outside_training: Vec<bool>,
+    /// The FMU's `heading_change` output per sample \[rad\] ([`crate::heading`]); the
+    /// standard deviations above are grown by it as the FMU's are ([`crate::heading::growth`]),
+    /// bar `filtered`'s, the Kalman filter's own.
+    pub heading_change: Vec<f64>,
     /// The filter covariance checked after every step (when asked for: an eigen-decomposition
     /// per step, [`process_columns_checked`]).
     pub covariance: Option<CovarianceCheck>,
@@ -561,22 +564,27 @@ fn run_from(
             b.push(bias.estimate);
         }
         out.filtered.push(core.alignment());
+        let heading = &bias.heading;
+        let flagged = design.outside() || heading.outside();
+        out.heading_change.push(heading.change());
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
-            e.push(l.estimate(distance, core.alignment()));
+            let mut estimate = l.estimate(distance, core.alignment());
+            estimate.std *= heading.growth();
+            estimate.lagged_std *= heading.growth();
+            e.push(estimate);
             c.push(l.contact_scale());
             conicity.push(l.conicity());
             novelty.push(l.novelty());
-            outside.push(l.outside_training() || design.outside());
-        } else if design.active() {
-            // The paper's filter: the FMU's flag is the design's alone.
-            outside.push(design.outside());
+            outside.push(l.outside_training() || flagged);
+        } else {
+            outside.push(flagged);
         }
     }
     out.learned = estimates;
     out.bias = biases;
     out.conicity = contact.is_some().then_some(conicity);
     out.novelty = contact.is_some().then_some(novelty);
-    out.outside_training = (contact.is_some() || design.active()).then_some(outside);
+    out.outside_training = outside;
     out.contact_scale = contact;
     out.covariance = checked_p;
     if smooth {

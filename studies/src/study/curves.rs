@@ -198,7 +198,7 @@ fn flagged_told(user: &[(String, String)], rec: &Record, told: bool) -> Result<F
         .iter()
         .map(|e| e.alignment)
         .collect();
-    Ok((out.distance, est, out.outside_training.unwrap_or_default()))
+    Ok((out.distance, est, out.outside_training))
 }
 
 /// The share of the default's samples over `rec` with `outside_training` set, told the design

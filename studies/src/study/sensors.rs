@@ -11,7 +11,7 @@
 //! estimate is compared at the true positions (the recorded distance), not at the estimator's.
 
 use super::metrics::{BandMetrics, evaluate};
-use super::records::{Output, Record, estimate, estimate_learned, record_stepped};
+use super::records::{Output, Record, estimate, estimate_learned, record_stepped, run_learned};
 use super::runs::{Fmus, STEP, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
@@ -148,13 +148,15 @@ pub struct SensorResult {
     pub learned: Vec<BandMetrics>,
     /// The default told nothing.
     pub learned_untold: Vec<BandMetrics>,
+    /// The share of its moving samples with `outside_training` set, per seed.
+    pub untold_flagged: Vec<f64>,
 }
 
 fn profile(t: f64) -> f64 {
     if t < STANDSTILL { 0.0 } else { SPEED }
 }
 
-fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Error> {
+fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<([BandMetrics; 3], f64), Error> {
     let mut settings = seeded(seed);
     for (name, value) in &c.vehicle {
         let value = if name == "sensor_grade" {
@@ -214,21 +216,28 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<[BandMetrics; 3], Er
             TRIM,
         )?)
     };
-    Ok([
-        judge(estimate(&rec.samples, c.step, &paper, None, false)?)?,
-        judge(estimate_learned(
-            &rec.samples,
-            c.step,
-            &told,
-            Output::Alignment,
-        )?)?,
-        judge(estimate_learned(
-            &rec.samples,
-            c.step,
-            &untold,
-            Output::Alignment,
-        )?)?,
-    ])
+    let (out, _) = run_learned(&rec.samples, c.step, &untold)?;
+    let flags = &out.outside_training[from..];
+    let flagged = flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64;
+    let untold_est = out
+        .learned
+        .ok_or_else(|| Error::input("no learned estimate"))?
+        .iter()
+        .map(|e| e.alignment)
+        .collect();
+    Ok((
+        [
+            judge(estimate(&rec.samples, c.step, &paper, None, false)?)?,
+            judge(estimate_learned(
+                &rec.samples,
+                c.step,
+                &told,
+                Output::Alignment,
+            )?)?,
+            judge((out.distance, untold_est))?,
+        ],
+        flagged,
+    ))
 }
 
 /// Every condition on every seed, in parallel.
@@ -236,14 +245,15 @@ pub fn run(fmus: &Fmus, seeds: &[u32]) -> Result<Vec<SensorResult>, Error> {
     conditions()
         .into_par_iter()
         .map(|c| {
-            let runs: Vec<[BandMetrics; 3]> = seeds
+            let runs: Vec<([BandMetrics; 3], f64)> = seeds
                 .par_iter()
                 .map(|&s| run_one(fmus, &c, s))
                 .collect::<Result<_, Error>>()?;
             Ok(SensorResult {
-                paper: runs.iter().map(|r| r[0].clone()).collect(),
-                learned: runs.iter().map(|r| r[1].clone()).collect(),
-                learned_untold: runs.iter().map(|r| r[2].clone()).collect(),
+                paper: runs.iter().map(|r| r.0[0].clone()).collect(),
+                learned: runs.iter().map(|r| r.0[1].clone()).collect(),
+                learned_untold: runs.iter().map(|r| r.0[2].clone()).collect(),
+                untold_flagged: runs.iter().map(|r| r.1).collect(),
                 condition: c,
             })
         })
@@ -267,7 +277,7 @@ fn bands(ms: &[BandMetrics]) -> String {
 /// The table (means over the seeds).
 pub fn markdown(seeds: &[u32], results: &[SensorResult]) -> String {
     let mut s = format!(
-        "### Robustness: sensors\n\nEach sensor error of the vehicle FMU alone, other sample steps, and the presets; a {STANDSTILL} s standstill, then the standard case. Jrel whole / D1 / D2 / D3, mean over seeds {seeds:?}. Both estimators told the bias priors ({}); \"told nothing\": the default without them.\n\n| sensors | paper's filter | default (learned) | default told nothing, whole |\n|---|---|---|---|\n",
+        "### Robustness: sensors\n\nEach sensor error of the vehicle FMU alone, other sample steps, and the presets; a {STANDSTILL} s standstill, then the standard case. Jrel whole / D1 / D2 / D3, mean over seeds {seeds:?}. Both estimators told the bias priors ({}); \"told nothing\": the default without them, and the share of the moving distance over which it sets `outside_training`.\n\n| sensors | paper's filter | default (learned) | default told nothing, whole | told nothing, flagged |\n|---|---|---|---|---|\n",
         PRIORS
             .iter()
             .map(|(n, v)| format!("`{n} = {v}`"))
@@ -276,11 +286,12 @@ pub fn markdown(seeds: &[u32], results: &[SensorResult]) -> String {
     );
     for r in results {
         s.push_str(&format!(
-            "| {} | {} | {} | {:.3} |\n",
+            "| {} | {} | {} | {:.3} | {:.0} % |\n",
             r.condition.name,
             bands(&r.paper),
             bands(&r.learned),
-            mean(&r.learned_untold, |m| m.whole.jrel)
+            mean(&r.learned_untold, |m| m.whole.jrel),
+            100.0 * r.untold_flagged.iter().sum::<f64>() / r.untold_flagged.len().max(1) as f64
         ));
     }
     s
