@@ -98,8 +98,8 @@ def test_told_nothing_the_heading_check_flags_the_curves(curved, straight):
     design curvature integrated over the same window, to the few mrad of the irregularities'
     heading and the wheelset's yaw in a curve), so `outside_training` sets within 60 m of the
     first curve's start (145 m) and not before it, and the deviations grow with the turn. Told
-    the design, its response removed leaves the straight track's few mrad; on straight track
-    neither flags."""
+    the design, its response removed leaves the straight track's few mrad (and the
+    accelerometers' difference its few cm/s); on straight track neither flags."""
     nothing, _ = estimate(curved, design=False)
     told, _ = estimate(curved)
     flat, _ = estimate(straight, design=False)
@@ -110,6 +110,9 @@ def test_told_nothing_the_heading_check_flags_the_curves(curved, straight):
     first = d[flags][0]
     assert 145.0 < first < 205.0, first
     assert np.max(np.abs(told["heading_change"])) < 8e-3
+    # The accelerometers' difference: the frame's shift on its suspension in the curves told
+    # nothing (0.22 m/s measured), nothing beyond straight track's told the design.
+    assert np.max(np.abs(told["relative_velocity_change"])) < 0.1
     assert np.max(np.abs(flat["heading_change"])) < 8e-3 and not flat["outside_training"].any()
     turned = np.abs(nothing["heading_change"]) > 0.3
     assert np.all(nothing["alignment_std"][turned] > 10.0 * np.median(flat["alignment_std"]))

@@ -220,3 +220,30 @@ def test_a_heading_straight_track_does_not_give_sets_outside_training(make_slave
         assert len(warned) == 1 and "outside_training is set" in warned[0], warned
     else:
         assert first is None and warned == []
+
+
+@pytest.mark.parametrize("frame_bias", [0.0, 0.05])
+def test_an_accelerometer_bias_the_other_does_not_share_sets_outside_training(make_slave, frame_bias):
+    """30 s at 20 m/s (600 m), the paper's filter, 0.05 m/s2 on the wheelset accelerometer:
+    `relative_velocity_change` is `ws_acc_y - frame_acc_y` integrated over the last 500-510 m
+    (the oracle: 0.05 times 25-25.5 s), passes 0.5 m/s at 200 m (10 s) and says so once. The
+    same bias on the frame accelerometer too (a tilt both share) integrates to nothing and
+    sets nothing."""
+    from fmi_harness import WARNING
+    s = make_slave("relative", logging_on=True)
+    assert s.initialize({"estimator": 1}) == 0
+    inputs = [s.vr[k] for k in ("ws_acc_y", "ws_yaw_rate", "frame_acc_y", "speed")]
+    first = None
+    for k in range(30_000):
+        s.fmu.setReal(inputs, [0.05, 0.0, frame_bias, 20.0])
+        assert s.step(k * 1e-3, 1e-3) <= WARNING
+        if first is None and s.fmu.getBoolean([s.vr["outside_training"]])[0]:
+            first = s.fmu.getReal([s.vr["distance"]])[0]
+    change = s.fmu.getReal([s.vr["relative_velocity_change"]])[0]
+    warned = [m for m in s.log.messages(WARNING) if "ws_acc_y - frame_acc_y" in m]
+    if frame_bias:
+        assert change == 0.0 and first is None and warned == []
+    else:
+        assert 0.05 * 25.0 - 1e-9 <= change <= 0.05 * 25.5 + 1e-9, change
+        assert first == pytest.approx(200.0, abs=0.1), first
+        assert len(warned) == 1 and "outside_training is set" in warned[0], warned

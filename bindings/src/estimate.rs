@@ -179,11 +179,11 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
             d.set_item("active_estimator", active.into_pyarray(py))?;
         }
         None => {
-            // The FMU's alignment_std of the paper's filter: grown by the heading check.
+            // The FMU's alignment_std of the paper's filter: grown by the integrals' check.
             let std: Vec<f64> = kalman_std
                 .iter()
-                .zip(&out.heading_change)
-                .map(|(s, c)| s * fmu_estimator::heading::growth(*c))
+                .zip(&out.changes)
+                .map(|(s, c)| s * fmu_estimator::integrals::growth(c[0], c[1]))
                 .collect();
             d.set_item("alignment", kalman.clone().into_pyarray(py))?;
             d.set_item("alignment_std", std.clone().into_pyarray(py))?;
@@ -210,7 +210,10 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
     let novelty = out.novelty.unwrap_or_else(|| vec![0.0; n]);
     d.set_item("novelty", novelty.into_pyarray(py))?;
     d.set_item("outside_training", out.outside_training.into_pyarray(py))?;
-    d.set_item("heading_change", out.heading_change.into_pyarray(py))?;
+    let (heading, velocity): (Vec<f64>, Vec<f64>) =
+        out.changes.iter().map(|c| (c[0], c[1])).unzip();
+    d.set_item("heading_change", heading.into_pyarray(py))?;
+    d.set_item("relative_velocity_change", velocity.into_pyarray(py))?;
     let bias = out.bias.unwrap_or_else(|| vec![[0.0; 4]; n]);
     for (i, name) in [
         "ws_acc_y_bias",

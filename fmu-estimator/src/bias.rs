@@ -25,11 +25,12 @@
 //! `sigma_i` 0 (the default) nothing is estimated and the samples pass unchanged.
 //!
 //! # In motion
-//! The yaw rate with the bias removed is integrated in motion ([`crate::heading`]): a heading
-//! that straight track does not give, or a mean since the last standstill beyond its own, is a
-//! bias the estimator was not told of or could not see (no standstill).
+//! The samples with the biases removed are integrated in motion ([`crate::integrals`]): a
+//! heading or a relative velocity that straight track does not give, or a yaw-rate mean since
+//! the last standstill beyond its own, is a bias the estimator was not told of or could not see
+//! (no standstill).
 
-use crate::heading::Heading;
+use crate::integrals::Integrals;
 use serde::{Deserialize, Serialize};
 
 /// Below this speed \[m/s\] the train stands still: its sensors read their biases.
@@ -52,8 +53,8 @@ pub struct Bias {
     /// Their running mean and sum of squared deviations (Welford).
     mean: [f64; 4],
     m2: [f64; 4],
-    /// The corrected yaw rate's integrals in motion.
-    pub heading: Heading,
+    /// The corrected samples' integrals in motion.
+    pub integrals: Integrals,
 }
 
 impl Bias {
@@ -67,7 +68,7 @@ impl Bias {
             n: [0; 4],
             mean: [0.0; 4],
             m2: [0.0; 4],
-            heading: Heading::default(),
+            integrals: Integrals::default(),
         }
     }
 
@@ -82,8 +83,9 @@ impl Bias {
     /// that sensor's figures only.
     pub fn observe(&mut self, speed: f64, h: f64, x: &[f64; 4]) {
         let standing = speed.abs() < STANDSTILL_SPEED;
-        self.heading
-            .observe(standing, speed, h, x[1] - self.estimate[1]);
+        let e = &self.estimate;
+        self.integrals
+            .observe(standing, speed, h, [x[0] - e[0], x[1] - e[1], x[2] - e[2]]);
         if standing && !self.standing {
             self.start = self.estimate;
             (self.n, self.mean, self.m2) = ([0; 4], [0.0; 4], [0.0; 4]);
@@ -190,7 +192,7 @@ mod tests {
             for _ in 0..10_000 {
                 b.observe(20.0, 1e-3, &[0.0, 1e-3, 0.0, 0.0]);
             }
-            b.heading.change()
+            b.integrals.heading_change()
         };
         assert!(moved(2e-3).abs() < 1e-12, "{}", moved(2e-3));
         assert!((moved(0.0) - 1e-2).abs() < 1e-9, "{}", moved(0.0));

@@ -48,8 +48,8 @@ pub struct Estimator {
     novelty_warned: bool,
     /// Whether a yaw-rate bias was suspected in this run (warned once).
     bias_warned: bool,
-    /// Whether the heading check has set `outside_training` in this run (warned once).
-    heading_warned: bool,
+    /// Whether the integrals' check has set `outside_training` in this run (warned once).
+    integrals_warned: bool,
     /// The step size warned about, if any (once).
     step_warned: bool,
     /// Warnings that recur per step, logged once and counted.
@@ -82,12 +82,13 @@ impl Estimator {
         let (xi, std) = core.alignment();
         let (body, xi_rate) = core.states();
         let distance = v.real[vr::DISTANCE as usize];
-        let heading = &self.bias.heading;
-        // A curve or a bias not told: the estimate's error grows with the heading it did not
-        // explain ([`crate::heading`]), whichever estimator gives it.
-        let grow = heading.growth();
-        let flagged = self.design.outside() || heading.outside();
-        v.real[vr::HEADING_CHANGE as usize] = heading.change();
+        let integrals = &self.bias.integrals;
+        // A curve or a bias not told: the estimate's error grows with what it did not explain
+        // ([`crate::integrals`]), whichever estimator gives it.
+        let grow = integrals.growth();
+        let flagged = self.design.outside() || integrals.outside();
+        v.real[vr::HEADING_CHANGE as usize] = integrals.heading_change();
+        v.real[vr::RELATIVE_VELOCITY_CHANGE as usize] = integrals.velocity_change();
         let o = &mut v.real;
         o[vr::ALIGNMENT_KALMAN as usize] = xi;
         match &self.learned {
@@ -184,7 +185,7 @@ impl Model for Estimator {
             outside: false,
             novelty_warned: false,
             bias_warned: false,
-            heading_warned: false,
+            integrals_warned: false,
             step_warned: false,
             repeats: Default::default(),
             _files: FilesInUse::default(),
@@ -233,7 +234,7 @@ impl Model for Estimator {
         self.outside = false;
         self.novelty_warned = false;
         self.bias_warned = false;
-        self.heading_warned = false;
+        self.integrals_warned = false;
         self.step_warned = false;
         self.repeats.clear();
         self.write_outputs(v);
@@ -312,7 +313,7 @@ impl Model for Estimator {
                 self.note_speed_range(input.speed, log);
                 self.note_novelty(v.real[vr::DISTANCE as usize], log);
                 self.note_bias(v.real[vr::DISTANCE as usize], log);
-                self.note_heading(v.real[vr::DISTANCE as usize], log);
+                self.note_integrals(v.real[vr::DISTANCE as usize], log);
                 self.note_design(v.real[vr::DISTANCE as usize], input.design, log);
                 self.write_outputs(v);
                 Ok(outcome)
@@ -421,7 +422,7 @@ impl Estimator {
 
     /// A yaw-rate mean that straight track does not give ([`crate::bias`]): said once.
     fn note_bias(&mut self, distance: f64, log: &Logger) {
-        if let Some((mean, over)) = self.bias.heading.suspected_bias()
+        if let Some((mean, over)) = self.bias.integrals.suspected_bias()
             && !self.bias_warned
         {
             log.warning(&format!(
@@ -431,18 +432,27 @@ impl Estimator {
         }
     }
 
-    /// The heading check setting `outside_training` ([`crate::heading`]): said once.
-    fn note_heading(&mut self, distance: f64, log: &Logger) {
-        let heading = &self.bias.heading;
-        if heading.outside() && !self.heading_warned {
-            log.warning(&format!(
-                "at {distance:.1} m the yaw gyroscope's heading changed by {:.4} rad over the last {:.0} m, beyond the {} rad that straight track's irregularities give: a curve whose design is not connected (design_curvature and design_cant, or line_file) or a gyroscope bias not removed (bias_sigma_ws_yaw_rate and a standstill); outside_training is set, and the estimate may be many times less accurate (said once)",
-                heading.change(),
-                crate::heading::WINDOW,
-                crate::heading::LEVEL,
-            ));
-            self.heading_warned = true;
+    /// The integrals' check setting `outside_training` ([`crate::integrals`]): said once.
+    fn note_integrals(&mut self, distance: f64, log: &Logger) {
+        use crate::integrals::{HEADING_LEVEL, VELOCITY_LEVEL, WINDOW};
+        let integrals = &self.bias.integrals;
+        if !integrals.outside() || self.integrals_warned {
+            return;
         }
+        let (heading, velocity) = (integrals.heading_change(), integrals.velocity_change());
+        let why = if heading.abs() > HEADING_LEVEL {
+            format!(
+                "the yaw gyroscope's heading changed by {heading:.4} rad over the last {WINDOW:.0} m, beyond the {HEADING_LEVEL} rad that straight track's irregularities give: a curve whose design is not connected (design_curvature and design_cant, or line_file) or a gyroscope bias not removed (bias_sigma_ws_yaw_rate and a standstill)"
+            )
+        } else {
+            format!(
+                "ws_acc_y - frame_acc_y integrates to {velocity:.3} m/s over the last {WINDOW:.0} m, beyond the {VELOCITY_LEVEL} m/s that the primary suspension allows: one accelerometer carries a bias the other does not (bias_sigma_ws_acc_y, bias_sigma_frame_acc_y and a standstill), or a curve's design is not connected"
+            )
+        };
+        log.warning(&format!(
+            "at {distance:.1} m {why}; outside_training is set, and the estimate may be many times less accurate (said once)"
+        ));
+        self.integrals_warned = true;
     }
 
     /// `outside_training` setting for the first time in the run: said once.

@@ -14,7 +14,7 @@
 //! | one sample's step, the same in the FMU and offline: distance, hold, sensors, filters | [`step`] |
 //! | a sample refused or skipped (NaN, out of range, standstill) | [`plausible`] |
 //! | the design line's response removed from the sensors | [`design`] |
-//! | the sensors' biases, found at a standstill; the heading check, which flags a curve or a bias the estimator was not told of | [`bias`], [`heading`] |
+//! | the sensors' biases, found at a standstill; their integrals in motion, which flag a curve or a bias the estimator was not told of | [`bias`], [`integrals`] |
 //! | the Kalman filter's step (matrices at the current speed, predict, update) | [`core`], [`engine`], [`filter`] |
 //! | the learned filter: its tap bank and the bank's contract (checked at initialization), grid, history, windows, speed and contact blending, fixed lag | [`learned`] |
 //!
@@ -50,7 +50,7 @@ pub mod engine;
 pub mod error;
 pub mod filter;
 pub mod fmu;
-pub mod heading;
+pub mod integrals;
 pub mod learned;
 pub mod model;
 pub mod observability;

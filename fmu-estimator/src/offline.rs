@@ -99,10 +99,10 @@ pub struct Processed {
     pub novelty: Option<Vec<f64>>,
     /// The FMU's `outside_training` output per sample.
     pub outside_training: Vec<bool>,
-    /// The FMU's `heading_change` output per sample \[rad\] ([`crate::heading`]); the
-    /// standard deviations above are grown by it as the FMU's are ([`crate::heading::growth`]),
-    /// bar `filtered`'s, the Kalman filter's own.
-    pub heading_change: Vec<f64>,
+    /// The FMU's `heading_change` \[rad\] and `relative_velocity_change` \[m/s\] outputs per
+    /// sample ([`crate::integrals`]); the standard deviations above are grown by them as the
+    /// FMU's are ([`crate::integrals::growth`]), bar `filtered`'s, the Kalman filter's own.
+    pub changes: Vec<[f64; 2]>,
     /// The filter covariance checked after every step (when asked for: an eigen-decomposition
     /// per step, [`process_columns_checked`]).
     pub covariance: Option<CovarianceCheck>,
@@ -564,13 +564,14 @@ fn run_from(
             b.push(bias.estimate);
         }
         out.filtered.push(core.alignment());
-        let heading = &bias.heading;
-        let flagged = design.outside() || heading.outside();
-        out.heading_change.push(heading.change());
+        let integrals = &bias.integrals;
+        let flagged = design.outside() || integrals.outside();
+        out.changes
+            .push([integrals.heading_change(), integrals.velocity_change()]);
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
             let mut estimate = l.estimate(distance, core.alignment());
-            estimate.std *= heading.growth();
-            estimate.lagged_std *= heading.growth();
+            estimate.std *= integrals.growth();
+            estimate.lagged_std *= integrals.growth();
             e.push(estimate);
             c.push(l.contact_scale());
             conicity.push(l.conicity());
