@@ -183,7 +183,7 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
             let std: Vec<f64> = kalman_std
                 .iter()
                 .zip(&out.changes)
-                .map(|(s, c)| s * fmu_estimator::integrals::growth(c[0], c[1]))
+                .map(|(s, c)| s * fmu_estimator::integrals::growth(*c))
                 .collect();
             d.set_item("alignment", kalman.clone().into_pyarray(py))?;
             d.set_item("alignment_std", std.clone().into_pyarray(py))?;
@@ -210,10 +210,17 @@ fn outputs(py: Python<'_>, out: Processed, lag: f64) -> PyResult<Bound<'_, PyDic
     let novelty = out.novelty.unwrap_or_else(|| vec![0.0; n]);
     d.set_item("novelty", novelty.into_pyarray(py))?;
     d.set_item("outside_training", out.outside_training.into_pyarray(py))?;
-    let (heading, velocity): (Vec<f64>, Vec<f64>) =
-        out.changes.iter().map(|c| (c[0], c[1])).unzip();
-    d.set_item("heading_change", heading.into_pyarray(py))?;
-    d.set_item("relative_velocity_change", velocity.into_pyarray(py))?;
+    for (i, name) in [
+        "heading_change",
+        "relative_velocity_change",
+        "heading_level",
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let column: Vec<f64> = out.changes.iter().map(|c| c[i]).collect();
+        d.set_item(name, column.into_pyarray(py))?;
+    }
     let bias = out.bias.unwrap_or_else(|| vec![[0.0; 4]; n]);
     for (i, name) in [
         "ws_acc_y_bias",

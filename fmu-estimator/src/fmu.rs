@@ -87,8 +87,10 @@ impl Estimator {
         // ([`crate::integrals`]), whichever estimator gives it.
         let grow = integrals.growth();
         let flagged = self.design.outside() || integrals.outside();
-        v.real[vr::HEADING_CHANGE as usize] = integrals.heading_change();
-        v.real[vr::RELATIVE_VELOCITY_CHANGE as usize] = integrals.velocity_change();
+        let [heading, velocity, level] = integrals.outputs();
+        v.real[vr::HEADING_CHANGE as usize] = heading;
+        v.real[vr::RELATIVE_VELOCITY_CHANGE as usize] = velocity;
+        v.real[vr::HEADING_LEVEL as usize] = level;
         let o = &mut v.real;
         o[vr::ALIGNMENT_KALMAN as usize] = xi;
         match &self.learned {
@@ -434,15 +436,15 @@ impl Estimator {
 
     /// The integrals' check setting `outside_training` ([`crate::integrals`]): said once.
     fn note_integrals(&mut self, distance: f64, log: &Logger) {
-        use crate::integrals::{HEADING_LEVEL, VELOCITY_LEVEL, WINDOW};
+        use crate::integrals::{VELOCITY_LEVEL, WINDOW};
         let integrals = &self.bias.integrals;
         if !integrals.outside() || self.integrals_warned {
             return;
         }
-        let (heading, velocity) = (integrals.heading_change(), integrals.velocity_change());
-        let why = if heading.abs() > HEADING_LEVEL {
+        let [heading, velocity, level] = integrals.outputs();
+        let why = if heading.abs() > level {
             format!(
-                "the yaw gyroscope's heading changed by {heading:.4} rad over the last {WINDOW:.0} m, beyond the {HEADING_LEVEL} rad that straight track's irregularities give: a curve whose design is not connected (design_curvature and design_cant, or line_file) or a gyroscope bias not removed (bias_sigma_ws_yaw_rate and a standstill)"
+                "the yaw gyroscope's heading changed by {heading:.4} rad over the last {WINDOW:.0} m, beyond the {level:.4} rad that straight track's irregularities give (heading_level): a curve whose design is not connected (design_curvature and design_cant, or line_file) or a gyroscope bias not removed (bias_sigma_ws_yaw_rate and a standstill)"
             )
         } else {
             format!(

@@ -99,10 +99,11 @@ pub struct Processed {
     pub novelty: Option<Vec<f64>>,
     /// The FMU's `outside_training` output per sample.
     pub outside_training: Vec<bool>,
-    /// The FMU's `heading_change` \[rad\] and `relative_velocity_change` \[m/s\] outputs per
-    /// sample ([`crate::integrals`]); the standard deviations above are grown by them as the
-    /// FMU's are ([`crate::integrals::growth`]), bar `filtered`'s, the Kalman filter's own.
-    pub changes: Vec<[f64; 2]>,
+    /// The FMU's `heading_change` \[rad\], `relative_velocity_change` \[m/s\] and
+    /// `heading_level` \[rad\] outputs per sample ([`crate::integrals`]); the standard
+    /// deviations above are grown by them as the FMU's are ([`crate::integrals::growth`]), bar
+    /// `filtered`'s, the Kalman filter's own.
+    pub changes: Vec<[f64; 3]>,
     /// The filter covariance checked after every step (when asked for: an eigen-decomposition
     /// per step, [`process_columns_checked`]).
     pub covariance: Option<CovarianceCheck>,
@@ -566,8 +567,7 @@ fn run_from(
         out.filtered.push(core.alignment());
         let integrals = &bias.integrals;
         let flagged = design.outside() || integrals.outside();
-        out.changes
-            .push([integrals.heading_change(), integrals.velocity_change()]);
+        out.changes.push(integrals.outputs());
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
             let mut estimate = l.estimate(distance, core.alignment());
             estimate.std *= integrals.growth();
