@@ -145,10 +145,10 @@ impl Integrals {
             self.since_stop = (0.0, 0.0);
             return;
         }
-        if !speed.is_finite() {
+        let ds = speed * h;
+        if !ds.is_finite() {
             return;
         }
-        let ds = speed * h;
         let [acc, yaw_rate, frame] = x;
         if yaw_rate.is_finite() {
             self.since_stop.0 += ds;
@@ -159,17 +159,23 @@ impl Integrals {
             self.now[1] += (acc - frame) * h;
         }
         self.into_cell += ds;
-        while self.into_cell >= CELL {
-            self.into_cell -= CELL;
+        if self.into_cell < CELL {
+            return;
+        }
+        // Every cell end passed in this step holds the same integrals; a step longer than the
+        // span (a hostile speed) fills it at once instead of looping cell by cell.
+        let span = (WANDER_SPAN / CELL) as usize + 1;
+        let cells = (self.into_cell / CELL).floor().min(span as f64) as usize;
+        self.into_cell = self.into_cell.rem_euclid(CELL);
+        for _ in 0..cells {
             self.marks.push_back(self.now);
-            let span = (WANDER_SPAN / CELL) as usize + 1;
             if self.marks.len() > span {
                 self.marks.pop_front();
             }
-            if self.marks.len() == span {
-                let level = WANDER_FACTOR * wander(self.marks.iter().map(|m| m[0]));
-                self.heading_level = level.clamp(HEADING_FLOOR, HEADING_LEVEL);
-            }
+        }
+        if self.marks.len() == span {
+            let level = WANDER_FACTOR * wander(self.marks.iter().map(|m| m[0]));
+            self.heading_level = level.clamp(HEADING_FLOOR, HEADING_LEVEL);
         }
     }
 
@@ -428,5 +434,21 @@ mod tests {
             "{}",
             biased.heading_change()
         );
+    }
+
+    /// A step of a hostile length (1e300 m) fills the span at once, without a loop per cell:
+    /// the window's change is then nil and the level the wander of equal marks (the floor).
+    #[test]
+    fn a_step_past_the_span_fills_it_at_once() {
+        let mut a = Integrals::default();
+        a.observe(false, 20.0, 1e-3, [0.0, 1.0, 0.0]);
+        a.observe(false, 1e300, 1e-3, [0.0, 1.0, 0.0]);
+        assert!(a.into_cell >= 0.0 && a.into_cell < CELL);
+        assert_eq!(a.marks.len(), 201);
+        assert_eq!(a.heading_change(), 0.0);
+        assert_eq!(a.heading_level(), HEADING_FLOOR);
+        let before = a.clone();
+        a.observe(false, f64::MAX, 10.0, [0.0, 1.0, 0.0]);
+        assert_eq!(a, before);
     }
 }
