@@ -83,9 +83,9 @@ impl Bias {
     /// that sensor's figures only.
     pub fn observe(&mut self, speed: f64, h: f64, x: &[f64; 4]) {
         let standing = speed.abs() < STANDSTILL_SPEED;
-        let e = &self.estimate;
+        let r = self.remove(x);
         self.integrals
-            .observe(standing, speed, h, [x[0] - e[0], x[1] - e[1], x[2] - e[2]]);
+            .observe(standing, speed, h, [r[0], r[1], r[2]]);
         if standing && !self.standing {
             self.start = self.estimate;
             (self.n, self.mean, self.m2) = ([0; 4], [0.0; 4], [0.0; 4]);

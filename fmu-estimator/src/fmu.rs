@@ -82,12 +82,13 @@ impl Estimator {
         let (xi, std) = core.alignment();
         let (body, xi_rate) = core.states();
         let distance = v.real[vr::DISTANCE as usize];
-        let integrals = &self.bias.integrals;
+        let changes = self.bias.integrals.outputs();
         // A curve or a bias not told: the estimate's error grows with what it did not explain
         // ([`crate::integrals`]), whichever estimator gives it.
-        let grow = integrals.growth();
-        let flagged = self.design.outside() || integrals.outside();
-        let [heading, velocity, level] = integrals.outputs();
+        let grow = crate::integrals::growth(changes);
+        v.boolean[vr::OUTSIDE_TRAINING as usize] =
+            crate::step::outside_training(self.learned.as_ref(), &self.design, &self.bias);
+        let [heading, velocity, level] = changes;
         v.real[vr::HEADING_CHANGE as usize] = heading;
         v.real[vr::RELATIVE_VELOCITY_CHANGE as usize] = velocity;
         v.real[vr::HEADING_LEVEL as usize] = level;
@@ -105,7 +106,6 @@ impl Estimator {
                 v.real[vr::CONTACT_SCALE as usize] = l.contact_scale();
                 v.real[vr::CONICITY_ESTIMATE as usize] = l.conicity();
                 v.real[vr::NOVELTY as usize] = l.novelty();
-                v.boolean[vr::OUTSIDE_TRAINING as usize] = l.outside_training() || flagged;
             }
             None => {
                 o[vr::ALIGNMENT as usize] = xi;
@@ -117,7 +117,6 @@ impl Estimator {
                 v.real[vr::CONTACT_SCALE as usize] = 0.0;
                 v.real[vr::CONICITY_ESTIMATE as usize] = 0.0;
                 v.real[vr::NOVELTY as usize] = 0.0;
-                v.boolean[vr::OUTSIDE_TRAINING as usize] = flagged;
             }
         }
         let o = &mut v.real;

@@ -209,11 +209,6 @@ impl Integrals {
             || self.velocity_change().abs() > VELOCITY_LEVEL
     }
 
-    /// The factor the estimate's standard deviation is grown by ([`growth`]).
-    pub fn growth(&self) -> f64 {
-        growth(self.outputs())
-    }
-
     /// `heading_change`, `relative_velocity_change`, `heading_level`.
     pub fn outputs(&self) -> [f64; 3] {
         [
@@ -261,7 +256,7 @@ fn wander(headings: impl ExactSizeIterator<Item = f64> + Clone) -> f64 {
 mod tests {
     use super::{
         CELL, HEADING_FLOOR, HEADING_LEVEL, Integrals, VELOCITY_LEVEL, WANDER_FACTOR, WINDOW,
-        wander,
+        growth, wander,
     };
 
     /// `secs` of motion at 20 m/s and 1 kHz with the yaw rate `rate(t)`, the accelerometers
@@ -286,7 +281,7 @@ mod tests {
             a.heading_change()
         );
         assert!(!a.outside());
-        assert_eq!(a.growth(), 1.0);
+        assert_eq!(growth(a.outputs()), 1.0);
         run(&mut a, 50.0, |_| 1e-3);
         let (lo, hi) = (1e-3 * WINDOW / 20.0, 1e-3 * (WINDOW + CELL) / 20.0);
         let sample = 1e-3 * 1e-3;
@@ -296,7 +291,7 @@ mod tests {
             a.heading_change()
         );
         assert!(a.outside());
-        assert!((a.growth() - a.heading_change() / HEADING_LEVEL).abs() < 1e-12);
+        assert!((growth(a.outputs()) - a.heading_change() / HEADING_LEVEL).abs() < 1e-12);
     }
 
     /// A curve of radius 1000 m entered after 200 m (its rate `V / R`) passes the level once
@@ -337,7 +332,7 @@ mod tests {
             "{}",
             a.heading_change()
         );
-        assert_eq!(a.growth(), 1.0);
+        assert_eq!(growth(a.outputs()), 1.0);
         let before = a.clone();
         a.observe(false, f64::NAN, 1e-3, [1.0, 1.0, 0.0]);
         assert_eq!(a, before);
@@ -384,7 +379,10 @@ mod tests {
         let a = run_acc([0.05, 0.0, 0.0], 9.9);
         assert!(!a.outside() && (a.velocity_change() - 0.495).abs() < 1e-9);
         let a = run_acc([0.05, 0.0, 0.0], 10.1);
-        assert!(a.outside() && (a.growth() - a.velocity_change() / VELOCITY_LEVEL).abs() < 1e-12);
+        assert!(
+            a.outside()
+                && (growth(a.outputs()) - a.velocity_change() / VELOCITY_LEVEL).abs() < 1e-12
+        );
         let b = run_acc([0.05, 0.0, 0.05], 60.0);
         assert_eq!(b.velocity_change(), 0.0);
         assert!(!b.outside());

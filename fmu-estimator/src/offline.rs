@@ -565,20 +565,18 @@ fn run_from(
             b.push(bias.estimate);
         }
         out.filtered.push(core.alignment());
-        let integrals = &bias.integrals;
-        let flagged = design.outside() || integrals.outside();
-        out.changes.push(integrals.outputs());
+        let changes = bias.integrals.outputs();
+        outside.push(step::outside_training(learned.as_ref(), &design, &bias));
+        out.changes.push(changes);
         if let (Some(l), Some(e), Some(c)) = (&learned, estimates.as_mut(), contact.as_mut()) {
+            let grow = crate::integrals::growth(changes);
             let mut estimate = l.estimate(distance, core.alignment());
-            estimate.std *= integrals.growth();
-            estimate.lagged_std *= integrals.growth();
+            estimate.std *= grow;
+            estimate.lagged_std *= grow;
             e.push(estimate);
             c.push(l.contact_scale());
             conicity.push(l.conicity());
             novelty.push(l.novelty());
-            outside.push(l.outside_training() || flagged);
-        } else {
-            outside.push(flagged);
         }
     }
     out.learned = estimates;

@@ -14,6 +14,7 @@
 //! | hold | below `min_speed` or at a non-finite speed the filter does not step (the creep terms divide by the speed) |
 //! | filter speed | `design_speed` when set, else the sample's speed |
 //! | learned filter | steps with the sensors and the Kalman estimate, at the sample's own speed |
+//! | `outside_training` | after the step, [`outside_training`]: the one rule both callers output |
 
 use crate::bias::Bias;
 use crate::core::Core;
@@ -61,6 +62,13 @@ pub struct Settings {
     pub min_speed: f64,
     /// 0: the matrices follow the speed; above 0: built for this speed.
     pub design_speed: f64,
+}
+
+/// The `outside_training` output after a step, the same in the FMU and offline: the learned
+/// filter's own flag (novelty, conicity), the design line beyond its response's envelope, or
+/// the sensors' integrals beyond straight track's ([`crate::integrals`]).
+pub fn outside_training(learned: Option<&Learned>, design: &Design, bias: &Bias) -> bool {
+    learned.is_some_and(|l| l.outside_training()) || design.outside() || bias.integrals.outside()
 }
 
 /// Steps `core` (and `learned`) with one sample of step `h`, advancing `distance`. A negative
