@@ -42,6 +42,18 @@ impl Value {
     }
 }
 
+/// The value as [`Value::parse`] reads it back (a Real at full precision, shortest form).
+impl std::fmt::Display for Value {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Value::Real(x) => write!(f, "{x}"),
+            Value::Integer(i) => write!(f, "{i}"),
+            Value::Boolean(b) => write!(f, "{b}"),
+            Value::String(t) => write!(f, "{t}"),
+        }
+    }
+}
+
 /// One FMU in the system.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Component {
@@ -152,5 +164,28 @@ impl System {
     /// with two; the SSP reader refuses that).
     pub fn component(&self, name: &str) -> Option<&Component> {
         self.components.iter().find(|c| c.name == name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Value;
+    use model_description::BaseType as B;
+
+    /// Every kind of value is written as text that `parse` reads back to the same value, a
+    /// Real to the last bit at both ends of its range.
+    #[test]
+    fn a_value_written_as_text_parses_back_to_itself() {
+        for (v, base) in [
+            (Value::Real(0.1), B::Real),
+            (Value::Real(-1e-300), B::Real),
+            (Value::Real(1.7976931348623157e308), B::Real),
+            (Value::Integer(-7), B::Integer),
+            (Value::Boolean(true), B::Boolean),
+            (Value::String("learned-nominal.taps".into()), B::String),
+        ] {
+            assert_eq!(Value::parse(&v.to_string(), base), Ok(v));
+        }
+        assert_eq!(Value::Real(0.1).to_string(), "0.1");
     }
 }

@@ -199,15 +199,7 @@ fn settings_text(settings: &[(String, Value)]) -> String {
     if settings.is_empty() {
         return String::new();
     }
-    let s: Vec<String> = settings
-        .iter()
-        .map(|(n, v)| match v {
-            Value::String(t) => format!("{n} = {t}"),
-            Value::Real(x) => format!("{n} = {x}"),
-            Value::Integer(i) => format!("{n} = {i}"),
-            Value::Boolean(b) => format!("{n} = {b}"),
-        })
-        .collect();
+    let s: Vec<String> = settings.iter().map(|(n, v)| format!("{n} = {v}")).collect();
     format!(" with {}", s.join(", "))
 }
 

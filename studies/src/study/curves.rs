@@ -12,7 +12,9 @@
 //! stretches of the straight run.
 
 use super::metrics::{BandMetrics, evaluate};
-use super::records::{Output, Record, estimate, estimate_learned, record_table, run_learned};
+use super::records::{
+    Flagged, Output, Record, estimate, estimate_learned, flagged_learned, record_table, share_of,
+};
 use super::runs::{Fmus, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
@@ -164,9 +166,6 @@ fn judged(
     Ok(evaluate(&ed, &ex, &td, &tx, DS, TRIM)?)
 }
 
-/// The estimator's distance, its alignment and `outside_training`, per sample.
-type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
-
 /// The default told the design over `rec`.
 fn flagged(user: &[(String, String)], rec: &Record) -> Result<Flagged, Error> {
     flagged_told(user, rec, true)
@@ -183,22 +182,9 @@ fn samples_told(rec: &Record, told: bool) -> Vec<Sample> {
     samples
 }
 
-/// The share of `flags` set.
-fn share_of(flags: &[bool]) -> f64 {
-    flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64
-}
-
 /// The default over `rec`, told the design or not (`told`).
 fn flagged_told(user: &[(String, String)], rec: &Record, told: bool) -> Result<Flagged, Error> {
-    let (out, _) = run_learned(&samples_told(rec, told), 1e-3, user)?;
-    let est: Vec<f64> = out
-        .learned
-        .as_ref()
-        .ok_or_else(|| Error::input("no learned estimate"))?
-        .iter()
-        .map(|e| e.alignment)
-        .collect();
-    Ok((out.distance, est, out.outside_training))
+    flagged_learned(&samples_told(rec, told), 1e-3, user)
 }
 
 /// The share of the default's samples over `rec` with `outside_training` set, told the design

@@ -202,6 +202,30 @@ pub fn run_learned(
     Ok((out, lag))
 }
 
+/// The learned filter's positions, `alignment` and `outside_training` per sample.
+pub type Flagged = (Vec<f64>, Vec<f64>, Vec<bool>);
+
+/// [`run_learned`]'s `alignment` at its positions, with its `outside_training`.
+pub fn flagged_learned(
+    samples: &[Sample],
+    h: f64,
+    settings: &[(String, String)],
+) -> Result<Flagged, Error> {
+    let (out, _) = run_learned(samples, h, settings)?;
+    let est = out
+        .learned
+        .ok_or_else(|| Error::input("no learned estimate"))?
+        .iter()
+        .map(|e| e.alignment)
+        .collect();
+    Ok((out.distance, est, out.outside_training))
+}
+
+/// The share of `flags` set.
+pub fn share_of(flags: &[bool]) -> f64 {
+    flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64
+}
+
 /// The estimator FMU's learned filter (`estimator` 2) with `settings` over `samples`: the
 /// positions and values of `output`, as the FMU computes them (the built-in tap bank).
 pub fn estimate_learned(

@@ -125,15 +125,7 @@ impl Fmus {
         self.estimator_settings
             .iter()
             .filter(|(n, _)| n != "estimator")
-            .map(|(n, v)| {
-                let text = match v {
-                    Value::Real(x) => format!("{x:?}"),
-                    Value::Integer(i) => i.to_string(),
-                    Value::Boolean(b) => b.to_string(),
-                    Value::String(t) => t.clone(),
-                };
-                (n.clone(), text)
-            })
+            .map(|(n, v)| (n.clone(), v.to_string()))
             .collect()
     }
 

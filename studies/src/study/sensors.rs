@@ -11,7 +11,9 @@
 //! estimate is compared at the true positions (the recorded distance), not at the estimator's.
 
 use super::metrics::{BandMetrics, evaluate};
-use super::records::{Output, Record, estimate, estimate_learned, record_stepped, run_learned};
+use super::records::{
+    Output, Record, estimate, estimate_learned, flagged_learned, record_stepped, share_of,
+};
 use super::runs::{Fmus, STEP, seeded};
 use super::standard::{DS, TRIM};
 use crate::Error;
@@ -216,15 +218,7 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<([BandMetrics; 3], f
             TRIM,
         )?)
     };
-    let (out, _) = run_learned(&rec.samples, c.step, &untold)?;
-    let flags = &out.outside_training[from..];
-    let flagged = flags.iter().filter(|f| **f).count() as f64 / flags.len().max(1) as f64;
-    let untold_est = out
-        .learned
-        .ok_or_else(|| Error::input("no learned estimate"))?
-        .iter()
-        .map(|e| e.alignment)
-        .collect();
+    let (distance, untold_est, flags) = flagged_learned(&rec.samples, c.step, &untold)?;
     Ok((
         [
             judge(estimate(&rec.samples, c.step, &paper, None, false)?)?,
@@ -234,9 +228,9 @@ fn run_one(fmus: &Fmus, c: &Condition, seed: u32) -> Result<([BandMetrics; 3], f
                 &told,
                 Output::Alignment,
             )?)?,
-            judge((out.distance, untold_est))?,
+            judge((distance, untold_est))?,
         ],
-        flagged,
+        share_of(&flags[from..]),
     ))
 }
 
