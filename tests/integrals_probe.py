@@ -18,10 +18,10 @@ import argparse
 import numpy as np
 
 from project import packaged_fmus, seed_list
+from wiener_bound import STEP, noisy_record
 
 ta = __import__("track_alignment")
 
-STEP = 1e-3
 WINDOW, CELL = 500.0, 10.0
 DISTANCE = 10_000.0
 #: A sensor error parameter left at 0 takes the preset's value: a negligible bias removes it.
@@ -44,11 +44,8 @@ CONDITIONS = [
 
 
 def record(seed: int, parameters: dict, speed: float) -> dict[str, np.ndarray]:
-    out = ta.simulate(packaged_fmus()["RailVehicle"], float(round(DISTANCE / speed) + 1), step=STEP,
-                      parameters={"track_seed": seed, "noise_seed": seed + 1000, "speed": speed,
-                                  **parameters},
-                      variables=["ws_acc_y", "ws_yaw_rate", "frame_acc_y", "forward_speed"])
-    return {k: np.asarray(v[1:]) for k, v in out.items()}
+    return noisy_record(ta, packaged_fmus()["RailVehicle"], seed, float(round(DISTANCE / speed) + 1),
+                        {"speed": speed, **parameters}, seed + 1000)
 
 
 def window_changes(r: dict[str, np.ndarray]) -> np.ndarray:
